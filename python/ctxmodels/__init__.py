@@ -1,0 +1,38 @@
+"""ctxmodels: context-aware sensor models for multi-target tracking.
+
+Detection probability :math:`P_D(x; S)` and clutter density :math:`\\lambda(z; S)` that
+depend on the predicted state, the measurement and the sensor's state at each scan (pose,
+range bands, blind sectors, land, line of sight), evaluated over whole arrays in a Rust core
+and handed to Stone Soup trackers as per-scan :class:`DetectorContext` objects.
+"""
+from ._core import rule_points
+from .clutter import ClutterDensityModel, MetadataThreshold
+from .context import DetectionSet, DetectorContext, detection_positions
+from .detection import DetectionProbabilityModel
+from .land import LandMask, LineOfSight
+from .pose import ConstantPose, Mounting, NavigationTrack, Pose, PoseSource
+from .range_bands import RangeBands
+from .sector import AngularSector
+from .sensor import SensorModel
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "AngularSector",
+    "ClutterDensityModel",
+    "ConstantPose",
+    "DetectionProbabilityModel",
+    "DetectionSet",
+    "DetectorContext",
+    "LandMask",
+    "LineOfSight",
+    "MetadataThreshold",
+    "Mounting",
+    "NavigationTrack",
+    "Pose",
+    "PoseSource",
+    "RangeBands",
+    "SensorModel",
+    "detection_positions",
+    "rule_points",
+]

@@ -1,0 +1,168 @@
+"""Per-scan detector contexts, and detection sets that carry them.
+
+Interface compatible with the proposal in dstl/Stone-Soup#1291: a detector yields
+``(time, DetectionSet)``; the set carries the :class:`DetectorContext` of its scan (also
+when empty), and trackers ask the context for :math:`P_D(x; S)` per predicted state and
+:math:`\\lambda(z; S)` per detection.
+"""
+from __future__ import annotations
+
+import datetime
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+from stonesoup.base import Base, Property
+from stonesoup.models.measurement.linear import LinearGaussian
+from stonesoup.types.numeric import Probability
+
+from .pose import Pose
+from .sensor import SensorModel
+
+try:  # Subclass the upstream interface once Stone Soup ships it.
+    from stonesoup.types.detector_context import DetectorContext as _UpstreamContext  # type: ignore
+except ImportError:  # stonesoup 1.9.x
+    _UpstreamContext = Base
+
+
+class DetectionSet(set):
+    """A scan's detections (a ``set``) with the :class:`DetectorContext` of that scan.
+
+    An empty scan is an empty ``DetectionSet`` that still carries its context: that is what
+    tells a tracker the sensor looked and saw nothing there.
+    """
+
+    def __init__(self, detections: Iterable = (), detector_context: "DetectorContext | None" = None):
+        super().__init__(detections)
+        self.detector_context = detector_context
+
+    def copy(self) -> "DetectionSet":
+        return DetectionSet(self, self.detector_context)
+
+    def __repr__(self):
+        return f"DetectionSet({set(self)!r}, detector_context={self.detector_context!r})"
+
+    def __reduce__(self):
+        return (type(self), (list(self), self.detector_context))
+
+
+def _state_of(hypothesis_or_state: Any):
+    """The predicted state of a hypothesis, or the state itself."""
+    return getattr(hypothesis_or_state, "prediction", hypothesis_or_state)
+
+
+def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.ndarray:
+    """World (x, y) of each detection, (M, 2): through the measurement model's inverse
+    (bearing–range and other non-linear models), or the pseudo-inverse of a linear model's
+    matrix. Linear detections sharing a model are converted in one matrix product."""
+    positions = np.empty((len(detections), 2))
+    mapping = list(position_mapping)
+    linear_groups: dict[int, list[int]] = {}
+    for i, det in enumerate(detections):
+        model = getattr(det, "measurement_model", None)
+        if model is None:
+            raise ValueError(f"detections: detection {i} has no measurement model, so its "
+                             "position (needed for λ) is unknown")
+        if isinstance(model, LinearGaussian):
+            linear_groups.setdefault(id(model), []).append(i)
+        elif hasattr(model, "inverse_function"):
+            state = np.asarray(model.inverse_function(det), dtype=np.float64).ravel()
+            positions[i] = state[mapping]
+        else:
+            raise ValueError(f"detections: detection {i}'s measurement model "
+                             f"{type(model).__name__} has no inverse_function")
+    for indices in linear_groups.values():
+        model = detections[indices[0]].measurement_model
+        z = np.column_stack([np.asarray(detections[i].state_vector, dtype=np.float64).ravel()
+                             for i in indices])
+        states = np.linalg.pinv(model.matrix()) @ z
+        positions[indices] = states[mapping].T
+    return positions
+
+
+class DetectorContext(_UpstreamContext):
+    r"""The observability of one sensor at one scan: :math:`P_D(x; S)` and
+    :math:`\lambda(z; S)` for the sensor state :math:`S` (its pose at the scan).
+
+    Built by :meth:`SensorModel.context`. Contexts hash and compare by identity, so Stone
+    Soup can forward them into ``lru_cache``-d calls. The array forms evaluate a whole scan
+    in one call into the Rust core (GIL released, rows split over cores).
+    """
+
+    sensor_model: SensorModel = Property(doc="The sensor's model.")
+    pose: Pose = Property(doc="The sensor's own pose at the scan (mounting applied).")
+    timestamp: datetime.datetime | None = Property(default=None, doc="The scan time.")
+
+    __hash__ = object.__hash__
+
+    def __eq__(self, other):
+        return self is other
+
+    # --- detection probability -----------------------------------------------------------
+    def prob_detection_array(self, means, covars=None, *, out=None) -> np.ndarray:
+        """P_D for N states: ``means`` (N, D); with ``covars`` (N, D, D) and a sensor model
+        whose ``pd_evaluation`` is not ``'mean'``, the expectation over each Gaussian."""
+        model = self.sensor_model
+        mapping = tuple(model.position_mapping)
+        if covars is None or model.pd_evaluation == "mean":
+            return model.detection.evaluate(self.pose, means, mapping, out=out)
+        return model.detection.expected(self.pose, means, covars, mapping,
+                                        model.pd_evaluation, model.pd_order, out=out)
+
+    def prob_detection_states(self, states: Sequence) -> np.ndarray:
+        """P_D of Stone Soup states, predictions or hypotheses, in one array call."""
+        states = [_state_of(s) for s in states]
+        if not states:
+            return np.empty(0)
+        means = np.stack([np.asarray(s.state_vector, dtype=np.float64).ravel() for s in states])
+        covars = None
+        if self.sensor_model.pd_evaluation != "mean" and all(
+                getattr(s, "covar", None) is not None for s in states):
+            covars = np.stack([np.asarray(s.covar, dtype=np.float64) for s in states])
+        return self.prob_detection_array(means, covars)
+
+    def prob_detection(self, hypothesis_or_state) -> Probability:
+        """P_D of one hypothesis' prediction, a state, or a plain state vector. A particle
+        state gets the weighted mean of its particles' P_D."""
+        state = _state_of(hypothesis_or_state)
+        vector = getattr(state, "state_vector", state)
+        try:
+            vector = np.asarray(vector, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"hypothesis_or_state: cannot read a state vector from "
+                            f"{type(hypothesis_or_state).__name__}") from None
+        if vector.ndim == 2 and vector.shape[1] > 1:  # particles: (D, N)
+            pd = self.prob_detection_array(vector.T)
+            weights = getattr(state, "weight", None)
+            w = (np.full(pd.shape, 1 / pd.size) if weights is None
+                 else np.asarray(weights, dtype=np.float64).ravel())
+            return Probability(float(np.sum(w * pd) / np.sum(w)))
+        mean = vector.reshape(1, -1)
+        covar = getattr(state, "covar", None)
+        covars = None if covar is None else np.asarray(covar, dtype=np.float64)[np.newaxis]
+        return Probability(float(self.prob_detection_array(mean, covars)[0]))
+
+    # --- clutter ---------------------------------------------------------------------------
+    def clutter_spatial_density_array(self, positions, metadata=None, *, out=None) -> np.ndarray:
+        """λ for M detections at world ``positions`` (M, 2); ``metadata`` an (M, K) array in
+        the clutter model's ``metadata_keys`` order or a sequence of metadata mappings."""
+        return self.sensor_model.clutter.evaluate(self.pose, positions, metadata, out=out)
+
+    def clutter_spatial_density_detections(self, detections: Sequence) -> np.ndarray:
+        """λ of Stone Soup detections, in one array call."""
+        detections = list(detections)
+        clutter = self.sensor_model.clutter
+        if clutter.uses_position:
+            positions = detection_positions(detections, self.sensor_model.position_mapping)
+        else:
+            positions = np.zeros((len(detections), 2))
+        return clutter.evaluate(self.pose, positions, [d.metadata for d in detections])
+
+    def clutter_spatial_density(self, detection) -> float:
+        """λ of one detection (position from its measurement model, metadata from
+        ``detection.metadata``)."""
+        return float(self.clutter_spatial_density_detections([detection])[0])
+
+
+__all__ = ["DetectionSet", "DetectorContext", "detection_positions"]
+

@@ -1,0 +1,130 @@
+"""Sensor poses: where the sensor is and where it points at each scan.
+
+Angle convention, once for the whole library: Stone Soup's. World coordinates are x/y
+Cartesian metres; headings and bearings are radians counter-clockwise from +x (not compass
+bearings). A sensor's body frame has x along its heading and y to its left, so a body
+bearing of π is astern.
+"""
+from __future__ import annotations
+
+import datetime
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from stonesoup.base import Property
+
+from . import _core
+from ._component import ModelComponent, as_float, as_rows
+
+
+class Pose(ModelComponent):
+    """Position (x, y, metres) and heading (radians from +x, counter-clockwise)."""
+
+    x: float = Property(doc="World x, metres.")
+    y: float = Property(doc="World y, metres.")
+    heading: float = Property(default=0.0, doc="Heading, radians counter-clockwise from +x.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        for name in ("x", "y", "heading"):
+            as_float(getattr(self, name), name)
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        return float(self.x), float(self.y), float(self.heading)
+
+
+class Mounting(ModelComponent):
+    """Where a sensor sits on its platform: lever arm in the platform's body frame and the
+    yaw of the sensor's boresight relative to the platform heading."""
+
+    forward: float = Property(default=0.0, doc="Lever arm along the platform heading, metres.")
+    left: float = Property(default=0.0, doc="Lever arm to the platform's left, metres.")
+    yaw: float = Property(default=0.0, doc="Boresight yaw relative to the platform, radians.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        for name in ("forward", "left", "yaw"):
+            as_float(getattr(self, name), name)
+
+    def apply(self, platform: Pose) -> Pose:
+        """The sensor's pose on a platform at ``platform``."""
+        x, y, heading = _core.mount(platform.as_tuple(), float(self.forward), float(self.left),
+                                    float(self.yaw))
+        return Pose(x=x, y=y, heading=heading)
+
+
+class PoseSource(ModelComponent):
+    """Gives the platform pose at a scan's timestamp."""
+
+    def pose_at(self, timestamp: datetime.datetime | None) -> Pose:
+        raise NotImplementedError
+
+
+class ConstantPose(PoseSource):
+    """A platform that does not move (a coastal radar, a moored buoy)."""
+
+    pose: Pose = Property(doc="The platform's pose at every scan.")
+
+    def pose_at(self, timestamp=None) -> Pose:
+        return self.pose
+
+
+def _seconds(timestamps: Sequence[datetime.datetime], epoch: datetime.datetime) -> np.ndarray:
+    return np.array([(t - epoch).total_seconds() for t in timestamps], dtype=np.float64)
+
+
+class NavigationTrack(PoseSource):
+    r"""Platform poses interpolated from a navigation log.
+
+    Positions are interpolated linearly in time; headings along the shorter arc of the
+    circle (so 179° → -179° passes through 180°, not 0°). A timestamp outside the log raises
+    :class:`ValueError` rather than extrapolating.
+    """
+
+    timestamps: Sequence[datetime.datetime] = Property(doc="Strictly increasing log times.")
+    positions: np.ndarray = Property(doc="(T, 2) world x/y positions, metres.")
+    headings: np.ndarray = Property(doc="(T,) headings, radians counter-clockwise from +x.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        object.__setattr__(self, "_initialised", False)
+        self.timestamps = list(self.timestamps)
+        self.positions = as_rows(self.positions, "positions", ncols=2)
+        self.headings = np.ascontiguousarray(np.asarray(self.headings, dtype=np.float64).ravel())
+        object.__setattr__(self, "_initialised", True)
+        n = len(self.timestamps)
+        if n == 0:
+            raise ValueError("timestamps: a navigation track needs at least one entry")
+        if not all(isinstance(t, datetime.datetime) for t in self.timestamps):
+            raise TypeError("timestamps: must be datetime.datetime objects")
+        if self.positions.shape[0] != n or self.headings.shape[0] != n:
+            raise ValueError(
+                f"positions/headings: need one row per timestamp ({n}), got "
+                f"{self.positions.shape[0]} positions and {self.headings.shape[0]} headings")
+        if not (np.all(np.isfinite(self.positions)) and np.all(np.isfinite(self.headings))):
+            raise ValueError("positions/headings: must be finite")
+        seconds = _seconds(self.timestamps, self.timestamps[0])
+        if np.any(np.diff(seconds) <= 0):
+            raise ValueError("timestamps: must be strictly increasing")
+        self.__dict__["_cached_seconds"] = seconds
+
+    def pose_at(self, timestamp: datetime.datetime) -> Pose:
+        if not isinstance(timestamp, datetime.datetime):
+            raise TypeError(f"timestamp: expected a datetime, got {type(timestamp).__name__}")
+        seconds = self._cached("seconds", lambda: _seconds(self.timestamps, self.timestamps[0]))
+        t = (timestamp - self.timestamps[0]).total_seconds()
+        if t < 0 or t > seconds[-1]:
+            raise ValueError(
+                f"timestamp: {timestamp} is outside the navigation track "
+                f"[{self.timestamps[0]}, {self.timestamps[-1]}]")
+        k = int(np.searchsorted(seconds, t, side="right")) - 1
+        if k >= len(seconds) - 1:
+            x, y = self.positions[-1]
+            return Pose(x=float(x), y=float(y), heading=float(self.headings[-1]))
+        f = (t - seconds[k]) / (seconds[k + 1] - seconds[k])
+        x, y = (1 - f) * self.positions[k] + f * self.positions[k + 1]
+        h0, h1 = self.headings[k], self.headings[k + 1]
+        turn = math.remainder(h1 - h0, 2 * math.pi)
+        heading = math.remainder(h0 + f * turn, 2 * math.pi)
+        return Pose(x=float(x), y=float(y), heading=heading)

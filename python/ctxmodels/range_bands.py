@@ -1,0 +1,54 @@
+"""Range bands: a value that is piecewise constant in range from the sensor."""
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from stonesoup.base import Property
+
+from . import _core
+from ._component import ModelComponent, as_float_tuple
+
+
+class RangeBands(ModelComponent):
+    r"""A value piecewise constant over the range :math:`r` from the sensor.
+
+    With edges :math:`e_0 < \dots < e_{k-1}` and values :math:`v_0, \dots, v_k`,
+
+    .. math::
+        f(r) = v_i \quad \text{for } r \text{ between } e_{i-1} \text{ and } e_i,
+
+    (:math:`e_{-1} = 0`, :math:`e_k = \infty`). Which band owns an edge is explicit:
+    ``upper_owns[i]`` puts :math:`r = e_i` in the band above. The paper's lidar,
+    0.95 for :math:`r < 50`, 0.2 for :math:`50 \le r < 80`, 0 beyond, is
+    ``RangeBands(edges=(50, 80), values=(0.95, 0.2, 0.0))``; its radar, 0.4 for
+    :math:`50 < r < 1612` only, is
+    ``RangeBands(edges=(50, 1612), values=(0, 0.4, 0), upper_owns=(False, True))``.
+    """
+
+    edges: Sequence[float] = Property(doc="Strictly increasing range edges in metres, ≥ 0.")
+    values: Sequence[float] = Property(doc="One value per band: ``len(edges) + 1`` values.")
+    upper_owns: bool | Sequence[bool] = Property(
+        default=True,
+        doc="Per edge (or one flag for all): whether a range exactly on the edge belongs to "
+            "the band above it (True) or below it (False).")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._compiled()  # validate now, not at the first scan
+
+    def _owners(self) -> list[bool]:
+        if isinstance(self.upper_owns, (bool, np.bool_)):
+            return [bool(self.upper_owns)] * len(self.edges)
+        return [bool(flag) for flag in self.upper_owns]
+
+    def _compiled(self) -> _core.RangeBands:
+        return self._cached("core", lambda: _core.RangeBands(
+            list(as_float_tuple(self.edges, "edges")),
+            list(as_float_tuple(self.values, "values")),
+            self._owners()))
+
+    def __call__(self, ranges) -> np.ndarray:
+        """The band value at each range (array-like, metres)."""
+        r = np.ascontiguousarray(np.atleast_1d(np.asarray(ranges, dtype=np.float64)).ravel())
+        return self._compiled().at(r)

@@ -1,0 +1,194 @@
+//! Clutter spatial density λ(z; S): a product of factors evaluated per detection.
+//!
+//! Factors: constants, range bands over the detection's range from the sensor, and
+//! threshold rules on one column of detection metadata (the paper's lidar: segment
+//! `area < 10` → 1e-1, otherwise 1e-3). λ is a density in the detection's measurement
+//! space, so it must be strictly positive: trackers divide by it.
+
+use crate::batch::{for_each_chunk, CHUNK};
+use crate::error::{ModelError, Result};
+use crate::pose::Pose;
+use crate::range_bands::RangeBands;
+
+/// λ factor from one metadata column: `below` when value < threshold, `at_or_above`
+/// otherwise; `missing` (if given) when the detection has no such metadata (NaN).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MetadataThreshold {
+    pub column: usize,
+    pub threshold: f64,
+    pub below: f64,
+    pub at_or_above: f64,
+    pub missing: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum ClutterFactor {
+    Constant(f64),
+    Range(RangeBands),
+    Metadata(MetadataThreshold),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClutterModel {
+    factors: Vec<ClutterFactor>,
+    metadata_columns: usize,
+    uses_position: bool,
+}
+
+fn check_density(i: usize, v: f64) -> Result<()> {
+    if !(v.is_finite() && v > 0.0) {
+        return Err(ModelError::invalid(
+            "factors",
+            format!("factor {i} holds {v}, but clutter densities must be finite and > 0 (trackers divide by them)"),
+        ));
+    }
+    Ok(())
+}
+
+impl ClutterModel {
+    pub fn new(factors: Vec<ClutterFactor>) -> Result<Self> {
+        let mut metadata_columns = 0;
+        let mut uses_position = false;
+        for (i, f) in factors.iter().enumerate() {
+            match f {
+                ClutterFactor::Constant(v) => check_density(i, *v)?,
+                ClutterFactor::Range(b) => {
+                    uses_position = true;
+                    for &v in b.values() {
+                        check_density(i, v)?;
+                    }
+                }
+                ClutterFactor::Metadata(rule) => {
+                    if !rule.threshold.is_finite() {
+                        return Err(ModelError::invalid("threshold", format!("must be finite, got {}", rule.threshold)));
+                    }
+                    for v in [rule.below, rule.at_or_above].into_iter().chain(rule.missing) {
+                        check_density(i, v)?;
+                    }
+                    metadata_columns = metadata_columns.max(rule.column + 1);
+                }
+            }
+        }
+        Ok(ClutterModel { factors, metadata_columns, uses_position })
+    }
+
+    /// How many metadata columns the caller must pass.
+    pub fn metadata_columns(&self) -> usize {
+        self.metadata_columns
+    }
+
+    /// Whether λ depends on where the detection is (so positions must be finite).
+    pub fn uses_position(&self) -> bool {
+        self.uses_position
+    }
+
+    /// λ for M detections: world `positions` (M, 2) row-major and `metadata`
+    /// (M, metadata_columns) row-major with NaN for "not present".
+    pub fn evaluate(&self, pose: &Pose, positions: &[f64], metadata: &[f64], out: &mut [f64]) -> Result<()> {
+        let m = out.len();
+        if positions.len() != 2 * m {
+            return Err(ModelError::shape("positions", format!("must be ({m}, 2), got {} values", positions.len())));
+        }
+        let k = self.metadata_columns;
+        if metadata.len() != k * m {
+            return Err(ModelError::shape("metadata", format!("must be ({m}, {k}), got {} values", metadata.len())));
+        }
+        let origin = [pose.x, pose.y];
+        // (row, problem) of the first row that cannot be evaluated.
+        let problems = std::sync::Mutex::new(Vec::<(usize, &'static str, String)>::new());
+        let bad = for_each_chunk(out, |first, chunk| {
+            let mut range = [0.0f64; CHUNK];
+            let mut bad = None;
+            for i in 0..chunk.len() {
+                let row = first + i;
+                let (x, y) = (positions[2 * row], positions[2 * row + 1]);
+                if self.uses_position && !(x.is_finite() && y.is_finite()) && bad.is_none() {
+                    bad = Some(i);
+                    problems.lock().unwrap().push((row, "positions", "position is NaN or infinite".into()));
+                }
+                range[i] = ((x - origin[0]).powi(2) + (y - origin[1]).powi(2)).sqrt();
+                chunk[i] = 1.0;
+            }
+            for f in &self.factors {
+                match f {
+                    ClutterFactor::Constant(v) => chunk.iter_mut().for_each(|o| *o *= v),
+                    ClutterFactor::Range(bands) => {
+                        for i in 0..chunk.len() {
+                            chunk[i] *= bands.at(range[i]);
+                        }
+                    }
+                    ClutterFactor::Metadata(rule) => {
+                        for i in 0..chunk.len() {
+                            let value = metadata[(first + i) * k + rule.column];
+                            chunk[i] *= if value.is_nan() {
+                                match rule.missing {
+                                    Some(v) => v,
+                                    None => {
+                                        if bad.is_none() {
+                                            bad = Some(i);
+                                            problems.lock().unwrap().push((
+                                                first + i,
+                                                "metadata",
+                                                format!("metadata column {} is missing and the rule has no `missing` value", rule.column),
+                                            ));
+                                        }
+                                        f64::NAN
+                                    }
+                                }
+                            } else if value < rule.threshold {
+                                rule.below
+                            } else {
+                                rule.at_or_above
+                            };
+                        }
+                    }
+                }
+            }
+            bad
+        });
+        if let Some(row) = bad {
+            let problems = problems.into_inner().unwrap();
+            let (_, argument, message) = problems.into_iter().filter(|p| p.0 == row).min_by_key(|p| p.1 != "positions").unwrap();
+            return Err(ModelError::non_finite(argument, row, message));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_lidar_area_rule() {
+        let model = ClutterModel::new(vec![ClutterFactor::Metadata(MetadataThreshold {
+            column: 0,
+            threshold: 10.0,
+            below: 1e-1,
+            at_or_above: 1e-3,
+            missing: None,
+        })])
+        .unwrap();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        let mut out = [0.0; 3];
+        model.evaluate(&pose, &[0.0; 6], &[9.99, 10.0, 250.0], &mut out).unwrap();
+        assert_eq!(out, [1e-1, 1e-3, 1e-3]);
+        let err = model.evaluate(&pose, &[0.0; 6], &[9.99, f64::NAN, 250.0], &mut out).unwrap_err();
+        assert_eq!(err, ModelError::non_finite("metadata", 1, "metadata column 0 is missing and the rule has no `missing` value"));
+    }
+
+    #[test]
+    fn paper_radar_range_rule() {
+        let model = ClutterModel::new(vec![ClutterFactor::Range(RangeBands::new(vec![1000.0], vec![1e-3, 1e-2], vec![true]).unwrap())]).unwrap();
+        let pose = Pose::new(10.0, 10.0, 0.0).unwrap();
+        let mut out = [0.0; 3];
+        model.evaluate(&pose, &[10.0, 1009.0, 10.0, 1010.0, 1010.0, 10.0], &[], &mut out).unwrap();
+        assert_eq!(out, [1e-3, 1e-2, 1e-2]);
+    }
+
+    #[test]
+    fn zero_or_negative_density_is_rejected() {
+        assert!(ClutterModel::new(vec![ClutterFactor::Constant(0.0)]).is_err());
+        assert!(ClutterModel::new(vec![ClutterFactor::Constant(-1e-3)]).is_err());
+    }
+}

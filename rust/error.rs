@@ -1,0 +1,50 @@
+//! Errors of the core. Every variant names the argument it is about, so the binding can
+//! turn it into a Python exception whose message a user can act on.
+
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ModelError {
+    /// A configuration value is wrong (unsorted edges, probability outside [0, 1], ...).
+    #[error("{argument}: {message}")]
+    InvalidArgument { argument: &'static str, message: String },
+    /// An input row holds NaN or infinity where a finite number is needed.
+    #[error("{argument}: row {row} is not finite ({message})")]
+    NonFinite { argument: &'static str, row: usize, message: String },
+    /// Array shapes do not fit together.
+    #[error("{argument}: {message}")]
+    Shape { argument: &'static str, message: String },
+}
+
+impl ModelError {
+    pub fn invalid(argument: &'static str, message: impl Into<String>) -> Self {
+        ModelError::InvalidArgument { argument, message: message.into() }
+    }
+
+    pub fn shape(argument: &'static str, message: impl Into<String>) -> Self {
+        ModelError::Shape { argument, message: message.into() }
+    }
+
+    pub fn non_finite(argument: &'static str, row: usize, message: impl Into<String>) -> Self {
+        ModelError::NonFinite { argument, row, message: message.into() }
+    }
+
+    /// The argument the error is about.
+    pub fn argument(&self) -> &'static str {
+        match self {
+            ModelError::InvalidArgument { argument, .. }
+            | ModelError::NonFinite { argument, .. }
+            | ModelError::Shape { argument, .. } => argument,
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, ModelError>;
+
+/// Checks that `value` is a finite probability.
+pub(crate) fn check_probability(argument: &'static str, value: f64) -> Result<()> {
+    if !(0.0..=1.0).contains(&value) {
+        return Err(ModelError::invalid(argument, format!("must be a probability in [0, 1], got {value}")));
+    }
+    Ok(())
+}

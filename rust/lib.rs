@@ -1,0 +1,31 @@
+//! ctxmodels core: context-aware sensor models for multi-target tracking.
+//!
+//! Pure Rust, no Python: coverage geometry (range bands, body-frame sectors, land masks,
+//! line of sight), detection probability P_D(x; S) and clutter density λ(z; S), evaluated
+//! over whole arrays for one sensor pose S. The Python binding lives in [`python`] and is
+//! compiled only with the `python` feature.
+
+pub mod batch;
+pub mod clutter;
+pub mod cubature;
+pub mod detection;
+pub mod error;
+pub mod land;
+pub mod pose;
+pub mod range_bands;
+pub mod sector;
+pub mod sight;
+
+#[cfg(feature = "python")]
+mod python;
+
+pub use batch::PositionMapping;
+pub use clutter::{ClutterFactor, ClutterModel, MetadataThreshold};
+pub use cubature::Rule;
+pub use detection::{DetectionFactor, DetectionModel, ScanDetection};
+pub use error::{ModelError, Result};
+pub use land::{LandMask, Polygon};
+pub use pose::{Mounting, Pose, SensorFrame};
+pub use range_bands::RangeBands;
+pub use sector::AngularSector;
+pub use sight::LineOfSight;
