@@ -1,0 +1,1 @@
+"""The paper's radar–lidar experiment: scenarios, trackers, metrics, runner."""
