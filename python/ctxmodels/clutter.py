@@ -67,7 +67,7 @@ class ClutterDensityModel(ModelComponent):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         object.__setattr__(self, "_initialised", False)
-        self.factors = list(self.factors)
+        self.factors = tuple(self.factors)  # a tuple: no in-place edits behind the compiled model
         object.__setattr__(self, "_initialised", True)
         self._compiled()
 

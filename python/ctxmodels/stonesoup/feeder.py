@@ -1,0 +1,121 @@
+"""Feeders that attach each scan's :class:`~ctxmodels.DetectorContext` to its detections,
+and merge several sensors' scans into one time-ordered, asynchronous stream.
+
+A Stone Soup tracker pulls ``(time, detections)`` pairs from its ``detector``. Wrapping a
+sensor's reader in :class:`ContextFeeder` turns every scan — empty ones included — into a
+:class:`~ctxmodels.DetectionSet` carrying the context of that sensor at that scan, which the
+context-aware hypothesisers and updaters read. :class:`MultiSensorFeeder` then interleaves
+the sensors by time without touching the scans: a 0.8 Hz radar and a 10 Hz lidar stay two
+streams of separate scans, each processed by the tracker at its own timestamp.
+"""
+from __future__ import annotations
+
+import datetime
+import heapq
+from collections.abc import Iterable, Iterator, Sequence
+
+from stonesoup.base import Property
+from stonesoup.buffered_generator import BufferedGenerator
+from stonesoup.feeder.base import DetectionFeeder
+from stonesoup.reader import Reader
+
+from ..context import DetectionSet
+from ..pose import PoseSource
+from ..sensor import SensorModel
+
+
+def _scans(source: Iterable, name: str) -> Iterator[tuple[datetime.datetime, set]]:
+    """``(time, detections)`` pairs of a reader, checked to be pairs and in time order."""
+    try:
+        iterator = iter(source)
+    except TypeError:
+        raise TypeError(f"{name}: expected a detector/reader iterable as (time, detections) "
+                        f"pairs, got {type(source).__name__}") from None
+    previous = None
+    for item in iterator:
+        try:
+            time, detections = item
+        except (TypeError, ValueError):
+            raise TypeError(f"{name}: each item must be a (time, detections) pair, "
+                            f"got {item!r}") from None
+        if previous is not None and time < previous:
+            raise ValueError(f"{name}: scans must come in time order, but a scan at {time} "
+                             f"follows one at {previous}")
+        previous = time
+        yield time, detections
+
+
+class ContextFeeder(DetectionFeeder):
+    r"""Attaches the detector context of one sensor to each of its scans.
+
+    For every ``(t, detections)`` of :attr:`reader` it yields
+
+    .. math::
+        \bigl(t,\ \mathrm{DetectionSet}(\text{detections},\
+        S_t = \text{sensor\_model.context}(\text{pose\_source.pose\_at}(t), t))\bigr),
+
+    empty scans included: an empty scan with its context is how a tracker learns the sensor
+    looked and saw nothing *there* (and nothing about targets it cannot see). The reader
+    must be one sensor's: a Stone Soup detector, reader or simulator, or any iterable of
+    ``(time, set_of_detections)`` pairs in time order. A context already on an incoming set
+    is replaced. Use it as the ``detector`` of a Stone Soup tracker, or merge several with
+    :class:`MultiSensorFeeder`.
+    """
+
+    sensor_model: SensorModel = Property(doc="The sensor's observability model.")
+    pose_source: PoseSource = Property(
+        doc="The platform's pose at each scan time (mounting is applied by the sensor model).")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        if not isinstance(self.sensor_model, SensorModel):
+            raise TypeError(f"sensor_model: expected a ctxmodels SensorModel, "
+                            f"got {type(self.sensor_model).__name__}")
+        if not callable(getattr(self.pose_source, "pose_at", None)):
+            raise TypeError(f"pose_source: expected a PoseSource (with pose_at(timestamp)), "
+                            f"got {type(self.pose_source).__name__}")
+        if self.reader is None:
+            raise TypeError("reader: a ContextFeeder needs the reader of its sensor")
+
+    @BufferedGenerator.generator_method
+    def data_gen(self):
+        for time, detections in _scans(self.reader, "reader"):
+            context = self.sensor_model.context(self.pose_source.pose_at(time), time)
+            yield time, DetectionSet(detections, context)
+
+
+class MultiSensorFeeder(DetectionFeeder):
+    """Interleaves several sensors' scan streams into one time-ordered asynchronous stream.
+
+    Each scan stays one batch at its own timestamp, with its own detector context: nothing is
+    resampled, and scans of different sensors that share a timestamp are *not* merged (they
+    have different contexts); they are emitted one after the other, in the order of
+    :attr:`feeders` (stable). Each feeder must itself yield in time order; a feeder that
+    goes back in time raises :class:`ValueError` naming it.
+
+    Unlike Stone Soup's :class:`~stonesoup.feeder.multi.MultiDataFeeder`, ties never fall
+    back on comparing the detection sets themselves.
+    """
+
+    reader = None  # Several sources, not one: drop Feeder's ``reader`` Property.
+    feeders: Sequence[Reader] = Property(
+        doc="One feeder per sensor (typically :class:`ContextFeeder`), or any iterables of "
+            "(time, detections) pairs in time order.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        if isinstance(self.feeders, (str, bytes)) or not isinstance(self.feeders, Iterable):
+            raise TypeError(f"feeders: expected a sequence of feeders, "
+                            f"got {type(self.feeders).__name__}")
+        self.feeders = list(self.feeders)
+        if not self.feeders:
+            raise ValueError("feeders: need at least one feeder")
+
+    @BufferedGenerator.generator_method
+    def data_gen(self):
+        streams = [_scans(feeder, f"feeders[{i}]") for i, feeder in enumerate(self.feeders)]
+        # heapq.merge breaks equal keys by stream position: stable, and never compares sets.
+        yield from heapq.merge(*streams, key=lambda scan: scan[0])
+
+
+__all__ = ["ContextFeeder", "MultiSensorFeeder"]
