@@ -7,12 +7,32 @@
   :math:`\\lambda` per detection taken from the scan's context (stock behaviour without one).
 * Track management: :class:`ExpectedMissesDeleter` deletes JPDA tracks on the expected, not
   the counted, number of missed detections.
+* GM-PHD / LCC: :class:`PHDUpdater`, :class:`LCCUpdater` (P_D per component, λ per
+  detection, one array call each per scan) and :class:`PointProcessMultiTargetTracker`, which
+  passes each scan's context to the updater and adds measurement-driven birth
+  (:class:`MeasurementDrivenBirth`) and a surveillance region (:class:`CircularRegion`).
+* Particle filters: :class:`BernoulliParticleUpdater`, :class:`SMCPHDUpdater` (P_D over all
+  particles in one array call).
+* :class:`CachedCombinedLinearGaussianTransitionModel`: F(Δt), Q(Δt) computed once per
+  scan interval.
 """
+from .birth import MeasurementDrivenBirth
 from .deleter import ExpectedMissesDeleter
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .hypothesiser import PDAHypothesiser
+from .particle import BernoulliParticleUpdater, SMCPHDUpdater
+from .pointprocess import CircularRegion, LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
+from .transition import CachedCombinedLinearGaussianTransitionModel
 
 __all__ = [
+    "BernoulliParticleUpdater",
+    "CachedCombinedLinearGaussianTransitionModel",
+    "CircularRegion",
+    "LCCUpdater",
+    "MeasurementDrivenBirth",
+    "PHDUpdater",
+    "PointProcessMultiTargetTracker",
+    "SMCPHDUpdater",
     "ContextFeeder",
     "ExpectedMissesDeleter",
     "MultiSensorFeeder",

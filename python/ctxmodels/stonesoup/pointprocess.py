@@ -1,0 +1,386 @@
+r"""Context-aware GM-PHD and GM-LCC updaters, and the point-process tracker that feeds them.
+
+Drop-ins for :mod:`stonesoup.updater.pointprocess` and :mod:`stonesoup.tracker.pointprocess`
+(Stone Soup 1.9.1). Given a scan's :class:`~ctxmodels.DetectorContext`, the GM-PHD update
+(Vo & Ma 2006) uses the state-dependent detection probability of each predicted component
+:math:`j` and the clutter intensity of each detection :math:`z`:
+
+.. math::
+    w^{(j)}_{k|k}(z) = \frac{P_D(m^{(j)}_{k|k-1}; S_k)\, w^{(j)}_{k|k-1}\, q^{(j)}(z)}
+        {\kappa(z) + \sum_l P_D(m^{(l)}_{k|k-1}; S_k)\, w^{(l)}_{k|k-1}\, q^{(l)}(z)},
+    \qquad \kappa(z) = \lambda(z; S_k),
+
+    w^{(j)}_{k|k} = \bigl(1 - P_D(m^{(j)}_{k|k-1}; S_k)\bigr)\, w^{(j)}_{k|k-1}\, \ell_1,
+
+with Stone Soup's survival factor :math:`p_S` applied as the stock updater applies it, and
+:math:`\ell_1 = 1` for the PHD. :math:`\lambda(z; S)` takes the place of the stock
+``clutter_spatial_density``: it is the clutter *intensity* in the measurement space (the
+expected number of clutter points per unit measurement volume per scan), exactly what the
+stock updaters add to the normaliser. Without a context both updaters are the stock ones.
+
+P_D is evaluated for every distinct predicted component of the scan in one
+:meth:`~ctxmodels.DetectorContext.prob_detection_states` call, λ for every detection that
+gates at least one component in one
+:meth:`~ctxmodels.DetectorContext.clutter_spatial_density_detections` call.
+"""
+from __future__ import annotations
+
+import datetime
+import functools
+import inspect
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from scipy.stats import multivariate_normal
+from stonesoup.base import Base, Property
+from stonesoup.tracker.pointprocess import \
+    PointProcessMultiTargetTracker as _StockPointProcessTracker
+from stonesoup.types.numeric import Probability
+from stonesoup.types.state import TaggedWeightedGaussianState
+from stonesoup.types.track import Track
+from stonesoup.types.update import GaussianMixtureUpdate
+from stonesoup.updater.pointprocess import LCCUpdater as _StockLCCUpdater
+from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
+
+from ..context import DetectorContext
+from .birth import MeasurementDrivenBirth
+
+_BIRTH = TaggedWeightedGaussianState.BIRTH
+
+
+def _check_context(detector_context) -> None:
+    if not (hasattr(detector_context, "prob_detection_states")
+            and hasattr(detector_context, "clutter_spatial_density_detections")):
+        raise TypeError("detector_context: expected a ctxmodels DetectorContext (with "
+                        "prob_detection_states and clutter_spatial_density_detections), got "
+                        f"{type(detector_context).__name__}")
+
+
+class _ScanObservability:
+    """P_D of every distinct predicted component and λ of every gating detection of one
+    scan, each from one array call into the context."""
+
+    def __init__(self, hypotheses, detector_context: DetectorContext):
+        _check_context(detector_context)
+        # The hypothesiser's predictor hands every hypothesis of one component the same
+        # predicted state vector and covariance, so their identities key the component.
+        rows: dict[tuple[int, int], int] = {}
+        row_of_prediction: dict[int, int] = {}
+        states = []
+        for multi_hypothesis in hypotheses:
+            for hypothesis in multi_hypothesis:
+                prediction = hypothesis.prediction
+                key = (id(prediction.state_vector), id(prediction.covar))
+                row = rows.get(key)
+                if row is None:
+                    row = rows[key] = len(states)
+                    states.append(prediction)
+                row_of_prediction[id(prediction)] = row
+        pd = detector_context.prob_detection_states(states).tolist()
+        # Python floats: the stock arithmetic with a float P_D, Probability weights included.
+        self._pd = {key: pd[row] for key, row in row_of_prediction.items()}
+
+        gating = [multi_hypothesis for multi_hypothesis in hypotheses[:-1]
+                  if len(multi_hypothesis)]
+        detections = [multi_hypothesis.single_hypotheses[0].measurement
+                      for multi_hypothesis in gating]
+        clutter = (detector_context.clutter_spatial_density_detections(detections).tolist()
+                   if detections else [])
+        # A detection that gates no component has no term to normalise: no λ needed.
+        self._clutter = {id(m): value for m, value in zip(gating, clutter)}
+
+    def prob_detection(self, prediction) -> float:
+        return self._pd[id(prediction)]
+
+    def clutter(self, multi_hypothesis) -> float:
+        return self._clutter[id(multi_hypothesis)]
+
+
+class _ContextPointProcessUpdate:
+    """The context path shared by the PHD and LCC updaters (mixed into their stock classes)."""
+
+    def update(self, hypotheses, detector_context: DetectorContext | None = None):
+        """Update the mixture with the hypotheses of one scan, ordered by detection with the
+        missed-detection hypotheses last (``GaussianMixtureHypothesiser(...,
+        order_by_detection=True)``).
+
+        Without ``detector_context`` this is the stock update. With it, P_D comes from the
+        context per predicted component and κ(z) = λ(z; S) per detection; a component with
+        P_D = 0 has no detection term (its missed-detection term keeps its weight).
+        """
+        if detector_context is None:
+            return super().update(hypotheses)
+        return self._update_with_context(hypotheses, detector_context)
+
+    def _update_with_context(self, hypotheses, detector_context):
+        if len(hypotheses) == 0:
+            raise ValueError("hypotheses: expected the per-detection multi-hypotheses followed "
+                             "by the missed-detection one, got an empty list")
+        scan = _ScanObservability(hypotheses, detector_context)
+        updated_components = []
+        weight_sums = []
+        clutter_terms = []
+        # Same floating-point operations, in the same order, as the stock update, with the
+        # scalar P_D and clutter density replaced by the context's values.
+        for multi_hypothesis in hypotheses[:-1]:
+            detection_components = []
+            weight_sum = 0
+            for hypothesis in multi_hypothesis:
+                prediction = hypothesis.prediction
+                prob_detection = scan.prob_detection(prediction)
+                if prob_detection == 0:
+                    continue  # the term is exactly zero: don't materialise it
+                measurement = hypothesis.measurement
+                measurement_prediction = self.updater.predict_measurement(
+                    prediction, measurement.measurement_model)
+                likelihood = multivariate_normal.pdf(
+                    measurement.state_vector.flatten(),
+                    mean=measurement_prediction.mean.flatten(),
+                    cov=measurement_prediction.covar)
+                weight = prob_detection * prediction.weight * likelihood
+                if prediction.tag != _BIRTH:
+                    weight *= self.prob_survival
+                weight_sum += weight
+                posterior = self.updater.update(hypothesis)
+                detection_components.append(TaggedWeightedGaussianState(
+                    tag=prediction.tag if prediction.tag != _BIRTH else None,
+                    weight=weight,
+                    state_vector=posterior.mean,
+                    covar=posterior.covar,
+                    timestamp=posterior.timestamp))
+            weight_sums.append(weight_sum)
+            clutter = scan.clutter(multi_hypothesis) if len(multi_hypothesis) else None
+            clutter_terms.append(clutter)
+            for component in detection_components:
+                if self.normalisation:
+                    component.weight /= (weight_sum + clutter)
+                updated_components.append(component)
+
+        missed = [hypothesis.prediction for hypothesis in hypotheses[-1]]
+        missed_pd = [scan.prob_detection(prediction) for prediction in missed]
+        l1 = self._context_update_terms(weight_sums, clutter_terms, missed, missed_pd,
+                                        len(hypotheses) - 1)
+
+        for prediction, prob_detection in zip(missed, missed_pd):
+            if prediction.tag != _BIRTH:
+                updated_components.append(TaggedWeightedGaussianState(
+                    tag=prediction.tag,
+                    weight=prediction.weight * (1 - prob_detection) * l1 * self.prob_survival,
+                    state_vector=prediction.mean,
+                    covar=prediction.covar,
+                    timestamp=prediction.timestamp))
+
+        # As stock: no zero weights, which the GaussianMixtureReducer would divide by.
+        for component in updated_components:
+            if component.weight == 0:
+                component.weight = np.finfo(float).eps
+        return GaussianMixtureUpdate(hypothesis=hypotheses, components=updated_components)
+
+    def _context_update_terms(self, weight_sums, clutter_terms, missed, missed_pd,
+                              number_of_measurements):
+        raise NotImplementedError
+
+
+class PHDUpdater(_ContextPointProcessUpdate, _StockPHDUpdater):
+    r"""Gaussian-mixture PHD updater (Vo & Ma 2006) with per-scan context: P_D per predicted
+    component and κ(z) = λ(z; S) per detection (see the module docstring). Same Properties as
+    :class:`stonesoup.updater.pointprocess.PHDUpdater`, whose ``prob_detection`` and
+    ``clutter_spatial_density`` apply to scans without a context.
+    """
+
+    def _context_update_terms(self, weight_sums, clutter_terms, missed, missed_pd,
+                              number_of_measurements):
+        return 1
+
+
+class LCCUpdater(_ContextPointProcessUpdate, _StockLCCUpdater):
+    r"""Gaussian-mixture LCC updater (Clark & De Melo 2018) with per-scan context.
+
+    Besides the first-order terms of :class:`PHDUpdater`, the second-order terms take the
+    context's values:
+
+    .. math::
+        \mu_d = p_S \sum_j P_D^{(j)} w^{(j)}_{k|k-1}, \qquad
+        \mu_\phi = p_S \sum_j \bigl(1 - P_D^{(j)}\bigr) w^{(j)}_{k|k-1}, \qquad
+        c^{(2)}_{k|k} = \mu_\phi^2\, \ell_2
+            - \sum_{z} \frac{W(z)}{\bigl(W(z) + \lambda(z; S)\bigr)^2},
+
+    with :math:`W(z)` the detection's unnormalised weight sum (zero, and no λ needed, for a
+    detection that gates no component). ``mean_number_of_false_alarms`` and
+    ``variance_of_false_alarms`` stay Properties: a context gives λ's density, not the
+    clutter cardinality. When P_D is the same for every component of the scan, the sums are
+    taken as the stock updater takes them (:math:`P_D \cdot \sum_j w^{(j)}`), so a constant
+    context reproduces the stock numbers exactly.
+    """
+
+    def _context_update_terms(self, weight_sums, clutter_terms, missed, missed_pd,
+                              number_of_measurements):
+        predicted_weight_sum = Probability.sum(
+            prediction.weight for prediction in missed) * self.prob_survival
+        predicted_c2 = self.second_order_cumulant * self.prob_survival ** 2
+        if not missed_pd or all(pd == missed_pd[0] for pd in missed_pd):
+            prob_detection = missed_pd[0] if missed_pd else 0.0
+            detected_weight_sum = prob_detection * predicted_weight_sum
+            misdetected_weight_sum = (1 - prob_detection) * predicted_weight_sum
+        else:
+            detected_weight_sum = Probability.sum(
+                pd * prediction.weight for pd, prediction in zip(missed_pd, missed)) \
+                * self.prob_survival
+            misdetected_weight_sum = Probability.sum(
+                (1 - pd) * prediction.weight for pd, prediction in zip(missed_pd, missed)) \
+                * self.prob_survival
+        alpha_pred = ((predicted_weight_sum + self.mean_number_of_false_alarms) ** 2) \
+            / (predicted_c2 + self.second_order_false_alarm_cumulant + 1e-26)
+        denominator = alpha_pred + detected_weight_sum + self.mean_number_of_false_alarms
+        numerator = alpha_pred + number_of_measurements
+        l1 = numerator / denominator
+        l2 = numerator / (denominator ** 2)
+        detected_c2 = Probability.sum([
+            0.0 if clutter is None else weight_sum / ((weight_sum + clutter) ** 2)
+            for weight_sum, clutter in zip(weight_sums, clutter_terms)])
+        self.second_order_cumulant = (misdetected_weight_sum ** 2) * l2 - detected_c2
+        return np.float64(l1)
+
+
+class CircularRegion(Base):
+    """A disc of world x/y: the simplest surveillance region for
+    :class:`PointProcessMultiTargetTracker`."""
+
+    centre: Sequence[float] = Property(doc="Centre (x, y), metres.")
+    radius: float = Property(doc="Radius, metres (> 0).")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        centre = np.asarray(self.centre, dtype=np.float64).ravel()
+        if centre.shape != (2,) or not np.all(np.isfinite(centre)):
+            raise ValueError(f"centre: must be a finite (x, y) pair, got {self.centre!r}")
+        try:
+            radius = float(self.radius)
+        except (TypeError, ValueError):
+            raise TypeError(f"radius: expected a number, got {self.radius!r}") from None
+        if not np.isfinite(radius) or radius <= 0:
+            raise ValueError(f"radius: must be finite and > 0, got {self.radius!r}")
+        self.centre, self.radius = (float(centre[0]), float(centre[1])), radius
+
+    def contains(self, points) -> np.ndarray:
+        """Whether each (x, y) row of ``points`` lies in the disc (boundary included)."""
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        offsets = points - np.asarray(self.centre)
+        return np.einsum("ij,ij->i", offsets, offsets) <= self.radius ** 2
+
+
+@functools.lru_cache(maxsize=None)
+def _update_takes_context(updater_type: type) -> bool:
+    try:
+        return "detector_context" in inspect.signature(updater_type.update).parameters
+    except (TypeError, ValueError):
+        return False
+
+
+def _accepts_context(updater) -> bool:
+    return _update_takes_context(type(updater))
+
+
+class PointProcessMultiTargetTracker(_StockPointProcessTracker):
+    r"""The stock GM point-process tracker (GM-PHD / GM-LCC), fed scan contexts.
+
+    Each scan's context is read from ``detections.detector_context`` (a
+    :class:`~ctxmodels.DetectionSet`) and passed to an updater whose ``update`` takes a
+    ``detector_context`` (:class:`PHDUpdater`, :class:`LCCUpdater`), so a scan with *no*
+    detections still applies the context's P_D to every component. A stock updater, or a
+    plain ``set`` of detections, gives the stock tracker's behaviour exactly.
+
+    Per scan :math:`k`: (1) the stock ``birth_component`` (if any) and the measurement-driven
+    births that are due (see :class:`~ctxmodels.stonesoup.birth.MeasurementDrivenBirth`) join
+    the mixture; (2) hypothesise, (3) update, (4) drop components whose mean lies outside the
+    ``surveillance_region``, (5) reduce, (6) update and end tracks as stock; (7) the scan's
+    detections queue births for later scans (births outside the region are not queued).
+    Without ``birth_component`` and ``birth`` no births are added (the stock tracker needs a
+    ``birth_component``).
+
+    **Why a surveillance region.** With P_D = 0 outside every sensor's coverage and survival
+    probability 1, a component that drifts out of coverage keeps its weight forever (its
+    missed-detection factor is 1) and is never pruned, so the mixture grows without bound.
+    The region bounds the filter honestly: the PHD is estimated inside the region only, and
+    the intensity of components whose mean leaves it is discarded (not redistributed). A
+    region is a :class:`CircularRegion`, any object with ``contains(points) -> bool array``
+    (e.g. a :class:`~ctxmodels.LandMask` built from the region's polygon: inside = kept),
+    or a callable ``f(points) -> bool array``; ``points`` are the (N, 2) world x/y of the
+    component means (``position_mapping``).
+    """
+
+    birth: MeasurementDrivenBirth = Property(
+        default=None,
+        doc="Measurement-driven birth; None keeps the stock single ``birth_component`` only.")
+    surveillance_region: Any = Property(
+        default=None,
+        doc="Region outside which components are dropped after each update: a "
+            "CircularRegion, an object with ``contains(points)``, or a callable on (N, 2) "
+            "positions returning a boolean mask. None: no bound (stock).")
+    position_mapping: Sequence[int] = Property(
+        default=(0, 2), doc="Indices of x and y in the state, for the surveillance region.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        if self.birth is not None and not isinstance(self.birth, MeasurementDrivenBirth):
+            raise TypeError(f"birth: expected a MeasurementDrivenBirth, "
+                            f"got {type(self.birth).__name__}")
+        region = self.surveillance_region
+        if region is not None and not (hasattr(region, "contains") or callable(region)):
+            raise TypeError("surveillance_region: expected an object with contains(points) or "
+                            f"a callable, got {type(region).__name__}")
+        mapping = tuple(self.position_mapping)
+        if len(mapping) != 2 or not all(isinstance(i, (int, np.integer)) and i >= 0
+                                        for i in mapping) or mapping[0] == mapping[1]:
+            raise ValueError(f"position_mapping: must be two different indices >= 0, got {mapping}")
+        self._pending_births: list[TaggedWeightedGaussianState] = []
+
+    def _inside(self, components) -> list:
+        if self.surveillance_region is None or not components:
+            return list(components)
+        mapping = list(self.position_mapping)
+        points = np.array([np.asarray(c.state_vector, dtype=np.float64).ravel()[mapping]
+                           for c in components])
+        region = self.surveillance_region
+        mask = region.contains(points) if hasattr(region, "contains") else region(points)
+        mask = np.asarray(mask, dtype=bool).ravel()
+        if mask.shape != (len(components),):
+            raise ValueError(f"surveillance_region: returned {mask.shape[0]} flags for "
+                             f"{len(components)} positions")
+        return [c for c, keep in zip(components, mask) if keep]
+
+    def __next__(self) -> tuple[datetime.datetime, set[Track]]:
+        time, detections = next(self.detector_iter)
+        context = getattr(detections, "detector_context", None)
+        use_context = context is not None and _accepts_context(self.updater)
+        if not use_context:
+            context = None
+
+        if self.birth_component is not None:
+            self.birth_component.timestamp = time
+            self.gaussian_mixture.append(self.birth_component)
+        if self.birth is not None:
+            entering, self._pending_births = self.birth.due(self._pending_births, time, context)
+            for component in entering:
+                self.gaussian_mixture.append(component)
+
+        hypotheses = self.hypothesiser.hypothesise(
+            self.gaussian_mixture.components, detections, time)
+        if use_context:
+            self.gaussian_mixture = self.updater.update(hypotheses, detector_context=context)
+        else:
+            self.gaussian_mixture = self.updater.update(hypotheses)
+        if self.surveillance_region is not None:
+            self.gaussian_mixture.components = self._inside(self.gaussian_mixture.components)
+        self.gaussian_mixture.components = self.reducer.reduce(self.gaussian_mixture.components)
+        self.update_tracks()
+        self.end_tracks()
+
+        if self.birth is not None:
+            self._pending_births.extend(
+                self._inside(self.birth.components(detections, time)))
+        return time, self.tracks
+
+
+__all__ = ["CircularRegion", "LCCUpdater", "PHDUpdater", "PointProcessMultiTargetTracker"]

@@ -1,0 +1,45 @@
+"""A transition model that computes F(Δt) and Q(Δt) once per time interval.
+
+Stone Soup rebuilds the transition matrix and noise covariance of a combined model (a
+``scipy.linalg.block_diag`` per call) for every prediction of every track and component.
+Asynchronous sensors produce only a handful of distinct scan intervals, so caching per
+Δt removes that cost without changing a single number: the cached arrays are the ones the
+stock model returns for that interval.
+"""
+from __future__ import annotations
+
+from stonesoup.models.transition.linear import CombinedLinearGaussianTransitionModel
+
+
+class CachedCombinedLinearGaussianTransitionModel(CombinedLinearGaussianTransitionModel):
+    """:class:`~stonesoup.models.transition.linear.CombinedLinearGaussianTransitionModel`
+    with F and Q memoised per ``time_interval`` (returned read-only, so a caller that tried
+    to modify a shared array would fail loudly instead of corrupting later predictions)."""
+
+    #: Distinct intervals kept; asynchronous scans make a few, a long run a few hundred.
+    max_cached = 4096
+
+    def _memo(self, kind, compute, kwargs):
+        if set(kwargs) - {"time_interval"}:
+            return compute(**kwargs)  # unusual arguments: no caching
+        cache = self.__dict__.setdefault("_cached_arrays", {})
+        key = (kind, kwargs.get("time_interval"))
+        value = cache.get(key)
+        if value is None:
+            value = compute(**kwargs)
+            value.flags.writeable = False
+            if len(cache) >= self.max_cached:
+                cache.clear()
+            cache[key] = value
+        return value
+
+    def matrix(self, **kwargs):
+        return self._memo("F", super().matrix, kwargs)
+
+    def covar(self, **kwargs):
+        return self._memo("Q", super().covar, kwargs)
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_cached_arrays", None)
+        return state

@@ -1,0 +1,365 @@
+"""Context-aware Bernoulli particle and SMC-PHD updaters, held against the stock Stone Soup
+1.9.1 updaters on seeded scenarios and against the filter equations."""
+from __future__ import annotations
+
+import datetime
+
+import numpy as np
+import pytest
+from scipy.special import logsumexp
+from stonesoup.hypothesiser.simple import SimpleHypothesiser
+from stonesoup.initiator.particle import SMCPHDInitiator
+from stonesoup.models.measurement.linear import LinearGaussian
+from stonesoup.models.transition.linear import (CombinedLinearGaussianTransitionModel,
+                                                ConstantVelocity)
+from stonesoup.predictor.particle import BernoulliParticlePredictor, SMCPHDPredictor
+from stonesoup.regulariser.particle import MCMCRegulariser
+from stonesoup.resampler.particle import SystematicResampler
+from stonesoup.sampler.detection import (GaussianDetectionParticleSampler,
+                                         SwitchingDetectionSampler)
+from stonesoup.sampler.particle import ParticleSampler
+from stonesoup.types.array import StateVectors
+from stonesoup.types.detection import Clutter, Detection, MissedDetection
+from stonesoup.types.hypothesis import SingleHypothesis
+from stonesoup.types.multihypothesis import MultipleHypothesis
+from stonesoup.types.prediction import BernoulliParticleStatePrediction, ParticleStatePrediction
+from stonesoup.types.state import BernoulliParticleState, ParticleState
+from stonesoup.updater.particle import BernoulliParticleUpdater as StockBernoulli
+from stonesoup.updater.particle import SMCPHDUpdater as StockSMCPHD
+
+import ctxmodels
+from ctxmodels import DetectionSet
+from ctxmodels.stonesoup.particle import BernoulliParticleUpdater, SMCPHDUpdater
+
+T0 = datetime.datetime(2024, 1, 1)
+SECOND = datetime.timedelta(seconds=1)
+ORIGIN = (0.0, 0.0, 0.0)
+TRANSITION = CombinedLinearGaussianTransitionModel([ConstantVelocity(0.5)] * 2)
+MEASUREMENT = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2) * 4.0)
+PROB_DETECTION = 0.9
+CLUTTER_RATE = 2.0
+CLUTTER_DISTRIBUTION = 1 / 200.0 ** 2
+CLUTTER = CLUTTER_RATE * CLUTTER_DISTRIBUTION
+
+
+def constant_context(prob_detection=PROB_DETECTION, clutter=CLUTTER):
+    model = ctxmodels.SensorModel(
+        detection=ctxmodels.DetectionProbabilityModel(factors=[prob_detection]),
+        clutter=ctxmodels.ClutterDensityModel(factors=[clutter]))
+    return model.context(ORIGIN)
+
+
+def banded_context(edges=(50, 80), values=(0.95, 0.2, 0.0), clutter_edges=(30,),
+                   clutter_values=(1e-3, 1e-2)):
+    model = ctxmodels.SensorModel(
+        detection=ctxmodels.DetectionProbabilityModel(
+            factors=[ctxmodels.RangeBands(edges=edges, values=values)]),
+        clutter=ctxmodels.ClutterDensityModel(
+            factors=[ctxmodels.RangeBands(edges=clutter_edges, values=clutter_values)]))
+    return model.context(ORIGIN)
+
+
+def scenario(steps=8, seed=5, never_empty=False, empty=()):
+    """One target from (-40, 10) at (4, 1) m/s, P_D 0.9, Poisson(2) clutter over
+    [-100, 100]²; with ``never_empty`` every scan holds at least one clutter point; the
+    scans numbered in ``empty`` hold nothing."""
+    rng = np.random.default_rng(seed)
+    scans = []
+    for k in range(1, steps + 1):
+        timestamp = T0 + k * SECOND
+        detections = set()
+        if rng.random() < PROB_DETECTION:
+            z = np.array([-40 + 4 * k, 10 + k]) + rng.normal(0, 2, 2)
+            detections.add(Detection(z.reshape(-1, 1), timestamp=timestamp,
+                                     measurement_model=MEASUREMENT))
+        for _ in range(max(rng.poisson(CLUTTER_RATE), 1 if never_empty else 0)):
+            detections.add(Clutter(rng.uniform(-100, 100, (2, 1)), timestamp=timestamp,
+                                   measurement_model=MEASUREMENT))
+        scans.append((timestamp, set() if k in empty else detections))
+    return scans
+
+
+# --- Bernoulli ------------------------------------------------------------------------------
+def bernoulli_prior(n=300, seed=1):
+    rng = np.random.default_rng(seed)
+    particles = StateVectors(rng.normal([[-40], [4], [10], [1]], [[15], [2], [15], [2]], (4, n)))
+    return BernoulliParticleState(state_vector=particles, weight=np.full(n, 1 / n),
+                                  existence_probability=0.5, timestamp=T0)
+
+
+def bernoulli_filter(updater_cls, regularise=True, constrain=False):
+    sampler = SwitchingDetectionSampler(
+        detection_sampler=GaussianDetectionParticleSampler(nsamples=100),
+        backup_sampler=ParticleSampler(
+            distribution_func=np.random.multivariate_normal,
+            params={"mean": np.zeros(4), "cov": np.diag([100.0, 4, 100, 4]) ** 2, "size": 100},
+            ndim_state=4))
+    predictor = BernoulliParticlePredictor(transition_model=TRANSITION, birth_sampler=sampler,
+                                           birth_probability=0.05, survival_probability=0.98)
+    updater = updater_cls(
+        measurement_model=None, resampler=SystematicResampler(),
+        regulariser=MCMCRegulariser(transition_model=TRANSITION) if regularise else None,
+        constraint_func=(lambda state: state.state_vector[0, :] > 60) if constrain else None,
+        clutter_rate=CLUTTER_RATE, clutter_distribution=CLUTTER_DISTRIBUTION,
+        detection_probability=PROB_DETECTION, nsurv_particles=300)
+    return predictor, updater
+
+
+def bernoulli_hypotheses(prediction, detections, timestamp):
+    if detections:
+        return MultipleHypothesis([SingleHypothesis(prediction, d) for d in detections])
+    return MultipleHypothesis([SingleHypothesis(prediction, MissedDetection(timestamp=timestamp))])
+
+
+def run_bernoulli(updater_cls, scans, seed, context=None, **options):
+    predictor, updater = bernoulli_filter(updater_cls, **options)
+    np.random.seed(seed)
+    state = bernoulli_prior()
+    history = []
+    for timestamp, detections in scans:
+        prediction = predictor.predict(state, timestamp=timestamp)
+        hypotheses = bernoulli_hypotheses(prediction, detections, timestamp)
+        state = (updater.update(hypotheses) if context is None
+                 else updater.update(hypotheses, detector_context=context))
+        history.append((np.asarray(state.state_vector).tobytes(), state.log_weight.tobytes(),
+                        float(state.existence_probability)))
+    return history
+
+
+@pytest.mark.parametrize("feed", ["no context", "constant context"])
+@pytest.mark.parametrize("options", [{}, {"regularise": False, "constrain": True}],
+                         ids=["regularised", "constrained"])
+def test_bernoulli_reproduces_stock_bit_for_bit(feed, options):
+    # With a context an empty scan is a missed detection (the stock skips it): scans with
+    # detections for the constant-context comparison.
+    scans = (scenario(never_empty=True) if feed == "constant context"
+             else scenario(empty=(3, 6)))
+    context = constant_context() if feed == "constant context" else None
+    stock = run_bernoulli(StockBernoulli, scans, seed=7, **options)
+    ours = run_bernoulli(BernoulliParticleUpdater, scans, seed=7, context=context, **options)
+    assert ours == stock
+    assert 0.9 < stock[-1][2] <= 1  # the scenario confirms the target
+
+
+class CountingContext:
+    def __init__(self, context):
+        self.context = context
+        self.calls = {"prob_detection_array": 0, "clutter_spatial_density_detections": 0}
+
+    def prob_detection_array(self, means, covars=None, *, out=None):
+        self.calls["prob_detection_array"] += 1
+        assert covars is None
+        return self.context.prob_detection_array(means)
+
+    def clutter_spatial_density_detections(self, detections):
+        self.calls["clutter_spatial_density_detections"] += 1
+        return self.context.clutter_spatial_density_detections(detections)
+
+
+def bernoulli_prediction(n=400, seed=2, existence=0.6):
+    """Particles spread over 0–120 m in x, so P_D differs between them."""
+    rng = np.random.default_rng(seed)
+    particles = StateVectors(np.vstack([rng.uniform(0, 120, n), rng.normal(0, 1, n),
+                                        rng.uniform(-5, 5, n), rng.normal(0, 1, n)]))
+    log_weight = np.log(rng.uniform(0.5, 1.5, n))
+    log_weight -= logsumexp(log_weight)
+    return BernoulliParticleStatePrediction(state_vector=particles, log_weight=log_weight,
+                                            existence_probability=existence,
+                                            timestamp=T0 + SECOND)
+
+
+def reference_pd(prediction):
+    x = np.asarray(prediction.state_vector, float)
+    r = np.hypot(x[0], x[2])
+    return np.where(r < 50, 0.95, np.where(r < 80, 0.2, 0.0))
+
+
+def reference_clutter(detection):
+    return 1e-3 if np.hypot(*np.asarray(detection.state_vector, float).ravel()) < 30 else 1e-2
+
+
+def test_bernoulli_state_dependent_update_matches_the_equations():
+    prediction = bernoulli_prediction()
+    detections = [Detection(np.array([[20.0], [1.0]]), timestamp=prediction.timestamp,
+                            measurement_model=MEASUREMENT),
+                  Detection(np.array([[65.0], [-2.0]]), timestamp=prediction.timestamp,
+                            measurement_model=MEASUREMENT)]
+    context = CountingContext(banded_context())
+    updater = BernoulliParticleUpdater(measurement_model=None, clutter_rate=1,
+                                       clutter_distribution=1, detection_probability=0.5)
+    result = updater.update(bernoulli_hypotheses(prediction, detections, prediction.timestamp),
+                            detector_context=context)
+    assert context.calls == {"prob_detection_array": 1, "clutter_spatial_density_detections": 1}
+
+    pd = reference_pd(prediction)
+    w = np.exp(prediction.log_weight)
+    likelihood = np.array([np.exp(MEASUREMENT.logpdf(d, prediction)) for d in detections])
+    ratio = sum(g / reference_clutter(d) for g, d in zip(likelihood, detections))
+    delta = np.sum(pd * w) - np.sum(pd * ratio * w)
+    r = prediction.existence_probability
+    assert result.existence_probability == pytest.approx((1 - delta) / (1 - r * delta) * r,
+                                                         rel=1e-10)
+    expected = (1 - pd + pd * ratio) * w
+    np.testing.assert_allclose(np.exp(result.log_weight), expected / expected.sum(), rtol=1e-9)
+
+
+def test_bernoulli_empty_scan_with_context_is_a_missed_detection():
+    prediction = bernoulli_prediction()
+    hypotheses = bernoulli_hypotheses(prediction, [], prediction.timestamp)
+    updater = BernoulliParticleUpdater(measurement_model=None, clutter_rate=1,
+                                       clutter_distribution=1, detection_probability=0.5)
+    result = updater.update(hypotheses, detector_context=banded_context())
+    pd, w, r = reference_pd(prediction), np.exp(prediction.log_weight), 0.6
+    seen = np.sum(pd * w)
+    assert 0 < seen < 1
+    assert result.existence_probability == pytest.approx((1 - seen) * r / (1 - r * seen), rel=1e-12)
+    expected = (1 - pd) * w
+    np.testing.assert_allclose(np.exp(result.log_weight), expected / expected.sum(), rtol=1e-10)
+    # Out of coverage (P_D 0 at every particle): nothing changes.
+    blind = updater.update(hypotheses, detector_context=constant_context(0.0))
+    assert blind.existence_probability == pytest.approx(0.6, rel=1e-15)
+    np.testing.assert_allclose(blind.log_weight, prediction.log_weight, rtol=0, atol=1e-12)
+    # Without a context the stock updater leaves an empty scan alone.
+    plain = updater.update(hypotheses)
+    assert plain.existence_probability == 0.6
+
+
+def test_bernoulli_log_detection_probability_path():
+    prediction = bernoulli_prediction(n=50)
+    updater = BernoulliParticleUpdater(measurement_model=None, detection_probability=0.3)
+    assert np.all(updater.get_log_detection_probability(prediction) == np.log(0.3))
+    context = CountingContext(banded_context())
+    with np.errstate(divide="raise"):  # log 0 must not warn
+        log_pd = updater.get_log_detection_probability(prediction, context)
+    np.testing.assert_array_equal(np.exp(log_pd), reference_pd(prediction))
+    assert context.calls["prob_detection_array"] == 1
+
+
+# --- SMC-PHD --------------------------------------------------------------------------------
+def smcphd_filter(updater_cls, prob_detect=PROB_DETECTION, n=400):
+    sampler = ParticleSampler(
+        distribution_func=np.random.multivariate_normal,
+        params={"mean": np.zeros(4), "cov": np.diag([60.0, 3, 60, 3]) ** 2, "size": n},
+        ndim_state=4)
+    predictor = SMCPHDPredictor(transition_model=TRANSITION, death_probability=0.01,
+                                birth_probability=0.1, birth_rate=0.05, birth_sampler=sampler,
+                                birth_func_num_samples_field="size")
+    updater = updater_cls(measurement_model=None, prob_detect=prob_detect,
+                          clutter_intensity=CLUTTER,
+                          resampler=SystematicResampler(), num_samples=n)
+    return predictor, updater
+
+
+def smcphd_prior(n=400, seed=4):
+    rng = np.random.default_rng(seed)
+    particles = StateVectors(rng.normal([[-40], [4], [10], [1]], [[10], [2], [10], [2]], (4, n)))
+    return ParticleState(state_vector=particles, weight=np.full(n, 1.0 / n), timestamp=T0)
+
+
+def run_smcphd(updater_cls, scans, seed, context=None):
+    predictor, updater = smcphd_filter(updater_cls)
+    hypothesiser = SimpleHypothesiser(predictor, check_timestamp=False)
+    np.random.seed(seed)
+    state = smcphd_prior()
+    history = []
+    for timestamp, detections in scans:
+        hypotheses = hypothesiser.hypothesise(state, detections, timestamp)
+        state = (updater.update(hypotheses) if context is None
+                 else updater.update(hypotheses, detector_context=context))
+        history.append((np.asarray(state.state_vector).tobytes(), state.log_weight.tobytes()))
+    return history
+
+
+@pytest.mark.parametrize("feed", ["no context", "constant context"])
+def test_smcphd_reproduces_stock_bit_for_bit(feed):
+    scans = scenario(empty=(3, 6))
+    context = constant_context() if feed == "constant context" else None
+    stock = run_smcphd(StockSMCPHD, scans, seed=9)
+    ours = run_smcphd(SMCPHDUpdater, scans, seed=9, context=context)
+    assert ours == stock
+    final = np.frombuffer(stock[-1][1])
+    assert 0.5 < np.exp(logsumexp(final)) < 3  # about one target's worth of intensity
+
+
+def smcphd_hypotheses(prediction, detections):
+    return MultipleHypothesis(
+        [SingleHypothesis(prediction, MissedDetection(timestamp=prediction.timestamp))]
+        + [SingleHypothesis(prediction, d) for d in detections])
+
+
+def test_smcphd_state_dependent_weights_match_the_equations():
+    source = bernoulli_prediction(existence=1.0)
+    prediction = ParticleStatePrediction(state_vector=source.state_vector,
+                                         log_weight=source.log_weight + np.log(1.7),
+                                         timestamp=source.timestamp)
+    detections = [Detection(np.array([[20.0], [1.0]]), timestamp=prediction.timestamp,
+                            measurement_model=MEASUREMENT),
+                  Detection(np.array([[65.0], [-2.0]]), timestamp=prediction.timestamp,
+                            measurement_model=MEASUREMENT),
+                  Detection(np.array([[500.0], [0.0]]), timestamp=prediction.timestamp,
+                            measurement_model=MEASUREMENT)]
+    context = CountingContext(banded_context())
+    updater = SMCPHDUpdater(measurement_model=None, prob_detect=0.5, clutter_intensity=1.0)
+    np.random.seed(0)
+    weights = updater.get_log_weights_per_hypothesis(smcphd_hypotheses(prediction, detections),
+                                                     detector_context=context)
+    assert context.calls == {"prob_detection_array": 1, "clutter_spatial_density_detections": 1}
+    # The stock likelihood g(z|x) of the SMC-PHD adds measurement noise to the particles
+    # (``logpdf(..., noise=True)``): draw the same noise for the reference.
+    np.random.seed(0)
+    likelihoods = np.exp(updater._get_measurement_loglikelihoods(prediction, detections))
+    pd, w = reference_pd(prediction), np.exp(prediction.log_weight)
+    with np.errstate(divide="ignore"):
+        np.testing.assert_allclose(weights[:, 0], np.log((1 - pd) * w), rtol=1e-12)
+    for j, d in enumerate(detections, start=1):
+        term = pd * likelihoods[:, j - 1] * w
+        np.testing.assert_allclose(np.exp(weights[:, j]),
+                                   term / (reference_clutter(d) + term.sum()),
+                                   rtol=1e-9, atol=1e-300)
+    # The update goes through the same path: one P_D call and one λ call per update.
+    context.calls = dict.fromkeys(context.calls, 0)
+    updater.update(smcphd_hypotheses(prediction, detections), detector_context=context)
+    assert context.calls == {"prob_detection_array": 1, "clutter_spatial_density_detections": 1}
+
+
+def test_smcphd_initiator_gets_the_scan_context():
+    """SMCPHDInitiator forwards no context: ``scan_context`` supplies it."""
+    scans = scenario(steps=4, never_empty=True)
+
+    def initiate(updater_cls, wrap):
+        predictor, updater = smcphd_filter(updater_cls)
+        initiator = SMCPHDInitiator(prior_state=smcphd_prior(), predictor=predictor,
+                                    updater=updater, threshold=0.5)
+        np.random.seed(3)
+        out = []
+        for timestamp, detections in scans:
+            with wrap(updater):
+                tracks = initiator.initiate(detections, timestamp)
+            out.append((len(tracks), initiator._state.log_weight.tobytes()))
+        return out, updater
+
+    import contextlib
+    stock, _ = initiate(StockSMCPHD, lambda u: contextlib.nullcontext())
+    same, updater = initiate(SMCPHDUpdater, lambda u: u.scan_context(constant_context()))
+    assert same == stock and any(n for n, _ in stock)
+    assert updater._scan_context is None  # restored on exit
+    blind, _ = initiate(SMCPHDUpdater, lambda u: u.scan_context(constant_context(0.0)))
+    assert all(n == 0 for n, _ in blind)  # nothing can be confirmed where P_D = 0
+
+
+def test_context_must_be_a_context():
+    updater = SMCPHDUpdater(measurement_model=None, prob_detect=0.5, clutter_intensity=1.0)
+    prediction = bernoulli_prediction(n=10)
+    with pytest.raises(TypeError, match="detector_context"):
+        updater.update(smcphd_hypotheses(prediction, []), detector_context=0.9)
+    with pytest.raises(TypeError, match="detector_context"):
+        with updater.scan_context("radar"):
+            pass
+    bernoulli = BernoulliParticleUpdater(measurement_model=None, detection_probability=0.5,
+                                         clutter_rate=1,
+                                         clutter_distribution=1)
+    with pytest.raises(ValueError, match="hypotheses"):
+        bernoulli.update(MultipleHypothesis([]), detector_context=constant_context())
+    # A DetectionSet carries the context the caller passes on.
+    detections = DetectionSet((), constant_context())
+    assert detections.detector_context is not None
