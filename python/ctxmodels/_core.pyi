@@ -1,0 +1,136 @@
+"""Type stubs for ``ctxmodels._core``, the compiled Rust core (source: rust/python.rs).
+
+Array arguments must already be C-contiguous NumPy arrays of the stated dtype (rows of
+float64); the Python components (``ctxmodels.RangeBands`` and friends) convert and validate
+user input before calling in. ``out=`` buffers are filled in place and returned.
+"""
+from collections.abc import Sequence
+from typing import Literal, TypeAlias, final
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "AngularSector",
+    "ClutterModel",
+    "DetectionModel",
+    "LandMask",
+    "LineOfSight",
+    "MetadataThreshold",
+    "RangeBands",
+    "mount",
+    "rule_points",
+]
+
+_Pose: TypeAlias = tuple[float, float, float]
+# `position_mapping` defaults to (0, 2) (Stone Soup's [x, vx, y, vy]). It is written `...`
+# below because PyO3 renders a tuple default as `...` in the runtime signature, and stubtest
+# (run bare by scripts/test.sh) checks stub defaults against that rendering.
+_Mapping: TypeAlias = tuple[int, int]
+_Floats: TypeAlias = NDArray[np.float64]
+_Bools: TypeAlias = NDArray[np.bool_]
+_Rule: TypeAlias = Literal["mean", "cubature", "unscented", "gauss-hermite"]
+
+@final
+class RangeBands:
+    """Piecewise-constant value over range; ``upper_owns[i]``: r == edges[i] is in the band above."""
+
+    def __new__(
+        cls, edges: Sequence[float], values: Sequence[float], upper_owns: Sequence[bool]
+    ) -> RangeBands: ...
+    def at(self, ranges: _Floats) -> _Floats:
+        """Values at each of `ranges`."""
+
+@final
+class AngularSector:
+    """Body-frame sector: ``inside`` within ``width / 2`` of ``centre`` (radians), else ``outside``."""
+
+    def __new__(cls, centre: float, width: float, inside: float, outside: float) -> AngularSector: ...
+
+@final
+class LandMask:
+    """Validated land polygons with a containment index; boundary counts as land."""
+
+    def __new__(cls, polygons: Sequence[tuple[_Floats, Sequence[_Floats]]]) -> LandMask:
+        """`polygons`: list of (shell, [holes]) with rings as (K, 2) float64 arrays."""
+    def contains(self, points: _Floats) -> _Bools:
+        """Whether each (x, y) row of `points` is on land (boundary included)."""
+    @property
+    def vertex_count(self) -> int: ...
+
+@final
+class LineOfSight:
+    """Occlusion of sensor → target segments by a :class:`LandMask`."""
+
+    def __new__(cls, land: LandMask) -> LineOfSight: ...
+    def visible(self, sensor: tuple[float, float], targets: _Floats) -> _Bools:
+        """Whether each target row of `targets` (M, 2) is visible from `sensor` (x, y)."""
+
+@final
+class DetectionModel:
+    """P_D as the product of its factors (each in [0, 1])."""
+
+    def __new__(
+        cls, factors: Sequence[float | RangeBands | AngularSector | LandMask | LineOfSight]
+    ) -> DetectionModel:
+        """`factors`: floats (constants), RangeBands, AngularSector, LandMask (0 on land),
+        LineOfSight (0 when shadowed). P_D is their product."""
+    def evaluate(
+        self,
+        pose: _Pose,
+        states: _Floats,
+        position_mapping: _Mapping = ...,
+        out: _Floats | None = None,
+    ) -> _Floats:
+        """P_D at the positions of `states` (N, D) for a sensor at `pose` (x, y, heading)."""
+    def expected(
+        self,
+        pose: _Pose,
+        means: _Floats,
+        covars: _Floats,
+        position_mapping: _Mapping = ...,
+        rule: _Rule = "cubature",
+        order: int = 3,
+        out: _Floats | None = None,
+    ) -> _Floats:
+        """Expected P_D of Gaussians (`means` (N, D), `covars` (N, D, D)) under `rule`."""
+
+@final
+class MetadataThreshold:
+    """λ factor from metadata column ``column``: ``below`` if value < threshold, else
+    ``at_or_above``; ``missing`` for NaN (None: NaN is an error)."""
+
+    def __new__(
+        cls,
+        column: int,
+        threshold: float,
+        below: float,
+        at_or_above: float,
+        missing: float | None = None,
+    ) -> MetadataThreshold: ...
+
+@final
+class ClutterModel:
+    """λ as the product of its factors (each finite and > 0)."""
+
+    def __new__(cls, factors: Sequence[float | RangeBands | MetadataThreshold]) -> ClutterModel:
+        """`factors`: floats (constants), RangeBands (over range from the sensor) and
+        MetadataThreshold rules. λ is their product."""
+    @property
+    def metadata_columns(self) -> int: ...
+    @property
+    def uses_position(self) -> bool: ...
+    def evaluate(
+        self,
+        pose: _Pose,
+        positions: _Floats,
+        metadata: _Floats,
+        out: _Floats | None = None,
+    ) -> _Floats:
+        """λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing."""
+
+def mount(pose: _Pose, forward: float, left: float, yaw: float) -> _Pose:
+    """The pose (x, y, heading) of a sensor mounted on a platform at `pose`."""
+
+def rule_points(rule: _Rule, order: int = 3) -> tuple[list[tuple[float, float]], list[float]]:
+    """Points and weights of an integration rule in standard-normal space."""
