@@ -11,7 +11,7 @@ use crate::cubature::{cholesky2, Rule};
 use crate::error::{check_probability, ModelError, Result};
 use crate::land::LandMask;
 use crate::pose::{Pose, SensorFrame};
-use crate::range_bands::RangeBands;
+use crate::range_bands::{RangeBands, SquaredBands};
 use crate::sector::{AngularSector, FramedSector};
 use crate::sight::LineOfSight;
 use std::sync::Arc;
@@ -58,63 +58,90 @@ impl DetectionModel {
     pub fn at_pose(&self, pose: &Pose) -> ScanDetection<'_> {
         let frame = pose.frame();
         let mut constant = 1.0;
-        let mut sectors = Vec::new();
+        let mut steps = Vec::with_capacity(self.factors.len());
         for f in &self.factors {
             match f {
                 DetectionFactor::Constant(v) => constant *= v,
-                DetectionFactor::Sector(s) => sectors.push(s.in_frame(&frame)),
-                _ => {}
+                DetectionFactor::Range(bands) => steps.push(match bands.squared() {
+                    Some(sq) => Step::SquaredBands(sq),
+                    None => Step::Bands(bands),
+                }),
+                DetectionFactor::Sector(s) => steps.push(Step::Sector(s.in_frame(&frame))),
+                DetectionFactor::Land(land) => steps.push(Step::Land(land)),
+                DetectionFactor::Sight(sight) => steps.push(Step::Sight(sight)),
             }
         }
-        ScanDetection { model: self, frame, sectors, constant }
+        // Cheap factors first, so land and sight only run where P_D is still non-zero.
+        steps.sort_by_key(|s| matches!(s, Step::Land(_) | Step::Sight(_)));
+        ScanDetection { frame, steps, constant }
     }
+}
+
+#[inline(always)]
+fn is_non_finite(v: f64) -> bool {
+    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+    v.to_bits() & EXPONENT == EXPONENT
+}
+
+/// One factor, prepared for a pose.
+enum Step<'a> {
+    SquaredBands(SquaredBands),
+    Bands(&'a RangeBands),
+    Sector(FramedSector),
+    Land(&'a LandMask),
+    Sight(&'a LineOfSight),
 }
 
 /// A [`DetectionModel`] at one pose.
 pub struct ScanDetection<'a> {
-    model: &'a DetectionModel,
     frame: SensorFrame,
-    sectors: Vec<FramedSector>,
+    steps: Vec<Step<'a>>,
     constant: f64,
 }
 
 impl ScanDetection<'_> {
     /// P_D at world points (xs[i], ys[i]) into out[i]; all slices of one chunk's length.
+    /// Factor by factor over the chunk, so each loop body is small and branch-free enough
+    /// for the compiler to vectorise.
     fn at_points(&self, xs: &[f64], ys: &[f64], out: &mut [f64]) {
         let n = out.len();
+        let (xs, ys) = (&xs[..n], &ys[..n]);
         let mut dx = [0.0f64; CHUNK];
         let mut dy = [0.0f64; CHUNK];
-        let mut range = [0.0f64; CHUNK];
+        let mut r2 = [0.0f64; CHUNK];
+        let (dx, dy, r2) = (&mut dx[..n], &mut dy[..n], &mut r2[..n]);
         let [ox, oy] = self.frame.origin;
         for i in 0..n {
             dx[i] = xs[i] - ox;
             dy[i] = ys[i] - oy;
-            range[i] = (dx[i] * dx[i] + dy[i] * dy[i]).sqrt();
+            r2[i] = dx[i] * dx[i] + dy[i] * dy[i];
             out[i] = self.constant;
         }
-        let mut sectors = self.sectors.iter();
-        for f in &self.model.factors {
-            match f {
-                DetectionFactor::Constant(_) => {}
-                DetectionFactor::Range(bands) => {
+        for step in &self.steps {
+            match step {
+                Step::SquaredBands(bands) => {
                     for i in 0..n {
-                        out[i] *= bands.at(range[i]);
+                        out[i] *= bands.at_squared(r2[i]);
                     }
                 }
-                DetectionFactor::Sector(_) => {
-                    let s = sectors.next().expect("one framed sector per sector factor");
+                Step::Bands(bands) => {
                     for i in 0..n {
-                        out[i] *= s.at(dx[i], dy[i], range[i]);
+                        out[i] *= bands.at(r2[i].sqrt());
                     }
                 }
-                DetectionFactor::Land(land) => {
+                Step::Sector(sector) => {
+                    for i in 0..n {
+                        out[i] *= sector.at_squared(dx[i], dy[i], r2[i]);
+                    }
+                }
+                Step::Land(land) => {
                     for i in 0..n {
                         if out[i] != 0.0 && land.contains([xs[i], ys[i]]) {
                             out[i] = 0.0;
                         }
                     }
                 }
-                DetectionFactor::Sight(sight) => {
+                Step::Sight(sight) => {
                     for i in 0..n {
                         if out[i] != 0.0 && !sight.visible(self.frame.origin, [xs[i], ys[i]]) {
                             out[i] = 0.0;
@@ -130,19 +157,27 @@ impl ScanDetection<'_> {
         mapping.check(ncols, "states")?;
         check_rows(states, ncols, out.len(), "states")?;
         let bad = for_each_chunk(out, |first, chunk| {
+            let n = chunk.len();
+            let rows = &states[first * ncols..(first + n) * ncols];
             let mut xs = [0.0f64; CHUNK];
             let mut ys = [0.0f64; CHUNK];
-            let mut bad = None;
-            for (i, _) in chunk.iter().enumerate() {
-                let row = &states[(first + i) * ncols..(first + i + 1) * ncols];
+            for (i, row) in rows.chunks_exact(ncols).enumerate() {
                 xs[i] = row[mapping.x];
                 ys[i] = row[mapping.y];
-                if bad.is_none() && !(xs[i].is_finite() && ys[i].is_finite()) {
-                    bad = Some(i);
-                }
             }
-            self.at_points(&xs[..chunk.len()], &ys[..chunk.len()], chunk);
-            bad
+            let (xs, ys) = (&xs[..n], &ys[..n]);
+            self.at_points(xs, ys, chunk);
+            // Branch-free scan for NaN/inf (all exponent bits set); the rare bad chunk is then
+            // searched for its first bad row.
+            let mut non_finite = 0u64;
+            for i in 0..n {
+                non_finite |= (is_non_finite(xs[i]) | is_non_finite(ys[i])) as u64;
+            }
+            if non_finite == 0 {
+                None
+            } else {
+                (0..n).find(|&i| !(xs[i].is_finite() && ys[i].is_finite()))
+            }
         });
         match bad {
             Some(row) => Err(ModelError::non_finite("states", row, "position is NaN or infinite")),

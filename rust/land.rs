@@ -122,7 +122,7 @@ impl LandMask {
     pub fn contains(&self, p: Point) -> bool {
         match self.grid.contains(&self.edges, p) {
             Some(inside) => inside,
-            None => contains_exact(&self.edges, p),
+            None => self.grid.contains_row_exact(&self.edges, p),
         }
     }
 }
@@ -306,7 +306,43 @@ fn ring_bounds(ring: &[Point]) -> [f64; 4] {
     b
 }
 
-/// Uniform grid over the edges' bounding box (see the module docs).
+/// One cell of the index: `meta` = edge count << 2 | [`SUBDIVIDED`] | [`CENTRE_ON_LAND`].
+/// A leaf's edges are `cell_edges[start..start + count]`; a subdivided cell's s × s
+/// sub-cells are `sub_slots[start..start + s²]`.
+#[derive(Debug, Clone, Copy, Default)]
+struct Slot {
+    start: u32,
+    meta: u32,
+}
+
+const CENTRE_ON_LAND: u32 = 1;
+const WATER: u64 = 0;
+const LAND: u64 = 1;
+const EDGES: u64 = 2;
+const SUBDIVIDED: u32 = 2;
+
+impl Slot {
+    fn leaf(start: usize, count: usize, centre_on_land: bool) -> Slot {
+        Slot { start: start as u32, meta: ((count as u32) << 2) | centre_on_land as u32 }
+    }
+
+    #[inline(always)]
+    fn count(self) -> usize {
+        (self.meta >> 2) as usize
+    }
+
+    #[inline(always)]
+    fn range(self) -> std::ops::Range<usize> {
+        self.start as usize..self.start as usize + self.count()
+    }
+}
+
+/// Level-0 cells have more edges than this are split into sub-cells.
+const DENSE: usize = 6;
+/// Sub-cells per side of a split cell, at most.
+const MAX_SPLIT: usize = 16;
+
+/// Two-level grid over the edges' bounding box (see the module docs).
 #[derive(Debug, Clone)]
 struct Grid {
     min: Point,
@@ -315,160 +351,316 @@ struct Grid {
     inv_cell: [f64; 2],
     nx: usize,
     ny: usize,
-    /// CSR: edges of cell c are `cell_edges[cell_start[c]..cell_start[c + 1]]`.
-    cell_start: Vec<u32>,
+    /// (nx − 1, ny − 1) as floats, for clamping.
+    last: [f64; 2],
+    slots: Vec<Slot>,
+    /// Two bits per level-0 cell, 32 cells a word: [`WATER`], [`LAND`] (no edge in the
+    /// cell) or [`EDGES`]. Small enough to stay in L1 for the common edge-free cells.
+    kinds: Vec<u64>,
+    /// Sub-cells per side of every split cell (0 when no cell is split).
+    split: usize,
+    sub_cell: [f64; 2],
+    inv_sub_cell: [f64; 2],
+    sub_slots: Vec<Slot>,
     cell_edges: Vec<u32>,
-    centre_on_land: Vec<bool>,
+    /// CSR: the edges touching row j of level-0 cells, each once, for the exact fallback.
+    row_start: Vec<u32>,
+    row_edges: Vec<u32>,
+}
+
+/// Smallest and largest coordinate of all edges.
+fn edge_bounds(edges: &[Edge]) -> (Point, Point) {
+    let mut min = [f64::INFINITY; 2];
+    let mut max = [f64::NEG_INFINITY; 2];
+    for e in edges {
+        for p in [e.a, e.b] {
+            min = [min[0].min(p[0]), min[1].min(p[1])];
+            max = [max[0].max(p[0]), max[1].max(p[1])];
+        }
+    }
+    (min, max)
+}
+
+/// Lists each edge of `candidates` in every cell of an `n[0]` × `n[1]` grid (origin
+/// `origin`, cell size `cell`) that its segment touches. Boxes are grown by `margin`, so
+/// rounding in the query's cell lookup never loses an edge from the cell a point lands in.
+/// Returns (cell id, edge) pairs sorted by cell.
+fn register(edges: &[Edge], candidates: &[u32], origin: Point, cell: [f64; 2], n: [usize; 2], margin: [f64; 2]) -> Vec<(u32, u32)> {
+    let index = |v: f64, axis: usize| (((v - origin[axis]) / cell[axis]).floor().max(0.0) as usize).min(n[axis] - 1);
+    let mut pairs = Vec::with_capacity(candidates.len() * 3);
+    for &k in candidates {
+        let e = &edges[k as usize];
+        let (i0, i1) = (index(e.a[0].min(e.b[0]) - margin[0], 0), index(e.a[0].max(e.b[0]) + margin[0], 0));
+        let (j0, j1) = (index(e.a[1].min(e.b[1]) - margin[1], 1), index(e.a[1].max(e.b[1]) + margin[1], 1));
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let x0 = origin[0] + i as f64 * cell[0];
+                let y0 = origin[1] + j as f64 * cell[1];
+                let grown = [x0 - margin[0], y0 - margin[1], x0 + cell[0] + margin[0], y0 + cell[1] + margin[1]];
+                if segment_touches_box(e, grown) {
+                    pairs.push(((j * n[0] + i) as u32, k));
+                }
+            }
+        }
+    }
+    pairs.sort_unstable();
+    pairs
+}
+
+/// Even–odd parity of the horizontal ray from (x, y) to +∞ for each x of `xs` (ascending),
+/// over `candidates` (which must hold every edge crossing y = `y` right of xs[0]). The same
+/// half-open rule as [`Edge::crossing_x`], so parities agree with the query's walk.
+fn row_parities(edges: &[Edge], candidates: &[u32], y: f64, xs: &[f64], crossings: &mut Vec<f64>, out: &mut Vec<bool>) {
+    crossings.clear();
+    crossings.extend(candidates.iter().filter_map(|&k| edges[k as usize].crossing_x(y)));
+    crossings.sort_unstable_by(|a, b| a.total_cmp(b));
+    out.clear();
+    let mut left = 0; // crossings with x <= the current x
+    for &x in xs {
+        while left < crossings.len() && crossings[left] <= x {
+            left += 1;
+        }
+        out.push((crossings.len() - left) % 2 == 1);
+    }
 }
 
 impl Grid {
     fn build(edges: &[Edge]) -> Grid {
-        let mut min = [f64::INFINITY; 2];
-        let mut max = [f64::NEG_INFINITY; 2];
-        for e in edges {
-            for p in [e.a, e.b] {
-                min = [min[0].min(p[0]), min[1].min(p[1])];
-                max = [max[0].max(p[0]), max[1].max(p[1])];
-            }
-        }
-        // About two cells per edge keeps a cell's edge list short without a huge grid.
-        let target_cells = (2 * edges.len()).clamp(16, 1 << 22) as f64;
+        let (min, max) = edge_bounds(edges);
+        // About one level-0 cell per edge keeps that table small (it is touched by every
+        // query); dense cells are split below.
+        let target_cells = edges.len().clamp(1 << 12, 1 << 22) as f64;
         let (w, h) = ((max[0] - min[0]).max(f64::MIN_POSITIVE), (max[1] - min[1]).max(f64::MIN_POSITIVE));
         let nx = ((target_cells * w / h).sqrt().round() as usize).clamp(1, 1 << 14);
         let ny = ((target_cells / nx as f64).round() as usize).clamp(1, 1 << 14);
         let cell = [w / nx as f64, h / ny as f64];
-        let inv_cell = [1.0 / cell[0], 1.0 / cell[1]];
-        let mut grid = Grid { min, max, cell, inv_cell, nx, ny, cell_start: vec![], cell_edges: vec![], centre_on_land: vec![] };
-        grid.register(edges);
-        grid.sweep_centres(edges);
+        // Generous margins: an edge listed in a cell it misses costs a test, never an error.
+        let scale = min[0].abs().max(min[1].abs()).max(max[0].abs()).max(max[1].abs());
+        let margin_for = |c: [f64; 2]| [c[0] * 1e-7 + scale * 1e-13, c[1] * 1e-7 + scale * 1e-13];
+
+        let all: Vec<u32> = (0..edges.len() as u32).collect();
+        let pairs = register(edges, &all, min, cell, [nx, ny], margin_for(cell));
+        let mut cell_start = vec![0usize; nx * ny + 1];
+        for &(c, _) in &pairs {
+            cell_start[c as usize + 1] += 1;
+        }
+        for c in 0..nx * ny {
+            cell_start[c + 1] += cell_start[c];
+        }
+        let level0_edges: Vec<u32> = pairs.into_iter().map(|(_, k)| k).collect();
+        let cell_list = |c: usize| &level0_edges[cell_start[c]..cell_start[c + 1]];
+
+        // Split dense cells, all into the same s × s, within a memory budget of a few
+        // sub-cells per edge.
+        let dense = (0..nx * ny).filter(|&c| cell_list(c).len() > DENSE).count();
+        let split = if dense == 0 {
+            0
+        } else {
+            let budget = (8 * edges.len()).max(1 << 12) as f64;
+            ((budget / dense as f64).sqrt() as usize).clamp(2, MAX_SPLIT)
+        };
+        let sub_cell = if split > 0 { [cell[0] / split as f64, cell[1] / split as f64] } else { cell };
+        let mut grid = Grid {
+            min,
+            max,
+            cell,
+            inv_cell: [1.0 / cell[0], 1.0 / cell[1]],
+            nx,
+            ny,
+            last: [(nx - 1) as f64, (ny - 1) as f64],
+            slots: vec![Slot::default(); nx * ny],
+            kinds: vec![0; (nx * ny).div_ceil(32)],
+            split,
+            sub_cell,
+            inv_sub_cell: [1.0 / sub_cell[0], 1.0 / sub_cell[1]],
+            sub_slots: Vec::with_capacity(dense * split * split),
+            cell_edges: Vec::with_capacity(level0_edges.len() * 2),
+            row_start: vec![0],
+            row_edges: Vec::new(),
+        };
+
+        let mut seen_in_row = vec![usize::MAX; edges.len()];
+        let (mut crossings, mut parities) = (Vec::new(), Vec::new());
+        let mut xs = Vec::new();
+        for j in 0..ny {
+            // This row's edges, each once: every edge crossing a horizontal line inside the
+            // row is among them.
+            let row_first = grid.row_edges.len();
+            for c in j * nx..(j + 1) * nx {
+                for &k in cell_list(c) {
+                    if seen_in_row[k as usize] != j {
+                        seen_in_row[k as usize] = j;
+                        grid.row_edges.push(k);
+                    }
+                }
+            }
+            grid.row_start.push(grid.row_edges.len() as u32);
+            let row = grid.row_edges[row_first..].to_vec();
+
+            xs.clear();
+            xs.extend((0..nx).map(|i| grid.centre(i, j)[0]));
+            row_parities(edges, &row, grid.centre(0, j)[1], &xs, &mut crossings, &mut parities);
+            let level0_land = parities.clone();
+
+            let dense_in_row: Vec<usize> = (0..nx).filter(|&i| cell_list(j * nx + i).len() > DENSE).collect();
+            // Sub-cell centre parities of this row's split cells, one sweep per sub-row.
+            let mut sub_land = vec![false; dense_in_row.len() * split * split];
+            if !dense_in_row.is_empty() {
+                for sj in 0..split {
+                    xs.clear();
+                    for &i in &dense_in_row {
+                        xs.extend((0..split).map(|si| grid.sub_centre(i, j, si, sj)[0]));
+                    }
+                    let y = grid.sub_centre(0, j, 0, sj)[1];
+                    row_parities(edges, &row, y, &xs, &mut crossings, &mut parities);
+                    for (d, chunk) in parities.chunks(split).enumerate() {
+                        sub_land[(d * split + sj) * split..(d * split + sj + 1) * split].copy_from_slice(chunk);
+                    }
+                }
+            }
+
+            let mut d = 0;
+            for i in 0..nx {
+                let c = j * nx + i;
+                let list = cell_list(c);
+                if list.len() > DENSE {
+                    let origin = [min[0] + i as f64 * cell[0], min[1] + j as f64 * cell[1]];
+                    let sub_pairs = register(edges, list, origin, sub_cell, [split, split], margin_for(sub_cell));
+                    let first_slot = grid.sub_slots.len();
+                    let mut p = 0;
+                    for s in 0..split * split {
+                        let start = grid.cell_edges.len();
+                        while p < sub_pairs.len() && sub_pairs[p].0 as usize == s {
+                            grid.cell_edges.push(sub_pairs[p].1);
+                            p += 1;
+                        }
+                        let (sj, si) = (s / split, s % split);
+                        let land = sub_land[(d * split + sj) * split + si];
+                        grid.sub_slots.push(Slot::leaf(start, grid.cell_edges.len() - start, land));
+                    }
+                    grid.slots[c] = Slot { start: first_slot as u32, meta: SUBDIVIDED };
+                    d += 1;
+                } else {
+                    let start = grid.cell_edges.len();
+                    grid.cell_edges.extend_from_slice(list);
+                    grid.slots[c] = Slot::leaf(start, list.len(), level0_land[i]);
+                }
+            }
+        }
+        for c in 0..nx * ny {
+            let slot = grid.slots[c];
+            let kind = if slot.meta == 0 { WATER } else if slot.meta == CENTRE_ON_LAND { LAND } else { EDGES };
+            grid.kinds[c / 32] |= kind << (2 * (c % 32));
+        }
+        assert!(grid.cell_edges.len() < u32::MAX as usize && grid.sub_slots.len() < u32::MAX as usize, "land index too large");
         grid
     }
 
-    fn cell_of(&self, p: Point) -> (usize, usize) {
-        let i = ((p[0] - self.min[0]) * self.inv_cell[0]).floor();
-        let j = ((p[1] - self.min[1]) * self.inv_cell[1]).floor();
-        ((i.max(0.0) as usize).min(self.nx - 1), (j.max(0.0) as usize).min(self.ny - 1))
-    }
-
-    fn cell_box(&self, i: usize, j: usize) -> [f64; 4] {
-        let x0 = self.min[0] + i as f64 * self.cell[0];
-        let y0 = self.min[1] + j as f64 * self.cell[1];
-        [x0, y0, x0 + self.cell[0], y0 + self.cell[1]]
-    }
-
+    #[inline(always)]
     fn centre(&self, i: usize, j: usize) -> Point {
         [self.min[0] + (i as f64 + 0.5) * self.cell[0], self.min[1] + (j as f64 + 0.5) * self.cell[1]]
     }
 
-    /// Lists each edge in every cell it touches (conservatively: boxes grown by a hair so
-    /// rounding never loses an edge from a cell it passes through).
-    fn register(&mut self, edges: &[Edge]) {
-        let margin = [self.cell[0] * 1e-9, self.cell[1] * 1e-9];
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(edges.len() * 3);
-        for (k, e) in edges.iter().enumerate() {
-            let (i0, j0) = self.cell_of([e.a[0].min(e.b[0]) - margin[0], e.a[1].min(e.b[1]) - margin[1]]);
-            let (i1, j1) = self.cell_of([e.a[0].max(e.b[0]) + margin[0], e.a[1].max(e.b[1]) + margin[1]]);
-            for j in j0..=j1 {
-                for i in i0..=i1 {
-                    let b = self.cell_box(i, j);
-                    let grown = [b[0] - margin[0], b[1] - margin[1], b[2] + margin[0], b[3] + margin[1]];
-                    if segment_touches_box(e, grown) {
-                        pairs.push(((j * self.nx + i) as u32, k as u32));
-                    }
-                }
-            }
-        }
-        pairs.sort_unstable();
-        let n_cells = self.nx * self.ny;
-        self.cell_start = vec![0; n_cells + 1];
-        for &(c, _) in &pairs {
-            self.cell_start[c as usize + 1] += 1;
-        }
-        for c in 0..n_cells {
-            self.cell_start[c + 1] += self.cell_start[c];
-        }
-        self.cell_edges = pairs.into_iter().map(|(_, k)| k).collect();
+    #[inline(always)]
+    fn sub_centre(&self, i: usize, j: usize, si: usize, sj: usize) -> Point {
+        [
+            (self.min[0] + i as f64 * self.cell[0]) + (si as f64 + 0.5) * self.sub_cell[0],
+            (self.min[1] + j as f64 * self.cell[1]) + (sj as f64 + 0.5) * self.sub_cell[1],
+        ]
     }
 
-    /// Whether each cell centre is on land: one horizontal sweep per row of cells. Every
-    /// edge crossing a row's centre line is listed in one of that row's cells.
-    fn sweep_centres(&mut self, edges: &[Edge]) {
-        self.centre_on_land = vec![false; self.nx * self.ny];
-        let mut seen_in_row = vec![usize::MAX; edges.len()];
-        let mut xs: Vec<f64> = Vec::new();
-        for j in 0..self.ny {
-            let y = self.centre(0, j)[1];
-            xs.clear();
-            for i in 0..self.nx {
-                let c = j * self.nx + i;
-                for &k in &self.cell_edges[self.cell_start[c] as usize..self.cell_start[c + 1] as usize] {
-                    if seen_in_row[k as usize] != j {
-                        seen_in_row[k as usize] = j;
-                        if let Some(x) = edges[k as usize].crossing_x(y) {
-                            xs.push(x);
-                        }
-                    }
-                }
-            }
-            xs.sort_unstable_by(|a, b| a.total_cmp(b));
-            // Even–odd: the centre is on land when an odd number of crossings lie right of it.
-            let mut left = 0; // crossings with x <= centre x
-            for i in 0..self.nx {
-                let cx = self.centre(i, j)[0];
-                while left < xs.len() && xs[left] <= cx {
-                    left += 1;
-                }
-                self.centre_on_land[j * self.nx + i] = (xs.len() - left) % 2 == 1;
-            }
-        }
-    }
-
-    /// `Some(on land)`, or `None` when the walk is degenerate and the caller must use the
-    /// exact count.
-    #[inline]
+    /// `Some(on land)`, or `None` when the walk is degenerate and the caller must count
+    /// exactly.
+    #[inline(always)]
     fn contains(&self, edges: &[Edge], p: Point) -> Option<bool> {
-        if !(p[0] >= self.min[0] && p[0] <= self.max[0] && p[1] >= self.min[1] && p[1] <= self.max[1]) {
+        // Clamped into the grid (NaN → 0). A point outside the box lands in a border cell:
+        // an edge-free border cell is water (land reaching the box's side has an edge
+        // there), so only edge cells need the box test.
+        let i = ((p[0] - self.min[0]) * self.inv_cell[0]).max(0.0).min(self.last[0]) as u32 as usize;
+        let j = ((p[1] - self.min[1]) * self.inv_cell[1]).max(0.0).min(self.last[1]) as u32 as usize;
+        let c = j * self.nx + i;
+        // Most cells of a coastline's box hold no edge: two bits answer.
+        let kind = (self.kinds[c / 32] >> (2 * (c % 32))) & 3;
+        if kind != EDGES {
+            return Some(kind == LAND);
+        }
+        let in_box = (p[0] >= self.min[0]) & (p[0] <= self.max[0]) & (p[1] >= self.min[1]) & (p[1] <= self.max[1]);
+        if !in_box {
             return Some(false);
         }
-        let (i, j) = self.cell_of(p);
-        let c = j * self.nx + i;
-        let centre_on_land = self.centre_on_land[c];
-        let list = &self.cell_edges[self.cell_start[c] as usize..self.cell_start[c + 1] as usize];
-        if list.is_empty() {
-            return Some(centre_on_land);
+        let mut slot = self.slots[c];
+        let centre;
+        let tol;
+        if slot.meta & SUBDIVIDED != 0 {
+            let x0 = self.min[0] + i as f64 * self.cell[0];
+            let y0 = self.min[1] + j as f64 * self.cell[1];
+            let si = (((p[0] - x0) * self.inv_sub_cell[0]) as usize).min(self.split - 1);
+            let sj = (((p[1] - y0) * self.inv_sub_cell[1]) as usize).min(self.split - 1);
+            slot = self.sub_slots[slot.start as usize + sj * self.split + si];
+            if slot.count() == 0 {
+                return Some(slot.meta & CENTRE_ON_LAND != 0);
+            }
+            centre = self.sub_centre(i, j, si, sj);
+            tol = self.sub_cell[1] * 1e-9;
+        } else {
+            centre = self.centre(i, j);
+            tol = self.cell[1] * 1e-9;
         }
-        let centre = self.centre(i, j);
-        let (lo, hi) = if p[0] < centre[0] { (p[0], centre[0]) } else { (centre[0], p[0]) };
-        let (ylo, yhi) = if p[1] < centre[1] { (p[1], centre[1]) } else { (centre[1], p[1]) };
-        let tol = self.cell[1] * 1e-9;
-        let mut flips = false;
-        for &k in list {
+        walk(edges, &self.cell_edges[slot.range()], centre, slot.meta & CENTRE_ON_LAND != 0, p, tol)
+    }
+
+    /// Exact even–odd count for `p`, using only the edges of its row (every edge that can
+    /// cross the ray from `p` to +x) — the fallback for degenerate walks.
+    fn contains_row_exact(&self, edges: &[Edge], p: Point) -> bool {
+        let j = (((p[1] - self.min[1]) * self.inv_cell[1]) as usize).min(self.ny - 1);
+        let row = &self.row_edges[self.row_start[j] as usize..self.row_start[j + 1] as usize];
+        let mut inside = false;
+        for &k in row {
             let e = &edges[k as usize];
             if e.touches(p) {
-                return Some(true);
+                return true;
             }
-            // Horizontal leg, centre → (p.x, centre.y): the same half-open rule the sweep used.
-            if let Some(x) = e.crossing_x(centre[1]) {
-                if x > lo && x <= hi {
-                    flips = !flips;
-                }
-            }
-            // Vertical leg, (p.x, centre.y) → p.
-            let (ax, bx) = (e.a[0], e.b[0]);
-            let spans_leg = e.a[1].max(e.b[1]) >= ylo && e.a[1].min(e.b[1]) <= yhi;
-            if spans_leg && (ax == p[0] || bx == p[0]) {
-                return None;
-            }
-            if (ax > p[0]) != (bx > p[0]) {
-                let y = e.a[1] + (p[0] - ax) * (e.b[1] - e.a[1]) / (bx - ax);
-                if (y - centre[1]).abs() <= tol || (y - p[1]).abs() <= tol {
-                    return None;
-                }
-                if y > ylo && y < yhi {
-                    flips = !flips;
-                }
+            if let Some(x) = e.crossing_x(p[1]) {
+                inside ^= x > p[0];
             }
         }
+        inside
+    }
+}
+
+/// Parity walk inside one cell: from the cell centre (whose answer is known) horizontally
+/// to (p.x, centre.y), then vertically to p, flipping once per edge crossed. The path stays
+/// inside the cell, so the cell's edge list holds every edge it can cross. Branch-free over
+/// the edges; `None` when an edge meets the path at a vertex or a leg's end (exact count
+/// needed).
+#[inline(always)]
+fn walk(edges: &[Edge], list: &[u32], centre: Point, centre_on_land: bool, p: Point, tol: f64) -> Option<bool> {
+    let (lo, hi) = if p[0] < centre[0] { (p[0], centre[0]) } else { (centre[0], p[0]) };
+    let (ylo, yhi) = if p[1] < centre[1] { (p[1], centre[1]) } else { (centre[1], p[1]) };
+    let mut flips = false;
+    let mut touch = false;
+    let mut degenerate = false;
+    for &k in list {
+        let e = &edges[k as usize];
+        touch |= e.touches(p);
+        // Horizontal leg, centre → (p.x, centre.y): the half-open rule of the row sweep.
+        let crosses_h = (e.a[1] > centre[1]) != (e.b[1] > centre[1]);
+        let x = e.a[0] + (centre[1] - e.a[1]) * (e.b[0] - e.a[0]) / (e.b[1] - e.a[1]);
+        flips ^= crosses_h & (x > lo) & (x <= hi);
+        // Vertical leg, (p.x, centre.y) → p.
+        let (ax, bx) = (e.a[0], e.b[0]);
+        let spans_leg = (e.a[1].max(e.b[1]) >= ylo) & (e.a[1].min(e.b[1]) <= yhi);
+        degenerate |= spans_leg & ((ax == p[0]) | (bx == p[0]));
+        let crosses_v = (ax > p[0]) != (bx > p[0]);
+        let y = e.a[1] + (p[0] - ax) * (e.b[1] - e.a[1]) / (bx - ax);
+        degenerate |= crosses_v & (((y - centre[1]).abs() <= tol) | ((y - p[1]).abs() <= tol));
+        flips ^= crosses_v & (y > ylo) & (y < yhi);
+    }
+    if touch {
+        Some(true)
+    } else if degenerate {
+        None
+    } else {
         Some(centre_on_land != flips)
     }
 }
@@ -477,13 +669,12 @@ fn segment_touches_box(e: &Edge, b: [f64; 4]) -> bool {
     if e.a[0].max(e.b[0]) < b[0] || e.a[0].min(e.b[0]) > b[2] || e.a[1].max(e.b[1]) < b[1] || e.a[1].min(e.b[1]) > b[3] {
         return false;
     }
-    // The segment's line must separate neither all four corners to one side.
+    // The segment's line must not leave all four corners strictly on one side.
     let corners = [[b[0], b[1]], [b[2], b[1]], [b[2], b[3]], [b[0], b[3]]];
-    let signs: Vec<f64> = corners.iter().map(|&c| orientation(e.a, e.b, c)).collect();
-    let all_pos = signs.iter().all(|&s| s > 0.0);
-    let all_neg = signs.iter().all(|&s| s < 0.0);
-    !(all_pos || all_neg)
+    let signs = corners.map(|c| orientation(e.a, e.b, c));
+    !(signs.iter().all(|&s| s > 0.0) || signs.iter().all(|&s| s < 0.0))
 }
+
 
 #[cfg(test)]
 mod tests {

@@ -65,6 +65,59 @@ impl RangeBands {
     }
 }
 
+/// `if condition { a } else { b }` without a branch: bit masks, exact values. Range and
+/// bearing outcomes are data-dependent, so a branch here mispredicts on real data.
+#[inline(always)]
+pub(crate) fn select(condition: bool, a: f64, b: f64) -> f64 {
+    let mask = (condition as u64).wrapping_neg();
+    f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
+}
+
+/// Most edges the branch-free squared-range form takes; models with more use [`RangeBands::at`].
+pub const SQUARED_EDGES: usize = 4;
+
+/// [`RangeBands`] compared on squared range, unrolled over a fixed number of edges (padded
+/// with +∞, which is never passed) so the band lookup is a chain of selects the compiler can
+/// vectorise — no square root, no branch.
+#[derive(Debug, Clone, Copy)]
+pub struct SquaredBands {
+    edges2: [f64; SQUARED_EDGES],
+    upper_owns: [bool; SQUARED_EDGES],
+    values: [f64; SQUARED_EDGES + 1],
+}
+
+impl SquaredBands {
+    #[inline(always)]
+    pub fn at_squared(&self, r2: f64) -> f64 {
+        let mut value = self.values[0];
+        for k in 0..SQUARED_EDGES {
+            let passed = (r2 > self.edges2[k]) | (self.upper_owns[k] & (r2 == self.edges2[k]));
+            value = select(passed, self.values[k + 1], value);
+        }
+        value
+    }
+}
+
+impl RangeBands {
+    /// The squared-range form, if the bands have at most [`SQUARED_EDGES`] edges.
+    pub fn squared(&self) -> Option<SquaredBands> {
+        if self.edges.len() > SQUARED_EDGES {
+            return None;
+        }
+        let mut bands = SquaredBands {
+            edges2: [f64::INFINITY; SQUARED_EDGES],
+            upper_owns: [false; SQUARED_EDGES],
+            values: [*self.values.last().unwrap(); SQUARED_EDGES + 1],
+        };
+        for (k, &e) in self.edges.iter().enumerate() {
+            bands.edges2[k] = e * e;
+            bands.upper_owns[k] = self.upper_owns[k];
+        }
+        bands.values[..self.values.len()].copy_from_slice(&self.values);
+        Some(bands)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -104,6 +157,18 @@ mod tests {
         assert_eq!(RangeBands::new(vec![1.0], vec![1.0], vec![true]).unwrap_err().argument(), "values");
         assert_eq!(RangeBands::new(vec![1.0], vec![1.0, f64::NAN], vec![true]).unwrap_err().argument(), "values");
         assert_eq!(RangeBands::new(vec![1.0], vec![1.0, 0.0], vec![]).unwrap_err().argument(), "upper_owns");
+    }
+
+    #[test]
+    fn squared_form_matches_range_form() {
+        for bands in [lidar(), radar(), RangeBands::new(vec![], vec![0.3], vec![]).unwrap()] {
+            let sq = bands.squared().unwrap();
+            for r in [0.0, 10.0, 49.999, 50.0, 50.001, 79.0, 80.0, 1611.0, 1612.0, 1e5] {
+                assert_eq!(sq.at_squared(r * r), bands.at(r), "r = {r}");
+            }
+        }
+        let many = RangeBands::new(vec![1.0, 2.0, 3.0, 4.0, 5.0], vec![0.0; 6], vec![true; 5]).unwrap();
+        assert!(many.squared().is_none());
     }
 
     #[test]

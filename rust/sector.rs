@@ -8,6 +8,7 @@
 
 use crate::error::{ModelError, Result};
 use crate::pose::SensorFrame;
+use crate::range_bands::select;
 use std::f64::consts::{PI, TAU};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -68,6 +69,20 @@ pub struct FramedSector {
 }
 
 impl FramedSector {
+    /// Inside test on the squared range r² (no square root): with c = cos(width/2),
+    /// d·u ≥ r c ⇔ (d·u ≥ 0 and (d·u)² ≥ r² c²) when c ≥ 0, and
+    /// (d·u ≥ 0 or (d·u)² ≤ r² c²) when c < 0. A full circle is inside everywhere.
+    #[inline(always)]
+    pub fn at_squared(&self, dx: f64, dy: f64, r2: f64) -> f64 {
+        let along = dx * self.centre[0] + dy * self.centre[1];
+        let bound = r2 * self.cos_half * self.cos_half;
+        let ahead = along >= 0.0;
+        let narrow = self.cos_half >= 0.0;
+        let inside = (narrow & ahead & (along * along >= bound))
+            | (!narrow & (ahead | (along * along <= bound) | (self.cos_half <= -1.0)));
+        select(inside, self.inside, self.outside)
+    }
+
     #[inline(always)]
     pub fn at(&self, dx: f64, dy: f64, range: f64) -> f64 {
         let along = dx * self.centre[0] + dy * self.centre[1];
@@ -115,6 +130,21 @@ mod tests {
         assert_eq!(value_at_bearing(&wide, 0.0, 151f64.to_radians()), 0.0);
         let full = AngularSector::new(0.0, TAU, 1.0, 0.0).unwrap();
         assert_eq!(value_at_bearing(&full, 0.0, PI), 1.0);
+    }
+
+    #[test]
+    fn squared_test_matches_range_test() {
+        let frame = Pose::new(0.0, 0.0, 0.4).unwrap().frame();
+        for width_deg in [10.0, 65.0, 179.0, 181.0, 300.0, 360.0] {
+            let s = AngularSector::new(2.0, f64::to_radians(width_deg), 0.25, 0.75).unwrap().in_frame(&frame);
+            for k in 0..3600 {
+                let b = k as f64 * 0.1f64.to_radians() + 0.00037;
+                let (dx, dy) = (250.0 * b.cos(), 250.0 * b.sin());
+                let r2 = dx * dx + dy * dy;
+                assert_eq!(s.at_squared(dx, dy, r2), s.at(dx, dy, r2.sqrt()), "width {width_deg} bearing {b}");
+            }
+            assert_eq!(s.at_squared(0.0, 0.0, 0.0), 0.25, "the sensor's own position is inside");
+        }
     }
 
     #[test]

@@ -13,11 +13,17 @@
   (:class:`MeasurementDrivenBirth`) and a surveillance region (:class:`CircularRegion`).
 * Particle filters: :class:`BernoulliParticleUpdater`, :class:`SMCPHDUpdater` (P_D over all
   particles in one array call).
+* Fast GM-PHD chain: :class:`FastGaussianMixtureHypothesiser`, :class:`FastPHDUpdater`,
+  :class:`FastLCCUpdater`, :class:`FastGaussianMixtureReducer` — the stock results, computed
+  a scan at a time in stacked arrays.
 * :class:`CachedCombinedLinearGaussianTransitionModel`: F(Δt), Q(Δt) computed once per
   scan interval.
 """
 from .birth import MeasurementDrivenBirth
 from .deleter import ExpectedMissesDeleter
+from .fast_hypothesiser import FastGaussianMixtureHypothesiser
+from .fast_reducer import FastGaussianMixtureReducer
+from .fast_updater import FastLCCUpdater, FastPHDUpdater
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .hypothesiser import PDAHypothesiser
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
@@ -34,6 +40,10 @@ __all__ = [
     "PointProcessMultiTargetTracker",
     "SMCPHDUpdater",
     "ContextFeeder",
+    "FastGaussianMixtureHypothesiser",
+    "FastGaussianMixtureReducer",
+    "FastLCCUpdater",
+    "FastPHDUpdater",
     "ExpectedMissesDeleter",
     "MultiSensorFeeder",
     "PDAHypothesiser",
