@@ -94,20 +94,17 @@ impl ClutterModel {
             return Err(ModelError::shape("metadata", format!("must be ({m}, {k}), got {} values", metadata.len())));
         }
         let origin = [pose.x, pose.y];
-        // (row, problem) of the first row that cannot be evaluated.
+        // The first row that cannot be evaluated, with the argument and the problem.
         let problems = std::sync::Mutex::new(Vec::<(usize, &'static str, String)>::new());
         let bad = for_each_chunk(out, |first, chunk| {
             let mut range = [0.0f64; CHUNK];
-            let mut bad = None;
             for i in 0..chunk.len() {
                 let row = first + i;
                 let (x, y) = (positions[2 * row], positions[2 * row + 1]);
-                if self.uses_position && !(x.is_finite() && y.is_finite()) && bad.is_none() {
-                    bad = Some(i);
-                    problems.lock().unwrap().push((row, "positions", "position is NaN or infinite".into()));
-                }
                 range[i] = ((x - origin[0]).powi(2) + (y - origin[1]).powi(2)).sqrt();
-                chunk[i] = 1.0;
+                // NaN marks the row as not evaluable and survives every product below.
+                let unusable = self.uses_position && !(x.is_finite() && y.is_finite());
+                chunk[i] = if unusable { f64::NAN } else { 1.0 };
             }
             for f in &self.factors {
                 match f {
@@ -121,20 +118,7 @@ impl ClutterModel {
                         for i in 0..chunk.len() {
                             let value = metadata[(first + i) * k + rule.column];
                             chunk[i] *= if value.is_nan() {
-                                match rule.missing {
-                                    Some(v) => v,
-                                    None => {
-                                        if bad.is_none() {
-                                            bad = Some(i);
-                                            problems.lock().unwrap().push((
-                                                first + i,
-                                                "metadata",
-                                                format!("metadata column {} is missing and the rule has no `missing` value", rule.column),
-                                            ));
-                                        }
-                                        f64::NAN
-                                    }
-                                }
+                                rule.missing.unwrap_or(f64::NAN)
                             } else if value < rule.threshold {
                                 rule.below
                             } else {
@@ -144,11 +128,29 @@ impl ClutterModel {
                     }
                 }
             }
-            bad
+            // Every factor value is finite, so a non-finite λ marks a row that could not be
+            // evaluated; say why for the first one.
+            let i = chunk.iter().position(|v| !v.is_finite())?;
+            let row = first + i;
+            let (x, y) = (positions[2 * row], positions[2 * row + 1]);
+            let problem = if self.uses_position && !(x.is_finite() && y.is_finite()) {
+                ("positions", "position is NaN or infinite".to_string())
+            } else {
+                let column = self.factors.iter().find_map(|f| match f {
+                    ClutterFactor::Metadata(rule) if rule.missing.is_none() && metadata[row * k + rule.column].is_nan() => Some(rule.column),
+                    _ => None,
+                });
+                match column {
+                    Some(c) => ("metadata", format!("metadata column {c} is missing and the rule has no `missing` value")),
+                    None => ("positions", "λ is not finite".to_string()),
+                }
+            };
+            problems.lock().unwrap().push((row, problem.0, problem.1));
+            Some(i)
         });
         if let Some(row) = bad {
             let problems = problems.into_inner().unwrap();
-            let (_, argument, message) = problems.into_iter().filter(|p| p.0 == row).min_by_key(|p| p.1 != "positions").unwrap();
+            let (_, argument, message) = problems.into_iter().find(|p| p.0 == row).unwrap();
             return Err(ModelError::non_finite(argument, row, message));
         }
         Ok(())

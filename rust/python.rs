@@ -33,6 +33,10 @@ fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> crate::Result<T> + Send
 }
 
 fn slice<'a, T: numpy::Element>(a: &'a PyReadonlyArray2<'_, T>, argument: &str) -> PyResult<&'a [T]> {
+    // as_slice also accepts Fortran order, which would be read as rows: wrong numbers.
+    if !a.is_c_contiguous() {
+        return Err(PyValueError::new_err(format!("{argument}: must be C-contiguous")));
+    }
     a.as_slice().map_err(|_| PyValueError::new_err(format!("{argument}: must be C-contiguous")))
 }
 
@@ -86,7 +90,7 @@ impl PyRangeBands {
 
     /// Values at each of `ranges`.
     fn at<'py>(&self, py: Python<'py>, ranges: PyReadonlyArray1<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let r = ranges.as_slice().map_err(|_| PyValueError::new_err("ranges: must be C-contiguous"))?;
+        let r = ranges.as_slice().map_err(|_| PyValueError::new_err("ranges: must be contiguous"))?;
         Ok(PyArray1::from_vec(py, r.iter().map(|&x| self.0.at(x)).collect()))
     }
 }
@@ -265,6 +269,9 @@ impl PyDetectionModel {
             return Err(PyValueError::new_err(format!("covars: must have shape ({n}, {ncols}, {ncols}) to match means, got {cshape:?}")));
         }
         let m = slice(&means, "means")?;
+        if !covars.is_c_contiguous() {
+            return Err(PyValueError::new_err("covars: must be C-contiguous"));
+        }
         let c = covars.as_slice().map_err(|_| PyValueError::new_err("covars: must be C-contiguous"))?;
         let result = output(py, out, n)?;
         let mut rw = result.readwrite();

@@ -250,9 +250,6 @@ def test_components_are_immutable(factory):
         np.testing.assert_array_equal(x, y)
 
 
-@pytest.mark.xfail(strict=True, reason="core bug (reported): NavigationTrack and LandMask keep the "
-                                       "caller's arrays (as_rows does not copy) and leave them writeable, so "
-                                       "editing them changes equality/hash/YAML behind the compiled model")
 def test_array_properties_neither_alias_the_input_nor_accept_edits():
     positions, headings, shell = np.array([[0.0, 0.0], [10.0, 0.0]]), np.array([0.0, 1.0]), ISLAND.copy()
     track = NavigationTrack(timestamps=[T0, T0 + datetime.timedelta(seconds=1)], positions=positions,

@@ -123,8 +123,6 @@ def test_non_contiguous_inputs_are_converted_and_evaluated_correctly():
                                   RangeBands(edges=(50, 80), values=(0.95, 0.2, 0.0))(np.abs(ranges).copy()))
 
 
-@pytest.mark.xfail(strict=True, reason="core bug (reported): the raw binding reads Fortran-ordered arrays "
-                                       "as row-major; the Python layer converts, so the public API is safe")
 def test_raw_core_refuses_arrays_that_are_not_c_contiguous():
     core = RADAR._compiled()
     fortran = np.asfortranarray(STATES[:10])
@@ -183,9 +181,6 @@ def test_non_finite_clutter_inputs_name_their_argument_and_row():
     assert "row 1" in message
 
 
-@pytest.mark.xfail(strict=True, reason="core bug (reported): within one 1024-row chunk, rust/clutter.rs "
-                                       "checks every position before any metadata, so a later bad position "
-                                       "is reported instead of an earlier missing metadata value")
 def test_clutter_reports_the_first_bad_row_whatever_the_problem():
     positions, metadata = np.zeros((20, 2)), np.ones((20, 1))
     metadata[5] = np.nan

@@ -112,6 +112,14 @@ def as_rows(array: Any, name: str, *, ncols: int | None = None) -> np.ndarray:
     return np.ascontiguousarray(rows, dtype=np.float64)
 
 
+def frozen_copy(array: np.ndarray) -> np.ndarray:
+    """A private read-only copy of an array a component keeps: later edits of the caller's
+    array cannot reach it, and edits of the stored one fail loudly."""
+    array = np.array(array, dtype=np.float64, order="C", copy=True)
+    array.setflags(write=False)
+    return array
+
+
 def check_out(out: Any, n: int) -> np.ndarray | None:
     """Validates a caller's `out=` buffer (float64, C-contiguous, writeable, length n)."""
     if out is None:

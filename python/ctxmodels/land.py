@@ -8,11 +8,11 @@ import numpy as np
 from stonesoup.base import Property
 
 from . import _core
-from ._component import ModelComponent, as_rows
+from ._component import ModelComponent, as_rows, frozen_copy
 
 
 def _ring(ring: Any, where: str) -> np.ndarray:
-    return as_rows(ring, f"polygons: {where}", ncols=2)
+    return frozen_copy(as_rows(ring, f"polygons: {where}", ncols=2))
 
 
 def _normalise_polygon(polygon: Any, index: int) -> dict:

@@ -15,7 +15,7 @@ import numpy as np
 from stonesoup.base import Property
 
 from . import _core
-from ._component import ModelComponent, as_float, as_rows
+from ._component import ModelComponent, as_float, as_rows, frozen_copy
 
 
 class Pose(ModelComponent):
@@ -90,8 +90,8 @@ class NavigationTrack(PoseSource):
         super().__init__(*args, **kwargs)
         object.__setattr__(self, "_initialised", False)
         self.timestamps = list(self.timestamps)
-        self.positions = as_rows(self.positions, "positions", ncols=2)
-        self.headings = np.ascontiguousarray(np.asarray(self.headings, dtype=np.float64).ravel())
+        self.positions = frozen_copy(as_rows(self.positions, "positions", ncols=2))
+        self.headings = frozen_copy(np.asarray(self.headings, dtype=np.float64).ravel())
         object.__setattr__(self, "_initialised", True)
         n = len(self.timestamps)
         if n == 0:

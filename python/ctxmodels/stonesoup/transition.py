@@ -20,8 +20,10 @@ class CachedCombinedLinearGaussianTransitionModel(CombinedLinearGaussianTransiti
     max_cached = 4096
 
     def _memo(self, kind, compute, kwargs):
-        if set(kwargs) - {"time_interval"}:
-            return compute(**kwargs)  # unusual arguments: no caching
+        # A linear Gaussian model's F and Q depend on Δt only; predictors also pass the
+        # `prior`, which they do not use. Anything else: no caching.
+        if set(kwargs) - {"time_interval", "prior"}:
+            return compute(**kwargs)
         cache = self.__dict__.setdefault("_cached_arrays", {})
         key = (kind, kwargs.get("time_interval"))
         value = cache.get(key)
