@@ -1,0 +1,106 @@
+"""End to end: the experiment runner, its outputs and the CLI, on short runs."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ctxmodels.cli import main
+from ctxmodels.experiment.runner import ExperimentConfig, Job, run_experiment, run_job
+from ctxmodels.experiment.scenarios import make_scenario
+from ctxmodels.experiment.sensors import paper_sensor_models
+from ctxmodels.experiment.trackers import TRACKERS, applicable, build_tracker
+
+
+def test_every_tracker_builds_and_runs_a_few_scans():
+    run = make_scenario("islands", 0, 3.0)
+    for name, spec in TRACKERS.items():
+        tracker = build_tracker(spec, run, fast=True)
+        scans = sum(1 for _ in tracker)
+        expected = len(run.radar_scans) + (len(run.lidar_scans) if "lidar" in spec.sensors else 0)
+        assert scans == expected, name
+
+
+def test_line_of_sight_tracker_only_on_islands():
+    assert applicable("gmphd-sight", "islands")
+    assert not applicable("gmphd-sight", "mixed-range")
+    jobs = ExperimentConfig(scenarios=("mixed-range",), seeds=(0,)).jobs()
+    assert not any(job.tracker == "gmphd-sight" for job in jobs)
+
+
+def test_context_models_follow_the_paper():
+    models = paper_sensor_models()
+    radar = models["radar"].context((0.0, 0.0, 0.0))
+    lidar = models["lidar"].context((0.0, 0.0, 0.0))
+    states = np.array([[30.0, 0, 0, 0], [60.0, 0, 0, 0], [500.0, 0, 0, 0], [-500.0, 0, 0, 0]])
+    assert radar.prob_detection_array(states).tolist() == [0.0, 0.4, 0.4, 0.0]
+    assert lidar.prob_detection_array(states).tolist() == [0.95, 0.2, 0.0, 0.0]
+
+
+def test_job_is_deterministic_and_scores_are_sane():
+    job = Job("mixed-range", 3, "gmphd-context", duration=20.0)
+    first, second = run_job(job), run_job(job)
+    assert first.hota.hota == second.hota.hota
+    assert first.gospa.rms == second.gospa.rms
+    assert 0.0 <= first.hota.hota <= 1.0
+    assert 0.0 <= first.gospa.rms <= 30.0 * math.sqrt(10)  # a few missed/false targets at most
+
+
+def test_fast_and_stock_chains_give_the_same_scores():
+    fast = run_job(Job("formation", 1, "gmphd-pd-aware", duration=12.0))
+    stock = run_job(Job("formation", 1, "gmphd-pd-aware", duration=12.0, stock=True))
+    assert fast.hota.hota == pytest.approx(stock.hota.hota, rel=1e-9, abs=1e-12)
+    assert fast.gospa.rms == pytest.approx(stock.gospa.rms, rel=1e-9, abs=1e-12)
+    assert fast.track_count == stock.track_count
+
+
+def test_run_experiment_writes_table_and_files(tmp_path):
+    config = ExperimentConfig(scenarios=("mixed-range", "formation"),
+                              trackers=("gmphd-uniform", "gmphd-context"), seeds=(0, 1),
+                              duration=10.0, workers=1)
+    results = run_experiment(config, progress=False)
+    assert len(results.results) == 2 * 2 * 2
+    table = results.table_markdown()
+    assert "GM-PHD (uniform)" in table and "GM-PHD (context-aware)" in table
+    assert "Combined (S1+S2)" in table
+    paths = results.save(tmp_path)
+    summary = json.loads(paths["json"].read_text())
+    assert {row["tracker"] for row in summary["scores"]} == {"gmphd-uniform", "gmphd-context"}
+    for row in summary["scores"]:
+        mean, half = row["combined"]["hota"]
+        assert 0 <= mean <= 100 and half >= 0
+    assert len(paths["csv"].read_text().splitlines()) == 1 + 8
+
+
+def test_any_executor_works(tmp_path):
+    from concurrent.futures import ThreadPoolExecutor
+    config = ExperimentConfig(scenarios=("mixed-range",), trackers=("gmphd-radar-only",),
+                              seeds=(0, 1), duration=8.0)
+    with ThreadPoolExecutor(2) as pool:
+        threaded = run_experiment(config, executor=pool, progress=False)
+    inline = run_experiment(ExperimentConfig(**{**config.__dict__, "workers": 1}), progress=False)
+    key = lambda r: (r.job.seed, r.hota.hota, r.gospa.rms)  # noqa: E731
+    assert sorted(map(key, threaded.results)) == sorted(map(key, inline.results))
+
+
+def test_cli_experiment_and_coverage(tmp_path, capsys):
+    out = tmp_path / "run"
+    code = main(["experiment", "--scenarios", "islands", "--trackers", "gmphd-context",
+                 "gmphd-sight", "--seeds", "1", "--duration", "8", "--workers", "1",
+                 "--output", str(out), "--quiet"])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "GM-PHD (line-of-sight)" in printed
+    for name in ("results.md", "results.csv", "results.json", "coverage_islands.png",
+                 "tracks_islands_gmphd-sight.png"):
+        assert (out / name).stat().st_size > 0, name
+    png = tmp_path / "cov.png"
+    assert main(["coverage", "--scenario", "islands", "--output", str(png),
+                 "--resolution", "60"]) == 0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cli_rejects_unknown_tracker():
+    with pytest.raises(ValueError, match="trackers"):
+        main(["experiment", "--trackers", "nope", "--seeds", "1", "--duration", "1",
+              "--no-plots", "--quiet", "--workers", "1"])
