@@ -104,3 +104,27 @@ def test_cli_rejects_unknown_tracker():
     with pytest.raises(ValueError, match="trackers"):
         main(["experiment", "--trackers", "nope", "--seeds", "1", "--duration", "1",
               "--no-plots", "--quiet", "--workers", "1"])
+
+
+def test_tracks_on_static_objects_are_distractors():
+    from stonesoup.types.state import State
+    from stonesoup.types.track import Track
+
+    from ctxmodels.experiment.runner import drop_distractor_states
+    run = make_scenario("mixed-range", 0, 5.0)
+    times = run.radar_times
+    marker = run.static_positions[0]
+    vessel = next(iter(run.truths))
+    vessel_at = {s.timestamp: s for s in vessel.states}
+    on_marker = Track([State([[marker[0] + 2], [0], [marker[1]], [0]], timestamp=t) for t in times])
+    on_vessel = Track([State(vessel_at[t].state_vector.copy(), timestamp=t) for t in times])
+    far_away = Track([State([[5000.0], [0], [5000.0], [0]], timestamp=t) for t in times])
+    kept = drop_distractor_states([on_marker, on_vessel, far_away], run, times)
+    assert sorted(len(t) for t in kept) == [len(times), len(times)]
+    assert all(t.id in (on_vessel.id, far_away.id) for t in kept)
+    # Scored against vessels only, the marker track no longer costs anything.
+    from ctxmodels.experiment import metrics
+    with_marker = metrics.gospa(run.truths, [on_marker, on_vessel], times).rms
+    without = metrics.gospa(run.truths, drop_distractor_states([on_marker, on_vessel], run, times),
+                            times).rms
+    assert without < with_marker

@@ -20,6 +20,7 @@ def _experiment(args) -> int:
     config = ExperimentConfig(scenarios=args.scenarios, trackers=args.trackers,
                               seeds=list(range(args.seed_start, args.seed_start + args.seeds)),
                               duration=args.duration, stock=args.stock, workers=args.workers,
+                              static_distractors=not args.static_as_false,
                               plot_seed=None if args.no_plots else args.seed_start)
     print(f"ctxmodels experiment: {len(config.jobs())} runs "
           f"({len(args.scenarios)} scenarios × trackers × {args.seeds} seeds), "
@@ -132,6 +133,9 @@ def parser() -> argparse.ArgumentParser:
     exp.add_argument("--stock", action="store_true",
                      help="run the stock Stone Soup GM-PHD components instead of ctxmodels' "
                           "fast drop-ins (same results, slower; for verification)")
+    exp.add_argument("--static-as-false", action="store_true",
+                     help="count tracks on static sea markers and islets as false tracks "
+                          "(default: they are distractors, neither hits nor false tracks)")
     exp.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     exp.add_argument("--quiet", action="store_true", help="no progress bar")
     exp.set_defaults(run=_experiment)
