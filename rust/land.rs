@@ -8,12 +8,16 @@
 //! lies on another's land. With those guarantees "on land" is the even–odd rule over all
 //! rings, which is what the index below evaluates.
 //!
-//! Containment index: a uniform grid over the mask's bounding box. Each cell lists the
+//! Containment index: a two-level grid over the mask's bounding box. Each cell lists the
 //! edges that touch it and knows, from a sweep done once, whether its centre is on land.
 //! A query walks from the cell centre to the point — horizontally, then vertically — and
-//! flips the centre's answer once per edge crossed, so a cell costs its own few edges and
-//! an empty cell costs nothing. Where the walk meets an edge exactly at a vertex (integer
-//! coordinates do this) it falls back to the exact crossing count over all edges.
+//! flips the centre's answer once per edge crossed, so a cell costs its own few edges. Two
+//! bits per level-0 cell (water / land / has edges) answer the common edge-free cells from a
+//! table that stays in L1. Cells with more than a few edges are split once into s × s
+//! sub-cells (s the same for all, chosen within a memory budget of a few sub-cells per edge),
+//! so folded or jagged coastlines keep short lists. Where the walk meets an edge exactly at
+//! a vertex (integer coordinates do this) the query falls back to the exact crossing count
+//! over the edges of the point's row of cells.
 
 use crate::error::{ModelError, Result};
 use parry2d_f64::bounding_volume::Aabb;
@@ -520,7 +524,7 @@ impl Grid {
             }
 
             let mut d = 0;
-            for i in 0..nx {
+            for (i, &centre_land) in level0_land.iter().enumerate() {
                 let c = j * nx + i;
                 let list = cell_list(c);
                 if list.len() > DENSE {
@@ -543,7 +547,7 @@ impl Grid {
                 } else {
                     let start = grid.cell_edges.len();
                     grid.cell_edges.extend_from_slice(list);
-                    grid.slots[c] = Slot::leaf(start, list.len(), level0_land[i]);
+                    grid.slots[c] = Slot::leaf(start, list.len(), centre_land);
                 }
             }
         }
@@ -727,6 +731,36 @@ mod tests {
             }
         }
         assert!(land > 1000);
+    }
+
+    /// Integer vertices and integer queries put walks exactly through vertices (the exact
+    /// row fallback); a dense zigzag makes cells split into sub-cells.
+    #[test]
+    fn index_agrees_with_exact_count_on_integer_coastline_with_split_cells() {
+        // A comb: 400 teeth 0.25 wide and 40 tall on top of a 60-high block, plus a hole.
+        let mut shell = vec![[0.0, 0.0], [100.0, 0.0]];
+        for k in (0..400).rev() {
+            let x = 0.25 * k as f64;
+            shell.push([x + 0.25, 60.0]);
+            shell.push([x + 0.125, 100.0]);
+        }
+        shell.push([0.0, 60.0]);
+        let hole = vec![[10.0, 10.0], [30.0, 10.0], [30.0, 30.0], [10.0, 30.0]];
+        let mask = LandMask::new(vec![Polygon { shell, holes: vec![hole] }]).unwrap();
+        assert!(mask.grid.split > 0 && !mask.grid.sub_slots.is_empty(), "the comb should split cells");
+        let mut land = 0;
+        for xi in -2..=402 {
+            for yi in -2..=410 {
+                let p = [xi as f64 * 0.25, yi as f64 * 0.25];
+                let got = mask.contains(p);
+                assert_eq!(got, contains_exact(mask.edges(), p), "at {p:?}");
+                land += got as usize;
+            }
+        }
+        assert!(land > 80_000, "{land}");
+        for p in [[-1e9, 5.0], [5.0, 1e9], [1e300, -1e300], [f64::INFINITY, 5.0], [f64::NAN, 5.0], [5.0, f64::NAN]] {
+            assert!(!mask.contains(p), "{p:?}");
+        }
     }
 
     #[test]

@@ -1,51 +1,327 @@
 //! Line of sight: a target is shadowed when the straight segment from the sensor to it
-//! meets land (the radar shade behind islands). Grazing a coastline counts as blocked.
+//! meets land (the radar shade behind islands). Grazing a coastline counts as blocked, and
+//! so does a target on land.
 //!
-//! The segment test is a ray cast through parry's BVH over the coastline edges, so one
-//! target costs O(log E). The sensor is assumed to be at sea: from a sensor on land every
-//! ray meets its own coastline and every target is shadowed.
+//! Two ways to ask, with the same answer (both test candidate coastline edges with one
+//! closed segment–segment predicate, [`segments_meet`]; only how candidates are found
+//! differs):
+//!
+//! * [`LineOfSight::visible`] for a single query: a walk down a parry BVH over the coastline
+//!   edges' boxes, pruned by a segment–box test, O(log E) per target.
+//! * [`LineOfSight::from_point`] for many targets seen from one sensor position (one scan):
+//!   builds a [`VisibilityIndex`] once — the coastline edges sorted into angular bins around
+//!   the sensor, each bin's edges ordered by their distance from the sensor — and then a
+//!   target tests only the edges of its own bin that are nearer than itself, usually none
+//!   or one. Building costs O(E log E) per sensor position, so it pays from a few thousand
+//!   targets per position on.
+//!
+//! The sensor is assumed to be at sea: from a sensor on land every ray meets its own
+//! coastline (or ends on land) and every target is shadowed.
 
-use crate::land::LandMask;
+use crate::land::{segments_meet, LandMask};
+use parry2d_f64::bounding_volume::Aabb;
 use parry2d_f64::math::Vector;
-use parry2d_f64::query::{Ray, RayCast};
-use parry2d_f64::shape::Polyline;
+use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use std::sync::Arc;
 
 #[derive(Debug, Clone)]
 pub struct LineOfSight {
     land: Arc<LandMask>,
-    coast: Polyline,
+    /// Coastline edges as (a, b), in the land mask's order.
+    edges: Vec<[[f64; 2]; 2]>,
+    /// BVH over the edges' boxes, grown by `margin` so that rounding in the segment–box test
+    /// never prunes an edge the segment touches.
+    bvh: Bvh,
 }
 
 impl LineOfSight {
     pub fn new(land: Arc<LandMask>) -> Self {
-        let mut vertices = Vec::with_capacity(land.vertex_count() * 2);
-        let mut indices = Vec::with_capacity(land.vertex_count());
-        for e in land.edges() {
-            let k = vertices.len() as u32;
-            vertices.push(Vector::new(e.a[0], e.a[1]));
-            vertices.push(Vector::new(e.b[0], e.b[1]));
-            indices.push([k, k + 1]);
-        }
-        LineOfSight { land, coast: Polyline::new(vertices, Some(indices)) }
+        let edges: Vec<[[f64; 2]; 2]> = land.edges().iter().map(|e| [e.a, e.b]).collect();
+        let scale = edges.iter().flatten().fold(0.0f64, |m, p| m.max(p[0].abs()).max(p[1].abs()));
+        let boxes: Vec<Aabb> = edges
+            .iter()
+            .map(|[a, b]| {
+                let margin = 1e-9 * ((a[0] - b[0]).abs() + (a[1] - b[1]).abs()) + 1e-12 * scale + f64::MIN_POSITIVE;
+                Aabb::new(
+                    Vector::new(a[0].min(b[0]) - margin, a[1].min(b[1]) - margin),
+                    Vector::new(a[0].max(b[0]) + margin, a[1].max(b[1]) + margin),
+                )
+            })
+            .collect();
+        let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &boxes);
+        LineOfSight { land, edges, bvh }
     }
 
     pub fn land(&self) -> &Arc<LandMask> {
         &self.land
     }
 
-    /// Whether the segment sensor → target is free of land.
+    /// Whether the segment sensor → target is free of land (one query; see
+    /// [`from_point`](Self::from_point) for many targets from one sensor position).
     #[inline]
     pub fn visible(&self, sensor: [f64; 2], target: [f64; 2]) -> bool {
-        let dir = Vector::new(target[0] - sensor[0], target[1] - sensor[1]);
-        if dir.x == 0.0 && dir.y == 0.0 {
+        if sensor == target {
             return !self.land.contains(target);
         }
-        let ray = Ray::new(Vector::new(sensor[0], sensor[1]), dir);
-        // The cast excludes a hit exactly at the end (time 1); a target on the coastline is
-        // on land, so check the end point as well.
-        !self.coast.intersects_local_ray(&ray, 1.0) && !self.land.contains(target)
+        let d = [target[0] - sensor[0], target[1] - sensor[1]];
+        if !(d[0].is_finite() && d[1].is_finite()) {
+            return !self.land.contains(target);
+        }
+        let inv = [1.0 / d[0], 1.0 / d[1]];
+        let blocked = self
+            .bvh
+            .leaves(|node| segment_may_touch_box(sensor, d, inv, node.mins(), node.maxs()))
+            .any(|k| {
+                let [a, b] = self.edges[k as usize];
+                segments_meet(sensor, target, a, b)
+            });
+        // From a sensor at sea a target on land is always behind some coastline edge; the
+        // containment test keeps the answer right for a sensor on land too.
+        !blocked && !self.land.contains(target)
     }
+
+    /// The per-scan index for many targets seen from `sensor`.
+    pub fn from_point(&self, sensor: [f64; 2]) -> VisibilityIndex<'_> {
+        VisibilityIndex::new(self, sensor)
+    }
+}
+
+/// Conservative slab test: false only when the segment origin + t·d, t ∈ [0, 1], surely
+/// misses the (already grown) box. `inv` = (1/d.x, 1/d.y), computed once per segment.
+#[inline(always)]
+fn segment_may_touch_box(origin: [f64; 2], d: [f64; 2], inv: [f64; 2], mins: Vector, maxs: Vector) -> bool {
+    const SLACK: f64 = 1e-9;
+    let (mut t0, mut t1) = (-SLACK, 1.0 + SLACK);
+    for (o, d, inv, lo, hi) in [(origin[0], d[0], inv[0], mins.x, maxs.x), (origin[1], d[1], inv[1], mins.y, maxs.y)] {
+        if d == 0.0 {
+            if o < lo || o > hi {
+                return false;
+            }
+        } else {
+            let (a, b) = ((lo - o) * inv, (hi - o) * inv);
+            let (near, far) = if a < b { (a, b) } else { (b, a) };
+            // Widen each slab's interval a hair: the products round.
+            let pad = SLACK * near.abs().max(far.abs()).max(1.0);
+            t0 = t0.max(near - pad);
+            t1 = t1.min(far + pad);
+        }
+    }
+    t0 <= t1
+}
+
+/// A monotone stand-in for the direction angle of (dx, dy), in [0, 4): 0 along +x, 1 along
+/// +y, 2 along −x, 3 along −y. Opposite directions differ by exactly 2. No trigonometry.
+#[inline(always)]
+fn pseudo_angle(dx: f64, dy: f64) -> f64 {
+    let p = dx / (dx.abs() + dy.abs());
+    if dy < 0.0 {
+        3.0 + p
+    } else {
+        1.0 - p
+    }
+}
+
+/// Above this mean list length per land-facing bin the index defers to the BVH.
+const MAX_MEAN_LIST: f64 = 64.0;
+
+/// One edge listed in one angular bin.
+#[derive(Debug, Clone, Copy)]
+struct BinEdge {
+    a: [f64; 2],
+    b: [f64; 2],
+    /// A lower bound of the squared distance from the sensor to the edge.
+    near2: f64,
+}
+
+/// Line of sight from one sensor position to any number of targets; see the module docs.
+/// Answers exactly as [`LineOfSight::visible`] does for the same sensor.
+#[derive(Debug, Clone)]
+pub struct VisibilityIndex<'a> {
+    sight: &'a LineOfSight,
+    sensor: [f64; 2],
+    /// The sensor touches the coastline: every segment from it meets land.
+    on_coast: bool,
+    /// Too many edges per direction for angular lists: ask the BVH per target.
+    dense: bool,
+    bins: usize,
+    /// CSR over bins; each bin's edges ascending in `near2`.
+    bin_start: Vec<u32>,
+    entries: Vec<BinEdge>,
+}
+
+impl<'a> VisibilityIndex<'a> {
+    fn new(sight: &'a LineOfSight, sensor: [f64; 2]) -> Self {
+        let edges = &sight.edges;
+        let mut index =
+            VisibilityIndex { sight, sensor, on_coast: false, dense: false, bins: 1, bin_start: vec![0, 0], entries: Vec::new() };
+        let s = sensor;
+        let s_size = s[0].abs().max(s[1].abs());
+
+        // Pass 1, per edge: a lower bound of its distance and the pseudo-angle interval
+        // [lo, hi] it covers as seen from the sensor (widened for rounding).
+        struct Span {
+            edge: u32,
+            near2: f64,
+            lo: f64,
+            hi: f64,
+        }
+        let mut spans = Vec::with_capacity(edges.len());
+        let mut coverage = 0.0; // Σ (hi − lo): how many edges a direction meets, × 4
+        for (k, &[a, b]) in edges.iter().enumerate() {
+            if segments_meet(s, s, a, b) {
+                index.on_coast = true;
+                return index;
+            }
+            let (da, db) = ([a[0] - s[0], a[1] - s[1]], [b[0] - s[0], b[1] - s[1]]);
+            let near = distance_to_segment(da, db);
+            let size = s_size.max(a[0].abs()).max(a[1].abs()).max(b[0].abs()).max(b[1].abs());
+            // Rounding in the differences above and in a target's own offset from the
+            // sensor: bound it generously so the bins and the distance cut-off never drop
+            // an edge a target's segment can touch.
+            let fuzz = 64.0 * f64::EPSILON * size;
+            let (lo, hi) = if near <= fuzz {
+                // Too close to tell directions apart: every direction.
+                (0.0, 4.0)
+            } else {
+                let (pa, pb) = (pseudo_angle(da[0], da[1]), pseudo_angle(db[0], db[1]));
+                let cross = da[0] * db[1] - da[1] * db[0];
+                // Counter-clockwise from `start` over `len` (pseudo-angle units).
+                let (start, len) = if cross > 0.0 {
+                    (pa, (pb - pa).rem_euclid(4.0))
+                } else if cross < 0.0 {
+                    (pb, (pa - pb).rem_euclid(4.0))
+                } else {
+                    // Collinear with the sensor (not through it): one direction, up to rounding.
+                    let len = (pb - pa).rem_euclid(4.0);
+                    if len > 2.0 {
+                        (pb, 4.0 - len)
+                    } else {
+                        (pa, len)
+                    }
+                };
+                // Angular error of directions known to ±fuzz at distance ≥ near (a
+                // pseudo-angle moves at most 2 units per radian).
+                let slack = 4.0 * (fuzz / (near - fuzz)) + 1e-12;
+                let (lo, hi) = (start - slack, start + len + slack);
+                if hi - lo >= 4.0 {
+                    (0.0, 4.0)
+                } else {
+                    (lo, hi)
+                }
+            };
+            coverage += hi - lo;
+            let near_low = (near - fuzz).max(0.0) * (1.0 - 1e-9);
+            spans.push(Span { edge: k as u32, near2: near_low * near_low, lo, hi });
+        }
+
+        // Bins: about one per edge, fewer when the coastline is so folded (a direction
+        // meets many edges) that the lists would outgrow a budget of entries; when even
+        // that leaves long lists, targets are answered through the BVH instead.
+        let n = edges.len().max(1);
+        let budget = (32 * n + (1 << 16)) as f64;
+        let mut bins = n.next_power_of_two().clamp(256, 1 << 16);
+        while bins > 64 && bins as f64 * coverage / 4.0 + 2.0 * n as f64 > budget {
+            bins /= 2;
+        }
+        let per_unit = bins as f64 / 4.0;
+        // Mean list length over the bins a direction towards land falls in.
+        let occupied = (coverage / 4.0).min(1.0).max(1.0 / bins as f64);
+        let mean_list = (coverage * per_unit + n as f64) / (occupied * bins as f64);
+        if mean_list > MAX_MEAN_LIST {
+            index.dense = true;
+            return index;
+        }
+        let bin_range = |span: &Span| -> (usize, usize) {
+            let first = (span.lo * per_unit).floor() as i64;
+            let count = ((span.hi * per_unit).floor() as i64 - first + 1) as usize;
+            (first.rem_euclid(bins as i64) as usize, count.min(bins))
+        };
+
+        // Pass 2: nearest first overall, then a stable counting sort into bins keeps every
+        // bin's list nearest first.
+        spans.sort_unstable_by(|x, y| x.near2.total_cmp(&y.near2));
+        index.bins = bins;
+        index.bin_start = vec![0; bins + 1];
+        for span in &spans {
+            let (first, count) = bin_range(span);
+            for i in 0..count {
+                index.bin_start[(first + i) % bins + 1] += 1;
+            }
+        }
+        for i in 0..bins {
+            index.bin_start[i + 1] += index.bin_start[i];
+        }
+        let mut fill: Vec<u32> = index.bin_start[..bins].to_vec();
+        index.entries = vec![BinEdge { a: [0.0; 2], b: [0.0; 2], near2: 0.0 }; index.bin_start[bins] as usize];
+        for span in &spans {
+            let [a, b] = edges[span.edge as usize];
+            let (first, count) = bin_range(span);
+            for i in 0..count {
+                let bin = (first + i) % bins;
+                index.entries[fill[bin] as usize] = BinEdge { a, b, near2: span.near2 };
+                fill[bin] += 1;
+            }
+        }
+        index
+    }
+
+    /// Whether this index answers through the BVH because the coastline, seen from its
+    /// sensor, is too folded for short angular lists.
+    pub fn is_dense(&self) -> bool {
+        self.dense
+    }
+
+    pub fn sensor(&self) -> [f64; 2] {
+        self.sensor
+    }
+
+    /// Whether the segment sensor → `target` is free of land.
+    #[inline]
+    pub fn visible(&self, target: [f64; 2]) -> bool {
+        let s = self.sensor;
+        if s == target {
+            return !self.sight.land.contains(target);
+        }
+        if self.on_coast {
+            return false;
+        }
+        if self.dense {
+            return self.sight.visible(s, target);
+        }
+        let (dx, dy) = (target[0] - s[0], target[1] - s[1]);
+        let r2 = dx * dx + dy * dy;
+        // NaN lands in bin 0 and meets nothing; the land test answers for it.
+        let bin = ((pseudo_angle(dx, dy) * (self.bins as f64 / 4.0)) as usize) % self.bins;
+        let list = &self.entries[self.bin_start[bin] as usize..self.bin_start[bin + 1] as usize];
+        for e in list {
+            if e.near2 > r2 {
+                break;
+            }
+            if segments_meet(s, target, e.a, e.b) {
+                return false;
+            }
+        }
+        !self.sight.land.contains(target)
+    }
+
+    /// How many (bin, edge) entries the index holds (its size).
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}
+
+/// Distance from the origin to the segment a–b (given relative to the origin).
+fn distance_to_segment(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if len2 > 0.0 { (-(a[0] * ab[0] + a[1] * ab[1]) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    let p = [a[0] + t * ab[0], a[1] + t * ab[1]];
+    let exact_end = (a[0] * a[0] + a[1] * a[1]).min(b[0] * b[0] + b[1] * b[1]).sqrt();
+    (p[0] * p[0] + p[1] * p[1]).sqrt().min(exact_end)
 }
 
 #[cfg(test)]
@@ -68,5 +344,166 @@ mod tests {
         assert!(!sight.visible([0.0, 0.0], [100.0, 0.0]), "on the coast is not visible");
         // Grazing the corner: the segment passes exactly through (100, 10).
         assert!(!sight.visible([0.0, 0.0], [200.0, 20.0]));
+        // Sliding along the top edge's line, beyond the island: grazing blocks.
+        assert!(!sight.visible([0.0, 10.0], [200.0, 10.0]));
+        // Ending exactly before the coast.
+        assert!(sight.visible([0.0, 0.0], [99.999, 0.0]));
+    }
+
+    #[test]
+    fn index_agrees_on_the_island() {
+        let sight = island();
+        let index = sight.from_point([0.0, 0.0]);
+        for t in [[200.0, 0.0], [50.0, 0.0], [200.0, 40.0], [110.0, 0.0], [100.0, 0.0], [200.0, 20.0], [99.999, 0.0], [0.0, 0.0], [-50.0, 3.0]] {
+            assert_eq!(index.visible(t), sight.visible([0.0, 0.0], t), "target {t:?}");
+        }
+        assert!(!sight.from_point([0.0, 10.0]).visible([200.0, 10.0]));
+    }
+
+    #[test]
+    fn sensor_on_the_coast_or_on_land_sees_nothing() {
+        let sight = island();
+        for sensor in [[100.0, 0.0], [100.0, 10.0], [110.0, 0.0]] {
+            let index = sight.from_point(sensor);
+            for t in [[0.0, 0.0], [200.0, 50.0], [110.0, 5.0], [-30.0, -30.0]] {
+                assert!(!sight.visible(sensor, t), "{sensor:?} → {t:?}");
+                assert!(!index.visible(t), "{sensor:?} → {t:?}");
+            }
+        }
+    }
+
+    /// A jagged star-shaped island plus a ring-shaped atoll (a polygon with a hole), seen
+    /// from several sensors, against targets at random and exactly through vertices.
+    #[test]
+    fn index_agrees_with_the_bvh_everywhere() {
+        let n = 900;
+        let star: Vec<[f64; 2]> = (0..n)
+            .map(|k| {
+                let t = k as f64 / n as f64 * std::f64::consts::TAU;
+                let r = 300.0 * (1.0 + 0.2 * (3.0 * t).sin()) * (1.0 - 0.15 * ((k as f64 * 0.618_033_988_75) % 1.0));
+                [r * t.cos(), r * t.sin()]
+            })
+            .collect();
+        let ring = |r: f64, cx: f64, cy: f64, m: usize| -> Vec<[f64; 2]> {
+            (0..m).map(|k| {
+                let t = k as f64 / m as f64 * std::f64::consts::TAU;
+                [cx + r * t.cos(), cy + r * t.sin()]
+            })
+            .collect()
+        };
+        let land = LandMask::new(vec![
+            Polygon { shell: star.clone(), holes: vec![] },
+            Polygon { shell: ring(120.0, 900.0, 100.0, 64), holes: vec![ring(80.0, 900.0, 100.0, 48)] },
+        ])
+        .unwrap();
+        let sight = LineOfSight::new(Arc::new(land));
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut uniform = move |lo: f64, hi: f64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+        };
+        let mut targets: Vec<[f64; 2]> = (0..20_000).map(|_| [uniform(-1500.0, 1500.0), uniform(-1500.0, 1500.0)]).collect();
+        for sensor in [[-700.0, 50.0], [900.0, 100.0], [0.0, 900.0], [-650.0, -650.0]] {
+            // Targets exactly through vertices (grazing) at twice the vertex's distance.
+            let mut extra: Vec<[f64; 2]> = star.iter().step_by(7).map(|v| [2.0 * v[0] - sensor[0], 2.0 * v[1] - sensor[1]]).collect();
+            extra.extend(star.iter().step_by(11).copied());
+            targets.extend_from_slice(&extra);
+            let index = sight.from_point(sensor);
+            assert!(!index.is_dense());
+            let (mut seen, mut hidden) = (0, 0);
+            for &t in &targets {
+                let expect = sight.visible(sensor, t);
+                assert_eq!(index.visible(t), expect, "sensor {sensor:?} target {t:?}");
+                if expect {
+                    seen += 1
+                } else {
+                    hidden += 1
+                }
+            }
+            // From inside the lagoon only the lagoon is visible.
+            let min_seen = if sensor == [900.0, 100.0] { 10 } else { 1000 };
+            assert!(seen >= min_seen && hidden > 1000, "{sensor:?}: {seen} seen, {hidden} hidden");
+            targets.truncate(20_000);
+        }
+        // Inside the atoll's lagoon: water, but walled in by land on every side.
+        let lagoon = sight.from_point([900.0, 100.0]);
+        assert!(lagoon.visible([920.0, 130.0]));
+        assert!(!lagoon.visible([1200.0, 100.0]));
+    }
+
+    /// parry's own ray cast against the coastline as an independent reference, on random
+    /// targets (no exact grazing, where the two predicates may round differently).
+    #[test]
+    fn agrees_with_parry_ray_cast_on_random_targets() {
+        use parry2d_f64::query::{Ray, RayCast};
+        use parry2d_f64::shape::Polyline;
+        let n = 2000;
+        let shell: Vec<[f64; 2]> = (0..n)
+            .map(|k| {
+                let t = k as f64 / n as f64 * std::f64::consts::TAU;
+                let r = 1000.0 * (1.0 + 0.3 * (3.0 * t).sin()) * (1.0 - 0.1 * ((k as f64 * 0.618_033_988_75) % 1.0));
+                [r * t.cos(), r * t.sin()]
+            })
+            .collect();
+        let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap()));
+        let vertices: Vec<Vector> = sight.edges.iter().flat_map(|[a, b]| [Vector::new(a[0], a[1]), Vector::new(b[0], b[1])]).collect();
+        let indices: Vec<[u32; 2]> = (0..sight.edges.len() as u32).map(|k| [2 * k, 2 * k + 1]).collect();
+        let coast = Polyline::new(vertices, Some(indices));
+        let sensor = [-1700.0, 300.0];
+        let index = sight.from_point(sensor);
+        let mut state = 12345u64;
+        let mut hidden = 0;
+        for _ in 0..20_000 {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let x = ((state >> 11) as f64 / (1u64 << 53) as f64) * 3600.0 - 1800.0;
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let y = ((state >> 11) as f64 / (1u64 << 53) as f64) * 3600.0 - 1800.0;
+            let t = [x, y];
+            let ray = Ray::new(Vector::new(sensor[0], sensor[1]), Vector::new(x - sensor[0], y - sensor[1]));
+            let reference = !coast.intersects_local_ray(&ray, 1.0) && !sight.land().contains(t);
+            assert_eq!(sight.visible(sensor, t), reference, "{t:?}");
+            assert_eq!(index.visible(t), reference, "{t:?}");
+            hidden += !reference as usize;
+        }
+        assert!(hidden > 5000 && hidden < 15000, "{hidden}");
+    }
+
+    /// A comb of long thin spikes seen side-on: every direction meets hundreds of edges, so
+    /// the index answers through the BVH — and still agrees.
+    #[test]
+    fn folded_coastline_falls_back_to_the_bvh() {
+        let n = 6000;
+        let shell: Vec<[f64; 2]> = (0..n)
+            .map(|k| {
+                let t = k as f64 / n as f64 * std::f64::consts::TAU;
+                let r = if k % 2 == 0 { 1000.0 } else { 500.0 };
+                [r * t.cos(), r * t.sin()]
+            })
+            .collect();
+        let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap()));
+        let sensor = [-1500.0, 100.0];
+        let index = sight.from_point(sensor);
+        assert!(index.is_dense());
+        for i in 0..60 {
+            for j in 0..60 {
+                let t = [i as f64 * 50.0 - 1500.0, j as f64 * 50.0 - 1500.0];
+                assert_eq!(index.visible(t), sight.visible(sensor, t), "{t:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn agrees_with_a_brute_force_segment_test() {
+        let sight = island();
+        let sensor = [3.0, -40.0];
+        for i in 0..80 {
+            for j in 0..80 {
+                let t = [i as f64 * 3.0 - 20.0, j as f64 * 1.0 - 40.0];
+                let brute = !sight.edges.iter().any(|&[a, b]| segments_meet(sensor, t, a, b)) && !sight.land.contains(t);
+                assert_eq!(sight.visible(sensor, t), brute, "{t:?}");
+            }
+        }
     }
 }

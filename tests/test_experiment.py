@@ -40,8 +40,10 @@ def test_context_models_follow_the_paper():
 def test_job_is_deterministic_and_scores_are_sane():
     job = Job("mixed-range", 3, "gmphd-context", duration=20.0)
     first, second = run_job(job), run_job(job)
-    assert first.hota.hota == second.hota.hota
-    assert first.gospa.rms == second.gospa.rms
+    # Stone Soup iterates tracks in set (uuid) order, so sums may differ in the last bit.
+    assert first.hota.hota == pytest.approx(second.hota.hota, rel=1e-12)
+    assert first.gospa.rms == pytest.approx(second.gospa.rms, rel=1e-12)
+    assert first.track_count == second.track_count
     assert 0.0 <= first.hota.hota <= 1.0
     assert 0.0 <= first.gospa.rms <= 30.0 * math.sqrt(10)  # a few missed/false targets at most
 
