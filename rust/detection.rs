@@ -83,6 +83,24 @@ fn is_non_finite(v: f64) -> bool {
     v.to_bits() & EXPONENT == EXPONENT
 }
 
+/// Per-thread scratch for one chunk: allocated once per thread, so evaluating a chunk
+/// neither allocates nor clears 40 KB of stack arrays.
+pub(crate) struct Scratch {
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    dx: Vec<f64>,
+    dy: Vec<f64>,
+    r2: Vec<f64>,
+    band: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch {
+        xs: vec![0.0; CHUNK], ys: vec![0.0; CHUNK], dx: vec![0.0; CHUNK],
+        dy: vec![0.0; CHUNK], r2: vec![0.0; CHUNK], band: vec![0.0; CHUNK],
+    });
+}
+
 /// One factor, prepared for a pose.
 enum Step<'a> {
     SquaredBands(SquaredBands),
@@ -100,15 +118,13 @@ pub struct ScanDetection<'a> {
 }
 
 impl ScanDetection<'_> {
-    /// P_D at world points (xs[i], ys[i]) into out[i]; all slices of one chunk's length.
+    /// P_D at the world points (xs[i], ys[i]) of `scratch` into out[i] (one chunk).
     /// Factor by factor over the chunk, so each loop body is small and branch-free enough
     /// for the compiler to vectorise.
-    fn at_points(&self, xs: &[f64], ys: &[f64], out: &mut [f64]) {
+    fn at_points(&self, scratch: &mut Scratch, out: &mut [f64]) {
         let n = out.len();
+        let Scratch { xs, ys, dx, dy, r2, band } = scratch;
         let (xs, ys) = (&xs[..n], &ys[..n]);
-        let mut dx = [0.0f64; CHUNK];
-        let mut dy = [0.0f64; CHUNK];
-        let mut r2 = [0.0f64; CHUNK];
         let (dx, dy, r2) = (&mut dx[..n], &mut dy[..n], &mut r2[..n]);
         let [ox, oy] = self.frame.origin;
         for i in 0..n {
@@ -119,11 +135,7 @@ impl ScanDetection<'_> {
         }
         for step in &self.steps {
             match step {
-                Step::SquaredBands(bands) => {
-                    for i in 0..n {
-                        out[i] *= bands.at_squared(r2[i]);
-                    }
-                }
+                Step::SquaredBands(bands) => bands.multiply_into(r2, out, band),
                 Step::Bands(bands) => {
                     for i in 0..n {
                         out[i] *= bands.at(r2[i].sqrt());
@@ -159,25 +171,35 @@ impl ScanDetection<'_> {
         let bad = for_each_chunk(out, |first, chunk| {
             let n = chunk.len();
             let rows = &states[first * ncols..(first + n) * ncols];
-            let mut xs = [0.0f64; CHUNK];
-            let mut ys = [0.0f64; CHUNK];
-            for (i, row) in rows.chunks_exact(ncols).enumerate() {
-                xs[i] = row[mapping.x];
-                ys[i] = row[mapping.y];
-            }
-            let (xs, ys) = (&xs[..n], &ys[..n]);
-            self.at_points(xs, ys, chunk);
-            // Branch-free scan for NaN/inf (all exponent bits set); the rare bad chunk is then
-            // searched for its first bad row.
-            let mut non_finite = 0u64;
-            for i in 0..n {
-                non_finite |= (is_non_finite(xs[i]) | is_non_finite(ys[i])) as u64;
-            }
-            if non_finite == 0 {
-                None
-            } else {
-                (0..n).find(|&i| !(xs[i].is_finite() && ys[i].is_finite()))
-            }
+            SCRATCH.with(|cell| {
+                let scratch = &mut *cell.borrow_mut();
+                let (xs, ys) = (&mut scratch.xs[..n], &mut scratch.ys[..n]);
+                if ncols == 4 && mapping == PositionMapping::default() {
+                    // Stone Soup's [x, vx, y, vy]: fixed offsets let the gather vectorise.
+                    for (i, row) in rows.chunks_exact(4).enumerate() {
+                        xs[i] = row[0];
+                        ys[i] = row[2];
+                    }
+                } else {
+                    for (i, row) in rows.chunks_exact(ncols).enumerate() {
+                        xs[i] = row[mapping.x];
+                        ys[i] = row[mapping.y];
+                    }
+                }
+                // Branch-free scan for NaN/inf (all exponent bits set); the rare bad chunk is
+                // then searched for its first bad row.
+                let mut non_finite = 0u64;
+                for i in 0..n {
+                    non_finite |= (is_non_finite(xs[i]) | is_non_finite(ys[i])) as u64;
+                }
+                let bad = if non_finite == 0 {
+                    None
+                } else {
+                    (0..n).find(|&i| !(xs[i].is_finite() && ys[i].is_finite()))
+                };
+                self.at_points(scratch, chunk);
+                bad
+            })
         });
         match bad {
             Some(row) => Err(ModelError::non_finite("states", row, "position is NaN or infinite")),
@@ -238,20 +260,21 @@ impl ScanDetection<'_> {
                 chol[i] = l.unwrap_or([0.0; 3]);
             }
             chunk.fill(0.0);
-            let mut xs = [0.0f64; CHUNK];
-            let mut ys = [0.0f64; CHUNK];
             let mut value = [0.0f64; CHUNK];
-            for (u, &w) in rule.points().iter().zip(rule.weights()) {
-                for i in 0..n {
-                    let [l11, l21, l22] = chol[i];
-                    xs[i] = mx[i] + l11 * u[0];
-                    ys[i] = my[i] + l21 * u[0] + l22 * u[1];
+            SCRATCH.with(|cell| {
+                let scratch = &mut *cell.borrow_mut();
+                for (u, &w) in rule.points().iter().zip(rule.weights()) {
+                    for i in 0..n {
+                        let [l11, l21, l22] = chol[i];
+                        scratch.xs[i] = mx[i] + l11 * u[0];
+                        scratch.ys[i] = my[i] + l21 * u[0] + l22 * u[1];
+                    }
+                    self.at_points(scratch, &mut value[..n]);
+                    for i in 0..n {
+                        chunk[i] += w * value[i];
+                    }
                 }
-                self.at_points(&xs[..n], &ys[..n], &mut value[..n]);
-                for i in 0..n {
-                    chunk[i] += w * value[i];
-                }
-            }
+            });
             // Rounding can push a weighted sum of values in [0, 1] a hair outside.
             for v in chunk.iter_mut() {
                 *v = v.clamp(0.0, 1.0);

@@ -76,11 +76,12 @@ pub(crate) fn select(condition: bool, a: f64, b: f64) -> f64 {
 /// Most edges the branch-free squared-range form takes; models with more use [`RangeBands::at`].
 pub const SQUARED_EDGES: usize = 4;
 
-/// [`RangeBands`] compared on squared range, unrolled over a fixed number of edges (padded
-/// with +∞, which is never passed) so the band lookup is a chain of selects the compiler can
-/// vectorise — no square root, no branch.
+/// [`RangeBands`] compared on squared range, for whole chunks: edge by edge over the chunk,
+/// each pass a branch-free select the compiler can vectorise — no square root, no branch,
+/// and only as many passes as the bands have edges.
 #[derive(Debug, Clone, Copy)]
 pub struct SquaredBands {
+    count: usize,
     edges2: [f64; SQUARED_EDGES],
     upper_owns: [bool; SQUARED_EDGES],
     values: [f64; SQUARED_EDGES + 1],
@@ -90,11 +91,29 @@ impl SquaredBands {
     #[inline(always)]
     pub fn at_squared(&self, r2: f64) -> f64 {
         let mut value = self.values[0];
-        for k in 0..SQUARED_EDGES {
+        for k in 0..self.count {
             let passed = (r2 > self.edges2[k]) | (self.upper_owns[k] & (r2 == self.edges2[k]));
             value = select(passed, self.values[k + 1], value);
         }
         value
+    }
+
+    /// out[i] *= f(r2[i]) over a chunk; `band` is scratch of the same length.
+    #[inline]
+    pub fn multiply_into(&self, r2: &[f64], out: &mut [f64], band: &mut [f64]) {
+        let n = out.len();
+        let (r2, band) = (&r2[..n], &mut band[..n]);
+        band.fill(self.values[0]);
+        for k in 0..self.count {
+            let (edge, owns, value) = (self.edges2[k], self.upper_owns[k], self.values[k + 1]);
+            for i in 0..n {
+                let passed = (r2[i] > edge) | (owns & (r2[i] == edge));
+                band[i] = select(passed, value, band[i]);
+            }
+        }
+        for i in 0..n {
+            out[i] *= band[i];
+        }
     }
 }
 
@@ -105,6 +124,7 @@ impl RangeBands {
             return None;
         }
         let mut bands = SquaredBands {
+            count: self.edges.len(),
             edges2: [f64::INFINITY; SQUARED_EDGES],
             upper_owns: [false; SQUARED_EDGES],
             values: [*self.values.last().unwrap(); SQUARED_EDGES + 1],
