@@ -155,12 +155,12 @@ def build_tracker(spec: TrackerSpec, run, fast: bool = True):
     updater = ExtendedKalmanUpdater(measurement_model=None)
     detector = _detector(spec, run)
     if spec.family == "jpda":
-        return _jpda(spec, predictor, updater, detector)
+        return _jpda(spec, predictor, updater, detector, fast)
     return _gmphd(spec, run, predictor, updater, detector, fast)
 
 
-def _jpda(spec, predictor, updater, detector):
-    from ..stonesoup import ExpectedMissesDeleter, PDAHypothesiser
+def _jpda(spec, predictor, updater, detector, fast):
+    from ..stonesoup import ExpectedMissesDeleter, FastGNNWith2DAssignment, PDAHypothesiser
     hypothesiser_class = PDAHypothesiser if spec.uses_context else StockPDAHypothesiser
     hypothesiser = hypothesiser_class(predictor, updater, clutter_spatial_density=UNIFORM_CLUTTER,
                                       prob_detect=UNIFORM_PD, prob_gate=JPDA_PROB_GATE)
@@ -172,7 +172,7 @@ def _jpda(spec, predictor, updater, detector):
     prior = GaussianState(np.zeros((4, 1)), np.diag(INIT_STD ** 2))
     initiator = MultiMeasurementInitiator(
         prior_state=prior, deleter=UpdateTimeStepsDeleter(time_steps_since_update=JPDA_DELETE_AFTER),
-        data_associator=GNNWith2DAssignment(DistanceHypothesiser(
+        data_associator=(FastGNNWith2DAssignment if fast else GNNWith2DAssignment)(DistanceHypothesiser(
             predictor, updater, Mahalanobis(), missed_distance=GATE_MAHALANOBIS)),
         updater=updater, min_points=JPDA_MIN_POINTS)
     return MultiTargetMixtureTracker(initiator=initiator, deleter=deleter, detector=detector,

@@ -15,12 +15,15 @@
   particles in one array call).
 * Fast GM-PHD chain: :class:`FastGaussianMixtureHypothesiser`, :class:`FastPHDUpdater`,
   :class:`FastLCCUpdater`, :class:`FastGaussianMixtureReducer` — the stock results, computed
-  a scan at a time in stacked arrays.
+  a scan at a time in stacked arrays; :class:`FastGNNWith2DAssignment`, the stock GNN
+  association (e.g. inside ``MultiMeasurementInitiator``) with all track × detection
+  distances of a scan computed at once.
 * :class:`CachedCombinedLinearGaussianTransitionModel`: F(Δt), Q(Δt) computed once per
   scan interval.
 """
 from .birth import MeasurementDrivenBirth
 from .deleter import ExpectedMissesDeleter
+from .fast_association import FastGNNWith2DAssignment
 from .fast_hypothesiser import FastGaussianMixtureHypothesiser
 from .fast_reducer import FastGaussianMixtureReducer
 from .fast_updater import FastLCCUpdater, FastPHDUpdater
@@ -40,6 +43,7 @@ __all__ = [
     "PointProcessMultiTargetTracker",
     "SMCPHDUpdater",
     "ContextFeeder",
+    "FastGNNWith2DAssignment",
     "FastGaussianMixtureHypothesiser",
     "FastGaussianMixtureReducer",
     "FastLCCUpdater",
