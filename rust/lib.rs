@@ -15,6 +15,7 @@ pub mod pose;
 pub mod range_bands;
 pub mod sector;
 pub mod sight;
+#[cfg(test)] mod fuzz;
 
 #[cfg(feature = "python")]
 mod python;

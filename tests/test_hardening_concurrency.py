@@ -1,0 +1,182 @@
+"""Concurrency: contexts and models are shared, immutable, and evaluate with the GIL released.
+
+* Many Python threads evaluating the same context at once (each call large enough that the
+  core also splits it over its own Rayon threads) give results bit-identical to serial ones.
+* Results do not depend on the number of Rayon threads (a subprocess with
+  RAYON_NUM_THREADS=1 reproduces them bit for bit).
+* A long evaluation lets another Python thread run meanwhile (the GIL is released): a counter
+  thread advances while the main thread is inside one Rust call. No timing thresholds.
+"""
+import hashlib
+import math
+import os
+import subprocess
+import sys
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from ctxmodels import (AngularSector, ClutterDensityModel, DetectionProbabilityModel, LandMask,
+                       LineOfSight, MetadataThreshold, Pose, RangeBands, SensorModel)
+
+N = 40_000  # above the core's parallel threshold (32768 rows): Rayon threads are used too
+ISLAND = np.array([[100.0, -50.0], [300.0, -50.0], [300.0, 150.0], [100.0, 150.0]])
+LAND = LandMask(polygons=[ISLAND, ISLAND + [-900.0, 400.0]])
+
+
+def sensor(pd_evaluation="mean"):
+    return SensorModel(
+        detection=DetectionProbabilityModel(factors=[
+            RangeBands(edges=(50, 1612), values=(0, 0.4, 0), upper_owns=(False, True)),
+            AngularSector.blind(math.pi, math.radians(65)), LAND, LineOfSight(land=LAND)]),
+        clutter=ClutterDensityModel(factors=[
+            RangeBands(edges=(1000,), values=(1e-3, 1e-2)),
+            MetadataThreshold(key="area", threshold=10, below=1e-1, at_or_above=1e-3)]),
+        pd_evaluation=pd_evaluation, pd_order=4)
+
+
+def inputs(seed, n=N):
+    rng = np.random.default_rng(seed)
+    means = np.column_stack([rng.uniform(-1800, 1800, n), rng.normal(0, 5, n),
+                             rng.uniform(-1800, 1800, n), rng.normal(0, 5, n)])
+    covars = np.tile(np.diag([400.0, 4.0, 900.0, 4.0]), (n, 1, 1))
+    areas = rng.uniform(0, 20, (n, 1))
+    return means, covars, areas
+
+
+def evaluate_all(context, means, covars, areas):
+    return (context.prob_detection_array(means),
+            context.prob_detection_array(means, covars),
+            context.clutter_spatial_density_array(means[:, 0::2], areas))
+
+
+def digest(results):
+    h = hashlib.sha256()
+    for r in results:
+        h.update(np.ascontiguousarray(r).tobytes())
+    return h.hexdigest()
+
+
+def test_threads_sharing_one_context_match_serial_bit_for_bit():
+    context = sensor("gauss-hermite").context((20.0, -30.0, 0.7))
+    jobs = [inputs(seed) for seed in range(6)]
+    serial = [evaluate_all(context, *job) for job in jobs]
+    with ThreadPoolExecutor(max_workers=6) as pool:
+        # Every job twice, interleaved, so the same arrays are also read concurrently.
+        futures = [pool.submit(evaluate_all, context, *jobs[k % 6]) for k in range(12)]
+        parallel = [f.result() for f in futures]
+    for k, result in enumerate(parallel):
+        for got, want in zip(result, serial[k % 6]):
+            np.testing.assert_array_equal(got, want)
+    assert {v for r in serial for v in np.unique(r[0])} <= {0.0, 0.4}
+    assert any(np.any(r[0] == 0.4) for r in serial)
+
+
+def test_threads_with_out_buffers_and_many_contexts():
+    """Each thread its own context (pose) and out buffer: no cross-talk between calls."""
+    model = sensor()
+    means, _, _ = inputs(7)
+    poses = [(float(x), float(-x), 0.1 * x) for x in range(8)]
+    expected = [model.context(p).prob_detection_array(means) for p in poses]
+
+    def run(k):
+        out = np.full(N, np.nan)
+        result = model.context(poses[k]).prob_detection_array(means, out=out)
+        assert result is out
+        return out
+
+    with ThreadPoolExecutor(max_workers=8) as pool:
+        results = list(pool.map(run, range(8)))
+    for got, want in zip(results, expected):
+        np.testing.assert_array_equal(got, want)
+    assert not all(np.array_equal(expected[0], e) for e in expected[1:])  # poses matter
+
+
+_CHILD = """
+import hashlib, sys
+sys.path.insert(0, {tests!r})
+from test_hardening_concurrency import sensor, inputs, evaluate_all, digest
+context = sensor("unscented").context((20.0, -30.0, 0.7))
+print(digest([r for seed in range(3) for r in evaluate_all(context, *inputs(seed))]))
+"""
+
+
+def test_results_do_not_depend_on_the_number_of_rayon_threads():
+    context = sensor("unscented").context((20.0, -30.0, 0.7))
+    here = digest([r for seed in range(3) for r in evaluate_all(context, *inputs(seed))])
+    code = _CHILD.format(tests=os.path.dirname(__file__))
+    for threads in ("1",):
+        env = dict(os.environ, RAYON_NUM_THREADS=threads)
+        child = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                               check=True)
+        assert child.stdout.strip() == here, (threads, child.stderr)
+
+
+def test_evaluation_releases_the_gil():
+    """While the main thread is inside one long Rust call, a pure-Python counter thread keeps
+    running. The switch interval is made huge, so the main thread never has the GIL taken
+    from it: between reading the counter and returning from the call, the counter can only
+    advance if the call itself releases the GIL. No timing thresholds."""
+    context = sensor("gauss-hermite").context((0.0, 0.0, 0.0))
+    means, covars, _ = inputs(3, n=200_000)
+    context.prob_detection_array(means[:10], covars[:10])  # compile and warm up first
+    stop = threading.Event()
+    running = threading.Event()
+    count = [0]
+
+    def counter():
+        running.set()
+        while not stop.is_set():
+            count[0] += 1
+            time.sleep(0)  # hand the GIL back at once, so the main thread can take it
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(60.0)
+    thread = threading.Thread(target=counter)
+    try:
+        thread.start()
+        running.wait()
+        time.sleep(0)
+        before = count[0]
+        result = context.prob_detection_array(means, covars)  # 16 nodes x 2e5 rows, land + sight
+        during = count[0] - before
+    finally:
+        stop.set()
+        sys.setswitchinterval(old)
+        thread.join()
+    assert result.shape == (200_000,) and np.all((result >= 0) & (result <= 1))
+    assert during > 0, "the counter thread never ran while P_D was being evaluated"
+
+
+def test_the_gil_test_would_notice_a_call_that_holds_the_gil():
+    """Control for the test above: the same harness around a pure-Python loop (which holds
+    the GIL throughout) sees no progress, so the assertion there can fail."""
+    stop = threading.Event()
+    running = threading.Event()
+    count = [0]
+
+    def counter():
+        running.set()
+        while not stop.is_set():
+            count[0] += 1
+            time.sleep(0)
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(60.0)
+    thread = threading.Thread(target=counter)
+    try:
+        thread.start()
+        running.wait()
+        time.sleep(0)
+        before = count[0]
+        total = 0
+        for k in range(300_000):  # GIL held: no blocking call, switch interval not reached
+            total += k
+        during = count[0] - before
+    finally:
+        stop.set()
+        sys.setswitchinterval(old)
+        thread.join()
+    assert total > 0 and during == 0
