@@ -128,9 +128,9 @@ impl ClutterModel {
                     }
                 }
             }
-            // Every factor value is finite, so a non-finite λ marks a row that could not be
-            // evaluated; say why for the first one.
-            let i = chunk.iter().position(|v| !v.is_finite())?;
+            // Every factor value is finite and > 0, so a λ that is not marks a row that could
+            // not be evaluated (or a product that under/overflowed); say why for the first one.
+            let i = chunk.iter().position(|v| !(v.is_finite() && *v > 0.0))?;
             let row = first + i;
             let (x, y) = (positions[2 * row], positions[2 * row + 1]);
             let problem = if self.uses_position && !(x.is_finite() && y.is_finite()) {
@@ -142,7 +142,7 @@ impl ClutterModel {
                 });
                 match column {
                     Some(c) => ("metadata", format!("metadata column {c} is missing and the rule has no `missing` value")),
-                    None => ("positions", "λ is not finite".to_string()),
+                    None => ("factors", format!("the product of the clutter factors is {}, not a finite density > 0 (factors too small or too large)", chunk[i])),
                 }
             };
             problems.lock().unwrap().push((row, problem.0, problem.1));

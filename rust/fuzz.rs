@@ -332,7 +332,7 @@ proptest! {
     ) {
         let factors: Vec<ClutterFactor> = factors.into_iter().flatten().collect();
         // Whether some product of the factors' values leaves the normal f64 range: then λ
-        // can round to 0 or overflow (see `known_issue_lambda_underflows_to_zero`).
+        // can round to 0 or overflow (then evaluate must refuse: `lambda_that_underflows_is_an_error`).
         let (mut lo, mut hi) = (1.0f64, 1.0f64);
         for f in &factors {
             let values: Vec<f64> = match f {
@@ -359,18 +359,15 @@ proptest! {
     }
 }
 
-/// Known issue, pinned (passes while the bug exists, fails once fixed — then drop
-/// `should_panic`): a product of valid tiny densities underflows to λ = 0, which `evaluate`
-/// returns as Ok although trackers divide by λ. Found by the property above.
+/// Regression (found by the property above): a product of valid tiny densities that
+/// underflows to 0 is an error naming `factors`, never λ = 0 (trackers divide by λ).
 #[test]
-#[should_panic(expected = "λ must be > 0")]
-fn known_issue_lambda_underflows_to_zero() {
+fn lambda_that_underflows_is_an_error() {
     let model = ClutterModel::new(vec![ClutterFactor::Constant(1e-200), ClutterFactor::Constant(1e-200)]).unwrap();
     let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
     let mut out = [1.0];
-    if model.evaluate(&pose, &[0.0, 0.0], &[], &mut out).is_ok() {
-        assert!(out[0] > 0.0, "λ must be > 0, got {}", out[0]);
-    }
+    let err = model.evaluate(&pose, &[0.0, 0.0], &[], &mut out).unwrap_err();
+    assert_eq!(err.argument(), "factors");
 }
 
 /// Known issue, pinned: the ray-cast line of sight treats a segment whose coordinate

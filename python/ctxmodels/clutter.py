@@ -106,6 +106,9 @@ class ClutterDensityModel(ModelComponent):
             return np.full((n, len(keys)), np.nan)
         if isinstance(metadata, np.ndarray):
             return as_rows(metadata, "metadata", ncols=len(keys))
+        if isinstance(metadata, (str, bytes)) or not isinstance(metadata, Sequence):
+            raise TypeError(f"metadata: expected an (M, K) array or a sequence of mappings, "
+                            f"got {type(metadata).__name__}")
         rows = np.full((n, len(keys)), np.nan)
         if len(metadata) != n:
             raise ValueError(f"metadata: needs one entry per position ({n}), got {len(metadata)}")

@@ -91,7 +91,11 @@ class NavigationTrack(PoseSource):
         object.__setattr__(self, "_initialised", False)
         self.timestamps = list(self.timestamps)
         self.positions = frozen_copy(as_rows(self.positions, "positions", ncols=2))
-        self.headings = frozen_copy(np.asarray(self.headings, dtype=np.float64).ravel())
+        headings = np.asarray(self.headings)
+        if headings.dtype == object or not (np.issubdtype(headings.dtype, np.integer)
+                                            or np.issubdtype(headings.dtype, np.floating)):
+            raise TypeError(f"headings: must be real numbers (radians), got dtype {headings.dtype}")
+        self.headings = frozen_copy(headings.ravel())
         object.__setattr__(self, "_initialised", True)
         n = len(self.timestamps)
         if n == 0:

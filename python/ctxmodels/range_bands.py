@@ -38,9 +38,16 @@ class RangeBands(ModelComponent):
         self._compiled()  # validate now, not at the first scan
 
     def _owners(self) -> list[bool]:
-        if isinstance(self.upper_owns, (bool, np.bool_)):
-            return [bool(self.upper_owns)] * len(self.edges)
-        return [bool(flag) for flag in self.upper_owns]
+        flags = self.upper_owns
+        if isinstance(flags, (bool, np.bool_)):
+            return [bool(flags)] * len(self.edges)
+        if isinstance(flags, (str, bytes)) or not isinstance(flags, (Sequence, np.ndarray)):
+            raise TypeError(f"upper_owns: expected a bool or a sequence of bools, "
+                            f"got {type(flags).__name__}")
+        for i, flag in enumerate(flags):
+            if not isinstance(flag, (bool, np.bool_)):  # 'False' would read as True
+                raise TypeError(f"upper_owns: flag {i} must be a bool, got {flag!r}")
+        return [bool(flag) for flag in flags]
 
     def _compiled(self) -> _core.RangeBands:
         return self._cached("core", lambda: _core.RangeBands(

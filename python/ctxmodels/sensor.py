@@ -43,6 +43,9 @@ class SensorModel(ModelComponent):
         if not isinstance(self.clutter, ClutterDensityModel):
             raise TypeError(f"clutter: expected a ClutterDensityModel, "
                             f"got {type(self.clutter).__name__}")
+        if isinstance(self.position_mapping, (str, bytes)) or not isinstance(
+                self.position_mapping, Sequence):
+            raise TypeError(f"position_mapping: expected two indices, got {self.position_mapping!r}")
         mapping = tuple(self.position_mapping)
         if len(mapping) != 2 or not all(isinstance(i, int) and i >= 0 for i in mapping) \
                 or mapping[0] == mapping[1]:

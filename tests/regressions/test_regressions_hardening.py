@@ -1,5 +1,5 @@
 """Cases found by the hardening fuzzers (tests/test_hardening_fuzz.py, rust/fuzz.rs), kept as
-minimal reproducers. Each known issue is a strict xfail asserting the *correct* behaviour:
+minimal reproducers. Each was a strict xfail asserting the *correct* behaviour until fixed:
 it fails loudly (XPASS → error) once the bug is fixed, so the marker must then be removed.
 """
 import datetime
@@ -19,7 +19,6 @@ def names_argument(call, exception, argument):
     assert str(info.value).startswith(f"{argument}:"), str(info.value)
 
 
-@pytest.mark.xfail(strict=True, reason="known issue: λ = 1e-200 · 1e-200 underflows to 0 and is returned")
 def test_clutter_density_product_that_underflows_is_not_silently_zero():
     model = ClutterDensityModel(factors=[1e-200, 1e-200])
     try:
@@ -30,20 +29,17 @@ def test_clutter_density_product_that_underflows_is_not_silently_zero():
         assert np.all(lam > 0), lam
 
 
-@pytest.mark.xfail(strict=True, reason="known issue: an overflowing λ product blames 'positions'")
 def test_clutter_density_product_that_overflows_names_factors():
     model = ClutterDensityModel(factors=[1e200, 1e200])
     names_argument(lambda: model.evaluate(POSE, np.zeros((2, 2))), ValueError, "factors")
 
 
-@pytest.mark.xfail(strict=True, reason="known issue: upper_owns=None/3 gives a bare 'not iterable'")
 @pytest.mark.parametrize("flags", [None, 3])
 def test_range_bands_non_iterable_upper_owns_names_it(flags):
     names_argument(lambda: RangeBands(edges=[50.0], values=[1.0, 0.0], upper_owns=flags),
                    TypeError, "upper_owns")
 
 
-@pytest.mark.xfail(strict=True, reason="known issue: upper_owns=['False'] is read as True")
 @pytest.mark.parametrize("flags", [["False"], [None], [2.5]])
 def test_range_bands_non_bool_upper_owns_are_refused(flags):
     names_argument(lambda: RangeBands(edges=[50.0], values=[1.0, 0.0], upper_owns=flags),
@@ -56,7 +52,6 @@ def test_range_bands_bool_flags_control_the_edge():
     assert RangeBands(edges=[50.0], values=[1.0, 0.0], upper_owns=[False])([50.0])[0] == 1.0
 
 
-@pytest.mark.xfail(strict=True, reason="known issue: position_mapping=None gives a bare 'not iterable'")
 @pytest.mark.parametrize("mapping", [None, 2])
 def test_sensor_model_non_iterable_position_mapping_names_it(mapping):
     names_argument(lambda: SensorModel(detection=DetectionProbabilityModel(factors=[0.5]),
@@ -65,15 +60,12 @@ def test_sensor_model_non_iterable_position_mapping_names_it(mapping):
                    TypeError, "position_mapping")
 
 
-@pytest.mark.xfail(strict=True, reason="known issue: scalar metadata gives a bare \"has no len()\"")
 @pytest.mark.parametrize("metadata", [0.0, 3])
 def test_scalar_metadata_names_metadata(metadata):
     model = ClutterDensityModel(factors=[1e-3])
     names_argument(lambda: model.evaluate(POSE, np.zeros((1, 2)), metadata), TypeError, "metadata")
 
 
-@pytest.mark.xfail(strict=True, reason="known issue: complex headings are cast (imaginary part "
-                                        "dropped with a ComplexWarning) or fail unnamed")
 @pytest.mark.parametrize("headings", [[0j], np.array([1 + 2j])])
 def test_complex_navigation_headings_name_headings(headings):
     stamps = [datetime.datetime(2024, 1, 1)]
