@@ -143,17 +143,17 @@ def run_job(job: Job) -> JobResult:
 @dataclass
 class ExperimentConfig:
     scenarios: Sequence[str] = ("mixed-range", "formation", "islands")
-    trackers: Sequence[str] | None = None  # None: every tracker in TRACKERS
-    seeds: Sequence[int] = (0, 1, 2)
-    duration: float | None = 300.0
+    trackers: Sequence[str] | None = None  # None: trackers.DEFAULT_TRACKERS
+    seeds: Sequence[int] = (0, 1)
+    duration: float | None = 60.0
     stock: bool = False
     workers: int | None = None
     plot_seed: int | None = 0
     static_distractors: bool = True
 
     def jobs(self) -> list[Job]:
-        from .trackers import TRACKERS, applicable
-        trackers = list(self.trackers) if self.trackers else list(TRACKERS)
+        from .trackers import DEFAULT_TRACKERS, TRACKERS, applicable
+        trackers = list(self.trackers) if self.trackers else list(DEFAULT_TRACKERS)
         for name in trackers:
             if name not in TRACKERS:
                 raise ValueError(f"trackers: unknown tracker {name!r}; choose from {list(TRACKERS)}")

@@ -105,6 +105,11 @@ TRACKERS: dict[str, TrackerSpec] = {spec.name: spec for spec in (
 )}
 
 
+#: Run when no trackers are named: the paper's five and the line-of-sight GM-PHD. The
+#: context-aware JPDA costs as much as the JPDA again; name it to run it.
+DEFAULT_TRACKERS = tuple(name for name in TRACKERS if name != "jpda-context")
+
+
 def applicable(tracker: str, scenario: str) -> bool:
     spec = TRACKERS[tracker]
     return spec.only_scenarios is None or scenario in spec.only_scenarios
