@@ -80,6 +80,14 @@ def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.nda
     return positions
 
 
+def require_array_context(detector_context, *methods: str) -> None:
+    """Drop-ins that evaluate a whole scan need a context with the array methods."""
+    missing = [m for m in methods if not hasattr(detector_context, m)]
+    if missing:
+        raise TypeError(f"detector_context: expected a ctxmodels DetectorContext (with "
+                        f"{' and '.join(methods)}), got {type(detector_context).__name__}")
+
+
 class DetectorContext(_UpstreamContext):
     r"""The observability of one sensor at one scan: :math:`P_D(x; S)` and
     :math:`\lambda(z; S)` for the sensor state :math:`S` (its pose at the scan).
@@ -164,5 +172,5 @@ class DetectorContext(_UpstreamContext):
         return float(self.clutter_spatial_density_detections([detection])[0])
 
 
-__all__ = ["DetectionSet", "DetectorContext", "detection_positions"]
+__all__ = ["DetectionSet", "DetectorContext", "detection_positions", "require_array_context"]
 

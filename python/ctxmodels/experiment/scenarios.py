@@ -674,6 +674,14 @@ class ScenarioRun:
 # --------------------------------------------------------------------------------------
 
 
+def _object_detection(source, state_vector, timestamp, model, metadata, truth_paths):
+    """A vessel's detection is a TrueDetection linked to its path; anything else is Clutter."""
+    if source[0] == "target":
+        return TrueDetection(state_vector, groundtruth_path=truth_paths[source[2]],
+                             timestamp=timestamp, measurement_model=model, metadata=metadata)
+    return Clutter(state_vector, timestamp=timestamp, measurement_model=model, metadata=metadata)
+
+
 def _land_edges(land: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """All polygon edges as start points (E, 2) and end points (E, 2)."""
     if not land:
@@ -841,25 +849,8 @@ def _radar_scans(
             range_ = ranges[k, j] + config.range_std * object_noise[k, j, 1]
             state_vector = StateVector([Bearing(_wrap_angle(bearing)), range_])
             metadata = _object_metadata(scene.sources[j])
-            if scene.sources[j][0] == "target":
-                detections.add(
-                    TrueDetection(
-                        state_vector,
-                        groundtruth_path=truth_paths[scene.sources[j][2]],
-                        timestamp=timestamp,
-                        measurement_model=model,
-                        metadata=metadata,
-                    )
-                )
-            else:
-                detections.add(
-                    Clutter(
-                        state_vector,
-                        timestamp=timestamp,
-                        measurement_model=model,
-                        metadata=metadata,
-                    )
-                )
+            detections.add(_object_detection(scene.sources[j], state_vector, timestamp, model,
+                                             metadata, truth_paths))
         for measured, source in (
             (near_split[k], "clutter"),
             (far_split[k], "clutter"),
@@ -949,25 +940,8 @@ def _lidar_scans(
         for j in np.flatnonzero(detected[k]):
             state_vector = StateVector(measured[k, j])
             metadata = _object_metadata(scene.sources[j]) | {"area": float(object_areas[k, j])}
-            if scene.sources[j][0] == "target":
-                detections.add(
-                    TrueDetection(
-                        state_vector,
-                        groundtruth_path=truth_paths[scene.sources[j][2]],
-                        timestamp=timestamp,
-                        measurement_model=model,
-                        metadata=metadata,
-                    )
-                )
-            else:
-                detections.add(
-                    Clutter(
-                        state_vector,
-                        timestamp=timestamp,
-                        measurement_model=model,
-                        metadata=metadata,
-                    )
-                )
+            detections.add(_object_detection(scene.sources[j], state_vector, timestamp, model,
+                                             metadata, truth_paths))
         for i in range(bounds[k], bounds[k + 1]):
             detections.add(
                 Clutter(

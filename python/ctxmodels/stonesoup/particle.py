@@ -72,11 +72,7 @@ class _ParticleContextMixin:
 
 
 def _check_context(detector_context) -> None:
-    if not (hasattr(detector_context, "prob_detection_array")
-            and hasattr(detector_context, "clutter_spatial_density_detections")):
-        raise TypeError("detector_context: expected a ctxmodels DetectorContext (with "
-                        "prob_detection_array and clutter_spatial_density_detections), got "
-                        f"{type(detector_context).__name__}")
+    require_array_context(detector_context, "prob_detection_array", "clutter_spatial_density_detections")
 
 
 def _log(values: np.ndarray) -> np.ndarray:
@@ -225,3 +221,4 @@ class SMCPHDUpdater(_ParticleContextMixin, _StockSMCPHDUpdater):
 
 
 __all__ = ["BernoulliParticleUpdater", "SMCPHDUpdater"]
+from ..context import require_array_context

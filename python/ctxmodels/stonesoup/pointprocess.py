@@ -43,6 +43,7 @@ from stonesoup.types.update import GaussianMixtureUpdate
 from stonesoup.updater.pointprocess import LCCUpdater as _StockLCCUpdater
 from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
 
+from ..context import require_array_context
 from ..context import DetectorContext
 from .birth import MeasurementDrivenBirth
 
@@ -50,11 +51,7 @@ _BIRTH = TaggedWeightedGaussianState.BIRTH
 
 
 def _check_context(detector_context) -> None:
-    if not (hasattr(detector_context, "prob_detection_states")
-            and hasattr(detector_context, "clutter_spatial_density_detections")):
-        raise TypeError("detector_context: expected a ctxmodels DetectorContext (with "
-                        "prob_detection_states and clutter_spatial_density_detections), got "
-                        f"{type(detector_context).__name__}")
+    require_array_context(detector_context, "prob_detection_states", "clutter_spatial_density_detections")
 
 
 class _ScanObservability:
