@@ -41,6 +41,8 @@ from stonesoup.types.state import TaggedWeightedGaussianState
 from stonesoup.types.update import GaussianMixtureUpdate
 from stonesoup.updater.pointprocess import LCCUpdater, PHDUpdater
 
+from .pointprocess import LCCUpdater as ContextLCCUpdater
+
 from .fast import (
     KALMAN_UPDATERS,
     ObjectFactory,
@@ -344,31 +346,13 @@ class FastLCCUpdater(_FastPointProcessUpdate, LCCUpdater):
         if detector_context is None:
             # the stock terms, on the stock inputs (it reads hypotheses[-1] itself)
             return self._calculate_update_terms(weight_sums, hypotheses)
-        survival = self.prob_survival
-        pds = missed_pd.tolist()
-        predicted_weight_sum = Probability.sum(p.weight for p in missed_preds) * survival
-        predicted_c2 = self.second_order_cumulant * survival ** 2
-        if not pds or all(pd == pds[0] for pd in pds):
-            # a constant P_D: the stock sums (P_D times the total), hence the stock numbers
-            prob_detection = pds[0] if pds else 0.0
-            detected_weight_sum = prob_detection * predicted_weight_sum
-            misdetected_weight_sum = (1 - prob_detection) * predicted_weight_sum
-        else:
-            detected_weight_sum = Probability.sum(
-                pd * p.weight for pd, p in zip(pds, missed_preds)) * survival
-            misdetected_weight_sum = Probability.sum(
-                (1 - pd) * p.weight for pd, p in zip(pds, missed_preds)) * survival
-        alpha_pred = ((predicted_weight_sum + self.mean_number_of_false_alarms) ** 2) \
-            / (predicted_c2 + self.second_order_false_alarm_cumulant + 1e-26)
-        denominator = alpha_pred + detected_weight_sum + self.mean_number_of_false_alarms
-        numerator = alpha_pred + (len(hypotheses) - 1)
-        l1 = numerator / denominator
-        l2 = numerator / (denominator ** 2)
-        detected_c2 = Probability.sum([
-            weight_sum / ((weight_sum + clutter[j]) ** 2) if len(hypotheses[j]) else 0.0
-            for j, weight_sum in enumerate(weight_sums)])
-        self.second_order_cumulant = (misdetected_weight_sum ** 2) * l2 - detected_c2
-        return np.float64(l1)
+        # The context terms are the context-aware LCCUpdater's own, on the same inputs:
+        # a detection that gated nothing has no λ term.
+        clutter_terms = [clutter[j] if len(hypotheses[j]) else None
+                         for j in range(len(weight_sums))]
+        return ContextLCCUpdater._context_update_terms(
+            self, weight_sums, clutter_terms, missed_preds, missed_pd.tolist(),
+            len(hypotheses) - 1)
 
 
 __all__ = ["FastLCCUpdater", "FastPHDUpdater"]
