@@ -130,3 +130,52 @@ def test_tracks_on_static_objects_are_distractors():
     without = metrics.gospa(run.truths, drop_distractor_states([on_marker, on_vessel], run, times),
                             times).rms
     assert without < with_marker
+
+
+def test_cli_sensitivity_options_change_the_simulated_sensors_only(tmp_path, capsys):
+    out = tmp_path / "light"
+    code = main(["experiment", "--scenarios", "mixed-range", "--trackers", "gmphd-radar-only",
+                 "--seeds", "1", "--duration", "6", "--workers", "1", "--output", str(out),
+                 "--quiet", "--no-plots", "--radar-clutter", "5", "3.2", "--lidar-clutter",
+                 "0.5", "--radar-bearing-std", "0.5"])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "radar.clutter_per_scan_far=3.2" in printed
+    assert "lidar.clutter_per_scan=0.5" in printed
+    assert f"radar.bearing_std={math.radians(0.5):g}" in printed
+    config = json.loads((out / "results.json").read_text())["config"]
+    assert config["radar"]["clutter_per_scan_far"] == 3.2
+    assert config["radar"]["clutter_per_scan_near"] == 5.0
+    assert config["lidar"]["clutter_per_scan"] == 0.5
+
+
+def test_default_table_names_no_simulation_changes():
+    from ctxmodels.experiment.runner import simulation_changes
+    from ctxmodels.experiment.scenarios import LidarConfig, RadarConfig
+    assert simulation_changes(None, None) == ""
+    assert simulation_changes(RadarConfig(), LidarConfig()) == ""
+
+
+def test_job_passes_the_simulated_radar_to_the_scenario():
+    import dataclasses
+
+    from ctxmodels.experiment.scenarios import RadarConfig
+    quiet = dataclasses.replace(RadarConfig(), clutter_per_scan_near=0.0, clutter_per_scan_far=0.0)
+    default = run_job(Job("formation", 2, "gmphd-radar-only", duration=15.0))
+    no_clutter = run_job(Job("formation", 2, "gmphd-radar-only", duration=15.0, radar=quiet))
+    # Same seed, same vessels: without radar clutter the radar-only tracker can only have
+    # fewer tracks, and the run must differ from the default one.
+    assert no_clutter.track_count <= default.track_count
+    assert (no_clutter.gospa.rms, no_clutter.track_count) != (default.gospa.rms, default.track_count)
+    run = make_scenario("formation", 2, 15.0, radar=quiet)
+    sources = {d.metadata["source"] for scan in run.radar_scans for d in scan.detections}
+    assert "clutter" not in sources
+
+
+@pytest.mark.parametrize("option, values", [
+    ("--radar-clutter", ["5", "-1"]), ("--lidar-clutter", ["nan"]),
+    ("--radar-bearing-std", ["0"])])
+def test_cli_rejects_bad_sensitivity_values(option, values, capsys):
+    with pytest.raises(SystemExit):
+        main(["experiment", option, *values, "--seeds", "1", "--duration", "1", "--quiet"])
+    assert option in capsys.readouterr().err

@@ -20,11 +20,13 @@ def _experiment(args) -> int:
     from .experiment.trackers import TRACKERS
     if args.trackers == ["all"]:
         args.trackers = list(TRACKERS)
+    radar, lidar = _simulated_sensors(args)
     config = ExperimentConfig(scenarios=args.scenarios, trackers=args.trackers,
                               seeds=list(range(args.seed_start, args.seed_start + args.seeds)),
                               duration=args.duration, stock=args.stock, workers=args.workers,
                               static_distractors=not args.static_as_false,
-                              plot_seed=None if args.no_plots else args.seed_start)
+                              plot_seed=None if args.no_plots else args.seed_start,
+                              radar=radar, lidar=lidar)
     print(f"ctxmodels experiment: {len(config.jobs())} runs "
           f"({len(args.scenarios)} scenarios × trackers × {args.seeds} seeds), "
           f"{args.duration:g} s each, {config.workers or 'all'} workers", file=sys.stderr)
@@ -35,6 +37,38 @@ def _experiment(args) -> int:
         paths.update(_draw(results, Path(args.output)))
     print("\nwrote " + ", ".join(str(p) for p in paths.values()), file=sys.stderr)
     return 0
+
+
+def _simulated_sensors(args):
+    """The simulation's sensor settings from the sensitivity options (None: defaults)."""
+    import dataclasses
+
+    from .experiment.scenarios import LidarConfig, RadarConfig
+    radar_changes, lidar_changes = {}, {}
+    if args.radar_clutter is not None:
+        near, far = args.radar_clutter
+        radar_changes.update(clutter_per_scan_near=near, clutter_per_scan_far=far)
+    if args.radar_bearing_std is not None:
+        radar_changes["bearing_std"] = math.radians(args.radar_bearing_std)
+    if args.lidar_clutter is not None:
+        lidar_changes["clutter_per_scan"] = args.lidar_clutter
+    radar = dataclasses.replace(RadarConfig(), **radar_changes) if radar_changes else None
+    lidar = dataclasses.replace(LidarConfig(), **lidar_changes) if lidar_changes else None
+    return radar, lidar
+
+
+def _non_negative(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number ≥ 0, got {text!r}")
+    return value
+
+
+def _positive(text: str) -> float:
+    value = _non_negative(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
 
 
 def _draw(results, folder: Path) -> dict:
@@ -143,6 +177,18 @@ def parser() -> argparse.ArgumentParser:
                           "(default: they are distractors, neither hits nor false tracks)")
     exp.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     exp.add_argument("--quiet", action="store_true", help="no progress bar")
+    sim = exp.add_argument_group(
+        "simulated sensors (sensitivity studies: these change the simulated truth only, "
+        "never the trackers' models)")
+    sim.add_argument("--radar-clutter", nargs=2, type=_non_negative, metavar=("NEAR", "FAR"),
+                     default=None,
+                     help="mean radar clutter returns per scan inside / beyond 1000 m (default "
+                          "5 32, i.e. 1e-3 and 1e-2 per rad·m: the paper's context-aware λ; "
+                          "5 3.2 makes the uniform λ = 1e-3 true everywhere)")
+    sim.add_argument("--lidar-clutter", type=_non_negative, metavar="N", default=None,
+                     help="mean lidar clutter segments per scan within 80 m (default 3)")
+    sim.add_argument("--radar-bearing-std", type=_positive, metavar="DEG", default=None,
+                     help="radar bearing noise σ in degrees (default 1)")
     exp.set_defaults(run=_experiment)
 
     cov = commands.add_parser(

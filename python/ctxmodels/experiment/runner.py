@@ -44,7 +44,7 @@ import numpy as np
 from stonesoup.types.track import Track
 
 from . import metrics
-from .scenarios import SCENARIOS, make_scenario
+from .scenarios import SCENARIOS, LidarConfig, RadarConfig, make_scenario
 
 #: Scenario names in table order, and the short labels of the results table.
 SCENARIO_LABELS = {"mixed-range": "Scenario 1", "formation": "Scenario 2", "islands": "Scenario 3"}
@@ -59,6 +59,10 @@ class Job:
     stock: bool = False
     keep_tracks: bool = False
     static_distractors: bool = True
+    #: Truth models of the simulated sensors (None: the scenario defaults). The trackers'
+    #: models never change with these: they are the sensitivity knobs of the simulation.
+    radar: RadarConfig | None = None
+    lidar: LidarConfig | None = None
 
 
 @dataclass
@@ -115,7 +119,7 @@ def run_job(job: Job) -> JobResult:
     from .trackers import TRACKERS, build_tracker
 
     spec = TRACKERS[job.tracker]
-    run = make_scenario(job.scenario, job.seed, job.duration)
+    run = make_scenario(job.scenario, job.seed, job.duration, radar=job.radar, lidar=job.lidar)
     tracker = build_tracker(spec, run, fast=not job.stock)
     started = time.perf_counter()
     all_tracks = set()
@@ -150,6 +154,8 @@ class ExperimentConfig:
     workers: int | None = None
     plot_seed: int | None = 0
     static_distractors: bool = True
+    radar: RadarConfig | None = None  # simulated radar (None: RadarConfig())
+    lidar: LidarConfig | None = None  # simulated lidar (None: LidarConfig())
 
     def jobs(self) -> list[Job]:
         from .trackers import DEFAULT_TRACKERS, TRACKERS, applicable
@@ -161,9 +167,24 @@ class ExperimentConfig:
             if name not in SCENARIOS:
                 raise ValueError(f"scenarios: unknown scenario {name!r}; choose from {list(SCENARIOS)}")
         return [Job(s, seed, t, self.duration, self.stock, keep_tracks=(seed == self.plot_seed),
-                    static_distractors=self.static_distractors)
+                    static_distractors=self.static_distractors, radar=self.radar,
+                    lidar=self.lidar)
                 for s in self.scenarios for t in trackers if applicable(t, s)
                 for seed in self.seeds]
+
+
+def simulation_changes(radar: RadarConfig | None, lidar: LidarConfig | None) -> str:
+    """The simulated-sensor settings that differ from the defaults, as ``name=value`` text
+    (empty when none do), so a results table always says what it was simulated with."""
+    parts = []
+    for prefix, config, default in (("radar", radar, RadarConfig()), ("lidar", lidar, LidarConfig())):
+        if config is None:
+            continue
+        for name, value in asdict(config).items():
+            if value != getattr(default, name):
+                parts.append(f"{prefix}.{name}={value:g}" if isinstance(value, float)
+                             else f"{prefix}.{name}={value}")
+    return ", ".join(parts)
 
 
 def _interval(values: Sequence[float]) -> tuple[float, float]:
@@ -243,6 +264,9 @@ class ExperimentResults:
                      f"{self.config.duration or 'default'} s per scenario; "
                      f"{'stock Stone Soup' if self.config.stock else 'fast'} GM-PHD chain; "
                      f"wall time {self.wall_seconds:.0f} s.")
+        changed = simulation_changes(self.config.radar, self.config.lidar)
+        if changed:
+            lines.append(f"Simulated sensors changed from the defaults: {changed}.")
         return "\n".join(lines)
 
     def save(self, folder: str | Path) -> dict[str, Path]:
