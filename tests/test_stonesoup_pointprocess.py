@@ -450,6 +450,39 @@ def test_surveillance_region_bounds_the_mixture(counted_tags):
     assert sizes[id(bounded)][-1] == []
 
 
+def test_position_uncertainty_bound_drops_unseen_growing_components(counted_tags):
+    kalman_updater, _ = one_scan_hypotheses([], set(), T0)
+    hypothesiser = GaussianMixtureHypothesiser(
+        DistanceHypothesiser(KalmanPredictor(TRANSITION_MODEL), kalman_updater, Mahalanobis(),
+                             missed_distance=3), order_by_detection=True)
+
+    def tracker(limit):
+        t = PointProcessMultiTargetTracker(
+            detector=None, hypothesiser=hypothesiser, updater=PHDUpdater(kalman_updater),
+            reducer=GaussianMixtureReducer(prune_threshold=1e-6, merging=False),
+            max_position_std=limit)
+        # Unseen (P_D 0 beyond 80 m), standing still: only the covariance changes.
+        t.gaussian_mixture = GaussianMixture([TaggedWeightedGaussianState(
+            np.array([[500.0], [0.0], [0.0], [0.0]]), np.diag([s ** 2, 1, s ** 2, 1]),
+            weight=1.0, timestamp=T0, tag=f"sd{s}") for s in (1.0, 5.0, 20.0)])
+        return t
+
+    limit = 6.0
+    bounded, unbounded = tracker(limit), tracker(None)
+    for k in range(1, 4):
+        context = banded_context((50, 80), (0.95, 0.2, 0.0), timestamp=T0 + k * SECOND)
+        for t in (bounded, unbounded):
+            t.update_tracker(T0 + k * SECOND, DetectionSet((), context))
+        # The bound is the RMS x/y standard deviation of each (predicted) component.
+        for c in unbounded.gaussian_mixture:
+            rms = np.sqrt((c.covar[0, 0] + c.covar[2, 2]) / 2)
+            assert (c.tag in {b.tag for b in bounded.gaussian_mixture}) == (rms <= limit)
+    assert sorted(c.tag for c in unbounded.gaussian_mixture) == ["sd1.0", "sd20.0", "sd5.0"]
+    assert all(float(c.weight) == 1.0 for c in unbounded.gaussian_mixture)
+    # sd 20 goes at once; sd 5 once the unit velocity variance has grown it past 6 m; sd 1 stays.
+    assert [c.tag for c in bounded.gaussian_mixture] == ["sd1.0"]
+
+
 def test_region_and_tracker_validation():
     with pytest.raises(ValueError, match="radius"):
         CircularRegion(centre=(0, 0), radius=-1)
@@ -466,6 +499,9 @@ def test_region_and_tracker_validation():
         PointProcessMultiTargetTracker(birth=object(), **common)
     with pytest.raises(ValueError, match="position_mapping"):
         PointProcessMultiTargetTracker(position_mapping=(0, 0), **common)
+    for bad in (0, -1.0, float("nan"), float("inf"), "10"):
+        with pytest.raises(ValueError, match="max_position_std"):
+            PointProcessMultiTargetTracker(max_position_std=bad, **common)
 
 
 # --- measurement-driven birth -------------------------------------------------------------

@@ -164,8 +164,10 @@ def parser() -> argparse.ArgumentParser:
     exp.add_argument("--seed-start", type=int, default=0, help="first seed (default 0)")
     exp.add_argument("--duration", type=float, default=60.0,
                      help="seconds of each scenario to simulate (default 60, which keeps the "
-                          "default run within ~5 min on 2 cores; the scenarios are 480 s long: "
-                          "`--duration 480 --seeds 10` is the full study, hours on 2 cores)")
+                          "default run within ~5 min on 2 cores). The scenarios are 480 s long; "
+                          "on 2 cores `--duration 480 --seeds 3` of the GM-PHD trackers takes "
+                          "~22 min, while one 480 s JPDA run alone takes over 15 min (it "
+                          "confirms hundreds of clutter tracks)")
     exp.add_argument("--workers", type=int, default=None,
                      help="parallel processes (default: one per core)")
     exp.add_argument("--output", default="results", help="output folder (default ./results)")

@@ -28,6 +28,7 @@ from __future__ import annotations
 import datetime
 import functools
 import inspect
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -291,7 +292,8 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
     Per scan :math:`k`: (1) the stock ``birth_component`` (if any) and the measurement-driven
     births that are due (see :class:`~ctxmodels.stonesoup.birth.MeasurementDrivenBirth`) join
     the mixture; (2) hypothesise, (3) update, (4) drop components whose mean lies outside the
-    ``surveillance_region``, (5) reduce, (6) update and end tracks as stock; (7) the scan's
+    ``surveillance_region`` or whose position uncertainty exceeds ``max_position_std``,
+    (5) reduce, (6) update and end tracks as stock; (7) the scan's
     detections queue births for later scans (births outside the region are not queued).
     Without ``birth_component`` and ``birth`` no births are added (the stock tracker needs a
     ``birth_component``).
@@ -305,6 +307,19 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
     (e.g. a :class:`~ctxmodels.LandMask` built from the region's polygon: inside = kept),
     or a callable ``f(points) -> bool array``; ``points`` are the (N, 2) world x/y of the
     component means (``position_mapping``).
+
+    **Why a bound on position uncertainty.** The same missed-detection factor of 1 lets a
+    component that stays unseen *inside* the region (a radar blind sector, beyond the lidar
+    while the radar is elsewhere) keep its weight while its covariance grows without bound
+    (constant velocity: position variance :math:`\propto t^3`). Such a component is no
+    longer a target estimate, and it is harmful: the stock reducer merges a candidate
+    :math:`c` into the heaviest component :math:`b` when
+    :math:`(m_c - m_b)^T P_c^{-1} (m_c - m_b) <` ``merge_threshold``, measured with the
+    *candidate's* covariance (Vo & Ma's rule), so a 300 m-wide ghost swallows a well-tracked
+    target hundreds of metres away and moves its mean there. ``max_position_std``
+    (:math:`\sigma_{\max}`) drops, after each update, every component with
+    :math:`\sqrt{\operatorname{tr} P_{xy} / 2} > \sigma_{\max}` (the RMS standard deviation
+    of its x/y position); its weight is discarded, as for the region.
     """
 
     birth: MeasurementDrivenBirth = Property(
@@ -315,8 +330,14 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         doc="Region outside which components are dropped after each update: a "
             "CircularRegion, an object with ``contains(points)``, or a callable on (N, 2) "
             "positions returning a boolean mask. None: no bound (stock).")
+    max_position_std: float = Property(
+        default=None,
+        doc="Components whose RMS x/y position standard deviation "
+            ":math:`\\sqrt{\\operatorname{tr} P_{xy}/2}` exceeds this (m) are dropped after "
+            "each update. None: no bound (stock).")
     position_mapping: Sequence[int] = Property(
-        default=(0, 2), doc="Indices of x and y in the state, for the surveillance region.")
+        default=(0, 2), doc="Indices of x and y in the state, for the surveillance region and "
+                            "the position-uncertainty bound.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -331,6 +352,11 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         if len(mapping) != 2 or not all(isinstance(i, (int, np.integer)) and i >= 0
                                         for i in mapping) or mapping[0] == mapping[1]:
             raise ValueError(f"position_mapping: must be two different indices >= 0, got {mapping}")
+        limit = self.max_position_std
+        if limit is not None and not (isinstance(limit, (int, float, np.floating))
+                                      and math.isfinite(limit) and limit > 0):
+            raise ValueError(
+                f"max_position_std: must be a finite number > 0 or None, got {limit!r}")
         self._pending_births: list[TaggedWeightedGaussianState] = []
 
     def _inside(self, components) -> list:
@@ -346,6 +372,16 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             raise ValueError(f"surveillance_region: returned {mask.shape[0]} flags for "
                              f"{len(components)} positions")
         return [c for c, keep in zip(components, mask) if keep]
+
+    def _certain_enough(self, components) -> list:
+        """The components whose x/y position uncertainty is within ``max_position_std``."""
+        if self.max_position_std is None or not components:
+            return list(components)
+        mapping = list(self.position_mapping)
+        limit = 2.0 * float(self.max_position_std) ** 2  # on tr P_xy
+        return [c for c in components
+                if np.trace(np.asarray(c.covar, dtype=np.float64)[np.ix_(mapping, mapping)])
+                <= limit]
 
     def __next__(self) -> tuple[datetime.datetime, set[Track]]:
         time, detections = next(self.detector_iter)
@@ -370,6 +406,9 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             self.gaussian_mixture = self.updater.update(hypotheses)
         if self.surveillance_region is not None:
             self.gaussian_mixture.components = self._inside(self.gaussian_mixture.components)
+        if self.max_position_std is not None:
+            self.gaussian_mixture.components = self._certain_enough(
+                self.gaussian_mixture.components)
         self.gaussian_mixture.components = self.reducer.reduce(self.gaussian_mixture.components)
         self.update_tracks()
         self.end_tracks()
