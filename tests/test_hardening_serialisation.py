@@ -114,7 +114,8 @@ def phd_tracker(paths):
         reducer=GaussianMixtureReducer(prune_threshold=1e-6, merge_threshold=5),
         extraction_threshold=0.5,
         birth=MeasurementDrivenBirth(birth_weight=1e-2),
-        surveillance_region=CircularRegion(centre=(0.0, 0.0), radius=2000.0))
+        surveillance_region=CircularRegion(centre=(0.0, 0.0), radius=2000.0),
+        max_position_std=500.0)
 
 
 def jpda_tracker(paths):
@@ -148,6 +149,8 @@ def test_tracker_round_trips_through_yaml_and_runs_identically(make, scan_files,
     for name in ("PHDUpdater", "MeasurementDrivenBirth", "CircularRegion", "ContextFeeder",
                  "MultiSensorFeeder", "SensorModel", "NavigationTrack", "AngularSector"):
         assert name in text or make is jpda_tracker, name
+    if make is phd_tracker:
+        assert "max_position_std: 500.0" in text
     if make is jpda_tracker:
         assert "PDAHypothesiser" in text and "ExpectedMissesDeleter" in text
     loaded = YAML().load(text)
