@@ -416,23 +416,26 @@ def test_lcc_second_order_terms_with_state_dependent_pd():
         assert missed[tag] == pytest.approx(weights[tag] * (1 - pd[tag]) * l1 * 0.9, rel=1e-12)
 
 
-# --- surveillance region ------------------------------------------------------------------
-def test_surveillance_region_bounds_the_mixture(counted_tags):
+# --- surveillance region and position-uncertainty bound ----------------------------------
+def bounded_tracker(components, **bounds):
+    """A GM-PHD tracker (no merging) holding ``components``, with the given bounds."""
     kalman_updater, _ = one_scan_hypotheses([], set(), T0)
     hypothesiser = GaussianMixtureHypothesiser(
         DistanceHypothesiser(KalmanPredictor(TRANSITION_MODEL), kalman_updater, Mahalanobis(),
                              missed_distance=3), order_by_detection=True)
+    tracker = PointProcessMultiTargetTracker(
+        detector=None, hypothesiser=hypothesiser, updater=PHDUpdater(kalman_updater),
+        reducer=GaussianMixtureReducer(prune_threshold=1e-6, merging=False), **bounds)
+    tracker.gaussian_mixture = GaussianMixture(components)
+    return tracker
 
+
+def test_surveillance_region_bounds_the_mixture(counted_tags):
     def tracker(region):
-        t = PointProcessMultiTargetTracker(
-            detector=None, hypothesiser=hypothesiser, updater=PHDUpdater(kalman_updater),
-            reducer=GaussianMixtureReducer(prune_threshold=1e-6, merging=False),
-            surveillance_region=region)
         # Drifting out of coverage (P_D 0 beyond 80 m) at 20 m/s, away from the centre.
-        t.gaussian_mixture = GaussianMixture([TaggedWeightedGaussianState(
+        return bounded_tracker([TaggedWeightedGaussianState(
             np.array([[95.0 + 30 * i], [20.0], [0.0], [0.0]]), np.eye(4), weight=1.0,
-            timestamp=T0, tag=f"c{i}") for i in range(4)])
-        return t
+            timestamp=T0, tag=f"c{i}") for i in range(4)], surveillance_region=region)
 
     bounded = tracker(CircularRegion(centre=(0, 0), radius=200))
     as_callable = tracker(lambda points: np.hypot(points[:, 0], points[:, 1]) <= 200)
@@ -451,21 +454,12 @@ def test_surveillance_region_bounds_the_mixture(counted_tags):
 
 
 def test_position_uncertainty_bound_drops_unseen_growing_components(counted_tags):
-    kalman_updater, _ = one_scan_hypotheses([], set(), T0)
-    hypothesiser = GaussianMixtureHypothesiser(
-        DistanceHypothesiser(KalmanPredictor(TRANSITION_MODEL), kalman_updater, Mahalanobis(),
-                             missed_distance=3), order_by_detection=True)
-
     def tracker(limit):
-        t = PointProcessMultiTargetTracker(
-            detector=None, hypothesiser=hypothesiser, updater=PHDUpdater(kalman_updater),
-            reducer=GaussianMixtureReducer(prune_threshold=1e-6, merging=False),
-            max_position_std=limit)
         # Unseen (P_D 0 beyond 80 m), standing still: only the covariance changes.
-        t.gaussian_mixture = GaussianMixture([TaggedWeightedGaussianState(
+        return bounded_tracker([TaggedWeightedGaussianState(
             np.array([[500.0], [0.0], [0.0], [0.0]]), np.diag([s ** 2, 1, s ** 2, 1]),
-            weight=1.0, timestamp=T0, tag=f"sd{s}") for s in (1.0, 5.0, 20.0)])
-        return t
+            weight=1.0, timestamp=T0, tag=f"sd{s}") for s in (1.0, 5.0, 20.0)],
+            max_position_std=limit)
 
     limit = 6.0
     bounded, unbounded = tracker(limit), tracker(None)
