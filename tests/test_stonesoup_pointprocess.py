@@ -192,6 +192,20 @@ def one_scan_hypotheses(components, detections, timestamp, missed_distance=3):
     return kalman_updater, hypothesiser.hypothesise(components, detections, timestamp)
 
 
+def phd_tracker(components, prune_threshold=1e-6, **bounds):
+    """A context-aware GM-PHD tracker (no merging) holding ``components``; ``bounds`` are the
+    tracker's other Properties (surveillance region, position-uncertainty bound)."""
+    kalman_updater = KalmanUpdater(MEASUREMENT_MODEL)
+    hypothesiser = GaussianMixtureHypothesiser(
+        DistanceHypothesiser(KalmanPredictor(TRANSITION_MODEL), kalman_updater, Mahalanobis(),
+                             missed_distance=3), order_by_detection=True)
+    tracker = PointProcessMultiTargetTracker(
+        detector=None, hypothesiser=hypothesiser, updater=PHDUpdater(kalman_updater),
+        reducer=GaussianMixtureReducer(prune_threshold=prune_threshold, merging=False), **bounds)
+    tracker.gaussian_mixture = GaussianMixture(components)
+    return tracker
+
+
 def component(x, y, weight, tag=None, covar=4.0):
     kwargs = {} if tag is None else {"tag": tag}
     return TaggedWeightedGaussianState(np.array([[x], [0.0], [y], [0.0]]), np.eye(4) * covar,
@@ -325,15 +339,8 @@ def test_empty_scan_applies_the_context_pd_to_every_component(counted_tags, upda
 
 def test_tracker_passes_the_context_of_an_empty_scan(counted_tags):
     timestamp = T0 + SECOND
-    kalman_updater, _ = one_scan_hypotheses([], set(), timestamp)
-    hypothesiser = GaussianMixtureHypothesiser(
-        DistanceHypothesiser(KalmanPredictor(TRANSITION_MODEL), kalman_updater, Mahalanobis(),
-                             missed_distance=3), order_by_detection=True)
-    tracker = PointProcessMultiTargetTracker(
-        detector=None, hypothesiser=hypothesiser, updater=PHDUpdater(kalman_updater),
-        reducer=GaussianMixtureReducer(prune_threshold=1e-9, merging=False))
-    tracker.gaussian_mixture = GaussianMixture(
-        [component(10, 0, 0.8, "inside"), component(300, 0, 0.9, "outside")])
+    tracker = phd_tracker([component(10, 0, 0.8, "inside"), component(300, 0, 0.9, "outside")],
+                          prune_threshold=1e-9)
     context = banded_context((50, 80), (0.95, 0.2, 0.0), timestamp=timestamp)
     tracker.update_tracker(timestamp, DetectionSet((), context))
     weights = {c.tag: float(c.weight) for c in tracker.gaussian_mixture}
@@ -417,23 +424,10 @@ def test_lcc_second_order_terms_with_state_dependent_pd():
 
 
 # --- surveillance region and position-uncertainty bound ----------------------------------
-def bounded_tracker(components, **bounds):
-    """A GM-PHD tracker (no merging) holding ``components``, with the given bounds."""
-    kalman_updater, _ = one_scan_hypotheses([], set(), T0)
-    hypothesiser = GaussianMixtureHypothesiser(
-        DistanceHypothesiser(KalmanPredictor(TRANSITION_MODEL), kalman_updater, Mahalanobis(),
-                             missed_distance=3), order_by_detection=True)
-    tracker = PointProcessMultiTargetTracker(
-        detector=None, hypothesiser=hypothesiser, updater=PHDUpdater(kalman_updater),
-        reducer=GaussianMixtureReducer(prune_threshold=1e-6, merging=False), **bounds)
-    tracker.gaussian_mixture = GaussianMixture(components)
-    return tracker
-
-
 def test_surveillance_region_bounds_the_mixture(counted_tags):
     def tracker(region):
         # Drifting out of coverage (P_D 0 beyond 80 m) at 20 m/s, away from the centre.
-        return bounded_tracker([TaggedWeightedGaussianState(
+        return phd_tracker([TaggedWeightedGaussianState(
             np.array([[95.0 + 30 * i], [20.0], [0.0], [0.0]]), np.eye(4), weight=1.0,
             timestamp=T0, tag=f"c{i}") for i in range(4)], surveillance_region=region)
 
@@ -456,7 +450,7 @@ def test_surveillance_region_bounds_the_mixture(counted_tags):
 def test_position_uncertainty_bound_drops_unseen_growing_components(counted_tags):
     def tracker(limit):
         # Unseen (P_D 0 beyond 80 m), standing still: only the covariance changes.
-        return bounded_tracker([TaggedWeightedGaussianState(
+        return phd_tracker([TaggedWeightedGaussianState(
             np.array([[500.0], [0.0], [0.0], [0.0]]), np.diag([s ** 2, 1, s ** 2, 1]),
             weight=1.0, timestamp=T0, tag=f"sd{s}") for s in (1.0, 5.0, 20.0)],
             max_position_std=limit)
