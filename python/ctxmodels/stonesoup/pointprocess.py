@@ -377,11 +377,11 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         """The components whose x/y position uncertainty is within ``max_position_std``."""
         if self.max_position_std is None or not components:
             return list(components)
-        mapping = list(self.position_mapping)
-        limit = 2.0 * float(self.max_position_std) ** 2  # on tr P_xy
-        return [c for c in components
-                if np.trace(np.asarray(c.covar, dtype=np.float64)[np.ix_(mapping, mapping)])
-                <= limit]
+        x, y = self.position_mapping
+        position_variance = np.array([c.covar[x, x] + c.covar[y, y] for c in components],
+                                     dtype=np.float64)  # tr P_xy
+        keep = position_variance <= 2.0 * float(self.max_position_std) ** 2
+        return [c for c, kept in zip(components, keep) if kept]
 
     def __next__(self) -> tuple[datetime.datetime, set[Track]]:
         time, detections = next(self.detector_iter)
