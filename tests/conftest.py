@@ -14,3 +14,16 @@ settings.register_profile("default", **_common)
 settings.register_profile("ci", derandomize=True, **_common)
 settings.register_profile("thorough", max_examples=1000, **_common)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
+
+
+import pytest  # noqa: E402
+
+
+@pytest.fixture
+def stock_in_stable_order(monkeypatch):
+    """Stock Stone Soup's Gaussian-mixture reducer visits shared tags in the order of a
+    ``set`` of random uuid strings, which changes with the process. ctxmodels visits them in
+    first-appearance order; with this fixture the stock reducer does the same, so the two
+    can be compared bit for bit ("the stock pipeline under the same stable order")."""
+    import stonesoup.mixturereducer.gaussianmixture as module
+    monkeypatch.setattr(module, "set", lambda items: list(dict.fromkeys(items)), raising=False)

@@ -69,6 +69,9 @@ from ctxmodels.stonesoup.fast import (
     stock_gaussian_pdf,
 )
 
+# Stock runs compared bit for bit with ctxmodels visit shared tags in first-appearance order.
+pytestmark = pytest.mark.usefixtures("stock_in_stable_order")
+
 START = datetime.datetime(2024, 1, 1)
 RTOL = 1e-9
 
@@ -693,19 +696,44 @@ def test_reducer_matches_stock(kind, options):
     assert len(expected) < len(components) or not options.get("merging", True)
 
 
+def kdtree_gated_merge(components, merge_threshold, max_distance):
+    """Reference for the k-d-tree gate, in the stable order: the stock greedy merge (heaviest
+    first, the rest visited in increasing weight, ties in input order) restricted to the
+    components within ``max_distance`` (Euclidean, full state) of the heaviest's *initial*
+    mean, as the stock's ball query finds them. Stock visits those candidates in the order
+    of a ``set`` of components (memory addresses), which no two processes share."""
+    stock = GaussianMixtureReducer(merge_threshold=merge_threshold)
+    measure = SquaredMahalanobis(state_covar_inv_cache_size=None)
+    remaining = sorted(components, key=lambda c: c.weight)
+    merged = []
+    while remaining:
+        best = remaining.pop()
+        centre = best.state_vector.ravel().copy()
+        for component in list(remaining):
+            if np.linalg.norm(component.state_vector.ravel() - centre) > max_distance:
+                continue
+            if measure(state1=component, state2=best) < merge_threshold:
+                remaining.remove(component)
+                best = stock.merge_components(best, component)
+        merged.append(best)
+    return merged
+
+
 @pytest.mark.parametrize("kind", ["tagged", "untagged", "probability"])
-def test_reducer_kdtree_gate_matches_stock(kind):
-    """With ``kdtree_max_distance`` the stock visits candidates in the order of a ``set`` of
-    components, which depends on their ids: both reducers merge the same objects (without
-    pruning and with unique tags, merging leaves its inputs untouched)."""
+def test_reducer_kdtree_gate_merges_candidates_in_weight_order(kind):
     for seed in range(3):
         components = random_mixture(60, seed, tagged=kind != "untagged",
                                     probability_weights=kind == "probability")
-        options = dict(kdtree_max_distance=15, merge_threshold=40, pruning=False)
-        expected = GaussianMixtureReducer(**options).reduce(list(components))
-        got = FastGaussianMixtureReducer(**options).reduce(list(components))
-        assert_same_components(expected, got, f"seed {seed}")
-        assert len(got) < len(components)
+        # a gate that excludes no one: exactly the stock reducer without a gate
+        wide = FastGaussianMixtureReducer(kdtree_max_distance=1e9, merge_threshold=40,
+                                          pruning=False).reduce(list(components))
+        assert_same_components(GaussianMixtureReducer(merge_threshold=40, pruning=False)
+                               .reduce(list(components)), wide, f"seed {seed}, wide gate")
+        # a gate that does exclude: the reference above
+        got = FastGaussianMixtureReducer(kdtree_max_distance=5, merge_threshold=40,
+                                         pruning=False).reduce(list(components))
+        assert_same_components(kdtree_gated_merge(components, 40, 5), got, f"seed {seed}")
+        assert len(got) < len(components) and len(got) != len(wide)
 
 
 def test_reducer_merges_near_the_threshold_exactly():

@@ -33,6 +33,11 @@ from ctxmodels.stonesoup.birth import TABLE_I_BIRTH_COVAR, MeasurementDrivenBirt
 from ctxmodels.stonesoup.pointprocess import (CircularRegion, LCCUpdater, PHDUpdater,
                                               PointProcessMultiTargetTracker)
 
+# Stock runs compared bit for bit with ctxmodels visit shared tags in first-appearance order.
+from ctxmodels.stonesoup.ordering import in_stable_order  # noqa: E402
+
+pytestmark = pytest.mark.usefixtures("stock_in_stable_order")
+
 T0 = datetime.datetime(2024, 1, 1)
 SECOND = datetime.timedelta(seconds=1)
 ORIGIN = (0.0, 0.0, 0.0)
@@ -143,9 +148,11 @@ def tracks_key(tracks):
 
 
 def run(tracker, scans):
+    """Each scan's detections in ctxmodels' stable order (a list keeping the context), so a
+    stock tracker iterates them in the order ctxmodels' does instead of set order."""
     history = []
     for timestamp, detections in scans:
-        tracker.update_tracker(timestamp, detections)
+        tracker.update_tracker(timestamp, in_stable_order(detections))
         history.append((mixture_key(tracker.gaussian_mixture), tracks_key(tracker.tracks)))
     return history
 

@@ -18,18 +18,24 @@ components, merged in the same order:
 
   with :math:`w` capped at 1 after each merge (the cap feeds the next merge, as stock). The
   merged component keeps :math:`b`'s tag and timestamp; components sharing a tag afterwards
-  keep it on the heaviest and get new tags otherwise. With ``kdtree_max_distance`` the
-  candidates are those within that Euclidean distance of :math:`b`, visited in the stock
-  set's order;
+  keep it on the heaviest and get new tags otherwise (tags visited in first-appearance
+  order). With ``kdtree_max_distance`` the candidates are those within that Euclidean
+  distance of :math:`b`, visited in increasing weight like the others;
 * **truncate**: keep the ``max_number_components`` heaviest, sharing the rest's weight.
 
 Instead of one Mahalanobis call per pair, a k-d tree over the means finds, once, the pairs
 that can merge at all (:math:`\delta^T P_c^{+} \delta \ge \lambda_{\min}(P_c^{+})
 \lVert\delta\rVert^2`); a pass with no such pair keeps its component without any arithmetic,
 and the others compute the exact distances of their candidates in one array operation,
-again after each merge (the running mean moves). With ``kdtree_max_distance`` the stock
-visiting order is that of a ``set`` of components, hence of their ids: it is reproduced for
-the same component objects.
+again after each merge (the running mean moves).
+
+**Order.** Two places of the stock reducer iterate a ``set``: the shared-tag pass (a set of
+random ``uuid4`` tag strings, whose order changes with ``PYTHONHASHSEED``) and the
+``kdtree_max_distance`` candidates (a set of components, in address order). Both orders
+change from process to process, so the stock results are not reproducible there. This
+reducer uses the order it has everywhere else instead — first appearance for tags,
+increasing weight (ties in input order) for k-d-tree candidates — and equals the stock
+reducer whenever the stock sets happen to iterate in that order.
 """
 from __future__ import annotations
 
@@ -145,7 +151,6 @@ class FastGaussianMixtureReducer(GaussianMixtureReducer):
         tree = None
         if self.kdtree_max_distance is not None:
             tree = KDTree(np.vstack([c.state_vector[:, 0] for c in components]))
-            position = {id(c): i for i, c in enumerate(components)}
         alive = np.ones(n, dtype=bool)  # by rank: still in the stock's remaining set
 
         merged_components = []
@@ -169,11 +174,11 @@ class FastGaussianMixtureReducer(GaussianMixtureReducer):
             else:
                 indexes = tree.query_ball_point(components[best].state_vector.ravel(),
                                                 r=self.kdtree_max_distance)
-                # a set, as stock: its iteration order is the visiting order
-                matched = {components[i] for i in indexes if alive[rank[i]]}
-                candidates = np.array([position[id(c)] for c in matched], dtype=np.intp)
-                positions = np.flatnonzero(np.isin(rank[candidates], reach))
-                check = candidates[positions]
+                # in increasing weight (rank), not the stock set's address order
+                alive_ranks = np.sort(np.asarray([rank[i] for i in indexes if alive[rank[i]]],
+                                                 dtype=np.intp))
+                candidates = order[alive_ranks]
+                check = candidates[np.isin(alive_ranks, reach)]
 
             mean = means[best]
             covar = covars[best]
@@ -224,7 +229,9 @@ class FastGaussianMixtureReducer(GaussianMixtureReducer):
         """Components sharing a tag: the heaviest keeps it, the others get new ones."""
         if not all(isinstance(c, TaggedWeightedGaussianState) for c in merged_components):
             return merged_components
-        tags = set(c.tag for c in merged_components)  # iteration order as the stock set's
+        # First-appearance order; stock iterates a set of (randomly hashed) tag strings,
+        # which puts the mixture in a different order in every process.
+        tags = list(dict.fromkeys(c.tag for c in merged_components))
         if len(tags) == len(merged_components):
             return merged_components
         by_tag: dict = {}

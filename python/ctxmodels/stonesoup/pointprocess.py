@@ -47,6 +47,7 @@ from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
 from ..context import require_array_context
 from ..context import DetectorContext
 from .birth import MeasurementDrivenBirth
+from .ordering import in_stable_order
 
 _BIRTH = TaggedWeightedGaussianState.BIRTH
 
@@ -386,6 +387,9 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
     def __next__(self) -> tuple[datetime.datetime, set[Track]]:
         time, detections = next(self.detector_iter)
         context = getattr(detections, "detector_context", None)
+        # Detections in value order, not set (address) order: hypothesis order, and so the
+        # merge order among equal weights, is then the same in every process.
+        detections = in_stable_order(detections)
         use_context = context is not None and _accepts_context(self.updater)
         if not use_context:
             context = None
