@@ -40,12 +40,10 @@ from stonesoup.deleter.time import UpdateTimeStepsDeleter
 from stonesoup.hypothesiser.distance import DistanceHypothesiser
 from stonesoup.hypothesiser.gaussianmixture import GaussianMixtureHypothesiser
 from stonesoup.hypothesiser.probability import PDAHypothesiser as StockPDAHypothesiser
-from stonesoup.initiator.simple import MultiMeasurementInitiator
 from stonesoup.measures import Mahalanobis
 from stonesoup.mixturereducer.gaussianmixture import GaussianMixtureReducer
 from stonesoup.models.transition.linear import ConstantVelocity
 from stonesoup.predictor.kalman import KalmanPredictor
-from stonesoup.tracker.simple import MultiTargetMixtureTracker
 from stonesoup.types.state import GaussianState
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 from stonesoup.updater.pointprocess import PHDUpdater as StockPHDUpdater
@@ -174,7 +172,9 @@ def build_tracker(spec: TrackerSpec, run, fast: bool = True):
 
 
 def _jpda(spec, predictor, updater, detector, fast):
-    from ..stonesoup import ExpectedMissesDeleter, FastGNNWith2DAssignment, PDAHypothesiser
+    from ..stonesoup import (ExpectedMissesDeleter, FastGNNWith2DAssignment,
+                             MultiMeasurementInitiator, MultiTargetMixtureTracker,
+                             PDAHypothesiser)
     hypothesiser_class = PDAHypothesiser if spec.uses_context else StockPDAHypothesiser
     hypothesiser = hypothesiser_class(predictor, updater, clutter_spatial_density=UNIFORM_CLUTTER,
                                       prob_detect=UNIFORM_PD, prob_gate=JPDA_PROB_GATE)

@@ -18,6 +18,11 @@
   a scan at a time in stacked arrays; :class:`FastGNNWith2DAssignment`, the stock GNN
   association (e.g. inside ``MultiMeasurementInitiator``) with all track × detection
   distances of a scan computed at once.
+* Reproducibility: :class:`MultiTargetMixtureTracker` and :class:`MultiMeasurementInitiator`
+  (the stock JPDA tracker and M-of-N initiator in a stable order); every ctxmodels tracker
+  puts a scan's detections in value order (:func:`in_stable_order`) and never lets set
+  iteration (memory addresses) decide a result; :func:`in_track_order` sorts tracks by
+  content.
 * :class:`CachedCombinedLinearGaussianTransitionModel`: F(Δt), Q(Δt) computed once per
   scan interval.
 """
@@ -29,6 +34,8 @@ from .fast_reducer import FastGaussianMixtureReducer
 from .fast_updater import FastLCCUpdater, FastPHDUpdater
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .hypothesiser import PDAHypothesiser
+from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracker
+from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
 from .pointprocess import CircularRegion, LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
 from .transition import CachedCombinedLinearGaussianTransitionModel
@@ -49,6 +56,10 @@ __all__ = [
     "FastLCCUpdater",
     "FastPHDUpdater",
     "ExpectedMissesDeleter",
+    "MultiMeasurementInitiator",
     "MultiSensorFeeder",
+    "MultiTargetMixtureTracker",
     "PDAHypothesiser",
+    "in_stable_order",
+    "in_track_order",
 ]
