@@ -51,33 +51,77 @@ def _state_of(hypothesis_or_state: Any):
     return getattr(hypothesis_or_state, "prediction", hypothesis_or_state)
 
 
+def _position_indices(model, position_mapping, i) -> list[int]:
+    """Which indices of ``model``'s state space hold x and y: ``position_mapping`` when the
+    model measures both of those indices, otherwise the first two indices it maps (Stone
+    Soup's models list position first). Raises when the model maps fewer than two."""
+    mapping = [int(m) for m in getattr(model, "mapping", ())]
+    wanted = [int(m) for m in position_mapping]
+    if all(m in mapping for m in wanted):
+        return wanted
+    if len(mapping) >= 2:
+        return mapping[:2]
+    raise ValueError(f"detections: detection {i}'s measurement model {type(model).__name__} "
+                     f"maps state indices {tuple(mapping)}; a world (x, y) position (needed "
+                     "for λ and births) needs a model that maps at least two")
+
+
 def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.ndarray:
-    """World (x, y) of each detection, (M, 2): through the measurement model's inverse
-    (bearing–range and other non-linear models), or the pseudo-inverse of a linear model's
-    matrix. Linear detections sharing a model are converted in one matrix product."""
+    """World (x, y) of each detection, (M, 2), from each detection's *own* measurement
+    model: through its ``inverse_function`` (bearing–range and other non-linear models) or
+    the pseudo-inverse of a linear model's matrix, read at that model's x/y indices —
+    ``position_mapping`` when the model maps both, else the first two indices the model
+    maps (so a 6-D model with ``mapping=(0, 3)`` gives x from index 0 and y from index 3).
+    A model that maps fewer than two indices, or a detection whose vector does not have the
+    model's ``ndim_meas`` rows, raises ValueError. Linear detections sharing a model are
+    converted in one matrix product."""
     positions = np.empty((len(detections), 2))
-    mapping = list(position_mapping)
     linear_groups: dict[int, list[int]] = {}
     for i, det in enumerate(detections):
         model = getattr(det, "measurement_model", None)
         if model is None:
             raise ValueError(f"detections: detection {i} has no measurement model, so its "
                              "position (needed for λ) is unknown")
+        vector = np.asarray(det.state_vector)
+        ndim_meas = getattr(model, "ndim_meas", None)
+        if ndim_meas is not None and vector.shape not in ((ndim_meas, 1), (ndim_meas,)):
+            raise ValueError(f"detections: detection {i} has a state vector of shape "
+                             f"{vector.shape}, but its measurement model "
+                             f"{type(model).__name__} measures {ndim_meas} values")
         if isinstance(model, LinearGaussian):
             linear_groups.setdefault(id(model), []).append(i)
         elif hasattr(model, "inverse_function"):
             state = np.asarray(model.inverse_function(det), dtype=np.float64).ravel()
-            positions[i] = state[mapping]
+            positions[i] = state[_position_indices(model, position_mapping, i)]
         else:
             raise ValueError(f"detections: detection {i}'s measurement model "
                              f"{type(model).__name__} has no inverse_function")
     for indices in linear_groups.values():
         model = detections[indices[0]].measurement_model
+        xy = _position_indices(model, position_mapping, indices[0])
         z = np.column_stack([np.asarray(detections[i].state_vector, dtype=np.float64).ravel()
                              for i in indices])
         states = np.linalg.pinv(model.matrix()) @ z
-        positions[indices] = states[mapping].T
+        positions[indices] = states[xy].T
     return positions
+
+
+def _particle_weights(weights, n: int) -> np.ndarray:
+    """A particle state's weights as floats, checked: one finite, non-negative weight per
+    particle, not all zero (the P_D average divides by their sum)."""
+    try:
+        w = np.asarray(weights, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        raise TypeError("hypothesis_or_state: particle weights must be numbers, got "
+                        f"{type(weights).__name__}") from None
+    if w.size != n:
+        raise ValueError(f"hypothesis_or_state: {w.size} particle weights for {n} particles")
+    if not np.all(np.isfinite(w)) or np.any(w < 0):
+        raise ValueError("hypothesis_or_state: particle weights must be finite and >= 0")
+    if not np.sum(w) > 0:
+        raise ValueError("hypothesis_or_state: particle weights sum to 0; P_D is their "
+                         "weighted mean")
+    return w
 
 
 def require_array_context(detector_context, *methods: str) -> None:
@@ -143,7 +187,7 @@ class DetectorContext(_UpstreamContext):
             pd = self.prob_detection_array(vector.T)
             weights = getattr(state, "weight", None)
             w = (np.full(pd.shape, 1 / pd.size) if weights is None
-                 else np.asarray(weights, dtype=np.float64).ravel())
+                 else _particle_weights(weights, pd.size))
             return Probability(float(np.sum(w * pd) / np.sum(w)))
         mean = vector.reshape(1, -1)
         covar = getattr(state, "covar", None)
