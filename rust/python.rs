@@ -1,6 +1,9 @@
 //! The only module that knows about Python: converts arguments at the boundary, releases
 //! the GIL around evaluation, and turns core errors (and, defensively, panics) into Python
-//! exceptions. Input arrays arrive as C-contiguous float64 (the Python layer converts).
+//! exceptions. Input arrays arrive as C-contiguous float64 (the Python layer converts;
+//! unaligned ones are copied here). Arrays are borrowed with numpy's fallible borrows and no
+//! `unwrap`: an `out=` that overlaps an input, or that another thread's call is writing, is
+//! a ValueError, not a panic.
 
 use crate::batch::PositionMapping;
 use crate::clutter::{ClutterFactor, ClutterModel, MetadataThreshold};
@@ -12,7 +15,10 @@ use crate::pose::{Mounting, Pose};
 use crate::range_bands::RangeBands;
 use crate::sector::AngularSector;
 use crate::sight::LineOfSight;
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray1, PyUntypedArrayMethods};
+use numpy::ndarray::Dimension;
+use numpy::{
+    BorrowError, PyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadwriteArray1, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -20,6 +26,10 @@ use std::sync::Arc;
 
 fn to_py(err: ModelError) -> PyErr {
     PyValueError::new_err(err.to_string())
+}
+
+fn value_error(argument: &str, message: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(format!("{argument}: {message}"))
 }
 
 /// Runs `f` with the GIL released; a panic becomes a RuntimeError instead of unwinding
@@ -32,12 +42,33 @@ fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> crate::Result<T> + Send
     }
 }
 
-fn slice<'a, T: numpy::Element>(a: &'a PyReadonlyArray2<'_, T>, argument: &str) -> PyResult<&'a [T]> {
-    // as_slice also accepts Fortran order, which would be read as rows: wrong numbers.
-    if !a.is_c_contiguous() {
-        return Err(PyValueError::new_err(format!("{argument}: must be C-contiguous")));
+/// A shared borrow of a float64 input array. numpy's borrow tracker refuses it while another
+/// call (GIL released) writes the same memory as its `out=`: that is a ValueError naming the
+/// argument, never a panic. Unaligned arrays are copied: the kernels read `&[f64]`.
+fn borrow<'py, D: Dimension>(array: &Bound<'py, PyArray<f64, D>>, argument: &str) -> PyResult<PyReadonlyArray<'py, f64, D>> {
+    // as_slice would also accept Fortran order, which would be read as rows: wrong numbers.
+    if !array.is_c_contiguous() {
+        return Err(value_error(argument, "must be C-contiguous"));
     }
-    a.as_slice().map_err(|_| PyValueError::new_err(format!("{argument}: must be C-contiguous")))
+    let view = array
+        .try_readonly()
+        .map_err(|_| value_error(argument, "is being written by another call (it is, or overlaps, an out= buffer in use)"))?;
+    if array.is_aligned() {
+        return Ok(view);
+    }
+    // The shared borrow stays held while numpy copies, so no call can write it meanwhile.
+    let copy = array.call_method0("copy")?.cast_into::<PyArray<f64, D>>()?;
+    drop(view);
+    copy.try_readonly().map_err(|_| value_error(argument, "could not borrow an aligned copy"))
+}
+
+fn slice<'a, D: Dimension>(a: &'a PyReadonlyArray<'_, f64, D>, argument: &str) -> PyResult<&'a [f64]> {
+    a.as_slice().map_err(|_| value_error(argument, "must be C-contiguous and aligned"))
+}
+
+/// The first row of `rows` (of `width` values) holding NaN or ±inf.
+fn first_non_finite(rows: &[f64], width: usize) -> Option<usize> {
+    rows.chunks_exact(width).position(|row| row.iter().any(|v| !v.is_finite()))
 }
 
 fn pose_of(pose: (f64, f64, f64)) -> PyResult<Pose> {
@@ -45,37 +76,42 @@ fn pose_of(pose: (f64, f64, f64)) -> PyResult<Pose> {
 }
 
 fn mapping_of(mapping: (i64, i64)) -> PyResult<PositionMapping> {
-    if mapping.0 < 0 || mapping.1 < 0 {
-        return Err(PyValueError::new_err(format!("position_mapping: indices must be >= 0, got {mapping:?}")));
-    }
-    PositionMapping::new(mapping.0 as usize, mapping.1 as usize).map_err(to_py)
+    let index = |i: i64| usize::try_from(i).map_err(|_| value_error("position_mapping", format_args!("indices must be >= 0, got {mapping:?}")));
+    PositionMapping::new(index(mapping.0)?, index(mapping.1)?).map_err(to_py)
 }
 
-/// The output buffer: the caller's `out` (checked) or a new array.
-fn output<'py>(py: Python<'py>, out: Option<PyReadwriteArray1<'py, f64>>, n: usize) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    match out {
+/// The output buffer, borrowed for writing: the caller's `out` (checked) or a new array.
+/// `inputs` are this call's input slices: Rust must never write memory it also reads.
+fn output<'py>(py: Python<'py>, out: Option<Bound<'py, PyArray1<f64>>>, n: usize, inputs: &[(&str, &[f64])]) -> PyResult<PyReadwriteArray1<'py, f64>> {
+    let array = match out {
+        None => PyArray1::zeros(py, [n], false),
         Some(out) => {
             if out.len() != n {
-                return Err(PyValueError::new_err(format!("out: must have {n} entries, got {}", out.len())));
+                return Err(value_error("out", format_args!("must have {n} entries, got {}", out.len())));
             }
             if !out.is_c_contiguous() {
-                return Err(PyValueError::new_err("out: must be C-contiguous"));
+                return Err(value_error("out", "must be C-contiguous"));
             }
-            Ok(out.as_array_bound())
+            if !out.is_aligned() {
+                return Err(value_error("out", "must be aligned (allocate it with numpy.empty)"));
+            }
+            // By address, so views the borrow tracker cannot relate (two arrays over one
+            // buffer) are caught too; inputs are contiguous, so spans are exact.
+            let start = out.data() as usize;
+            let end = start + n * std::mem::size_of::<f64>();
+            for (name, data) in inputs {
+                let (s, e) = (data.as_ptr() as usize, data.as_ptr() as usize + std::mem::size_of_val(*data));
+                if n > 0 && !data.is_empty() && s < end && start < e {
+                    return Err(value_error("out", format_args!("overlaps {name}, an input of the same call; pass a separate buffer")));
+                }
+            }
+            out
         }
-        None => Ok(PyArray1::zeros(py, [n], false)),
-    }
-}
-
-trait AsBound<'py> {
-    fn as_array_bound(&self) -> Bound<'py, PyArray1<f64>>;
-}
-
-impl<'py> AsBound<'py> for PyReadwriteArray1<'py, f64> {
-    fn as_array_bound(&self) -> Bound<'py, PyArray1<f64>> {
-        let readonly: &Bound<'py, PyArray1<f64>> = self;
-        readonly.clone()
-    }
+    };
+    array.try_readwrite().map_err(|err| match err {
+        BorrowError::NotWriteable => value_error("out", "must be writeable"),
+        _ => value_error("out", "is in use by another call or overlaps one of this call's inputs; give each concurrent call its own buffer"),
+    })
 }
 
 #[pyclass(name = "RangeBands", module = "ctxmodels._core", frozen, skip_from_py_object)]
@@ -88,9 +124,14 @@ impl PyRangeBands {
         Ok(PyRangeBands(RangeBands::new(edges, values, upper_owns).map_err(to_py)?))
     }
 
-    /// Values at each of `ranges`.
-    fn at<'py>(&self, py: Python<'py>, ranges: PyReadonlyArray1<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let r = ranges.as_slice().map_err(|_| PyValueError::new_err("ranges: must be contiguous"))?;
+    /// Values at each of `ranges` (±inf lie beyond / before every edge; NaN is an error).
+    fn at<'py>(&self, py: Python<'py>, ranges: Bound<'py, PyArray1<f64>>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let ranges = borrow(&ranges, "ranges")?;
+        let r = slice(&ranges, "ranges")?;
+        // NaN passes no edge, so it would silently get the first band.
+        if let Some(row) = r.iter().position(|x| x.is_nan()) {
+            return Err(to_py(ModelError::non_finite("ranges", row, "NaN")));
+        }
         Ok(PyArray1::from_vec(py, r.iter().map(|&x| self.0.at(x)).collect()))
     }
 }
@@ -110,14 +151,14 @@ impl PyAngularSector {
 pub struct PyLandMask(Arc<LandMask>);
 
 fn ring_of(ring: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 2]>> {
-    let array: PyReadonlyArray2<f64> = ring
-        .extract()
+    let array = ring
+        .cast::<PyArray2<f64>>()
         .map_err(|_| PyTypeError::new_err("polygons: every ring must be a (K, 2) float64 array"))?;
     if array.shape()[1] != 2 {
-        return Err(PyValueError::new_err(format!("polygons: every ring must have shape (K, 2), got {:?}", array.shape())));
+        return Err(value_error("polygons", format_args!("every ring must have shape (K, 2), got {:?}", array.shape())));
     }
-    let a = array.as_array();
-    Ok(a.rows().into_iter().map(|r| [r[0], r[1]]).collect())
+    let array = borrow(array, "polygons")?;
+    Ok(slice(&array, "polygons")?.chunks_exact(2).map(|r| [r[0], r[1]]).collect())
 }
 
 #[pymethods]
@@ -133,8 +174,9 @@ impl PyLandMask {
     }
 
     /// Whether each (x, y) row of `points` is on land (boundary included).
-    fn contains<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        let p = points_slice(&points, "points")?;
+    fn contains<'py>(&self, py: Python<'py>, points: Bound<'py, PyArray2<f64>>) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let points = borrow(&points, "points")?;
+        let p = finite_points(&points, "points")?;
         let land = &self.0;
         let inside = detached(py, || Ok(p.chunks_exact(2).map(|q| land.contains([q[0], q[1]])).collect::<Vec<_>>()))?;
         Ok(PyArray1::from_vec(py, inside))
@@ -146,11 +188,22 @@ impl PyLandMask {
     }
 }
 
-fn points_slice<'a>(points: &'a PyReadonlyArray2<'_, f64>, argument: &str) -> PyResult<&'a [f64]> {
+/// (M, 2) rows of `points` as a slice.
+fn points_slice<'a>(points: &'a PyReadonlyArray<'_, f64, numpy::Ix2>, argument: &'static str) -> PyResult<&'a [f64]> {
     if points.shape()[1] != 2 {
-        return Err(PyValueError::new_err(format!("{argument}: must have shape (M, 2), got {:?}", points.shape())));
+        return Err(value_error(argument, format_args!("must have shape (M, 2), got {:?}", points.shape())));
     }
     slice(points, argument)
+}
+
+/// [`points_slice`], refusing NaN/±inf rows: containment and sight have no answer for them
+/// (and would otherwise say "water" or "visible").
+fn finite_points<'a>(points: &'a PyReadonlyArray<'_, f64, numpy::Ix2>, argument: &'static str) -> PyResult<&'a [f64]> {
+    let p = points_slice(points, argument)?;
+    match first_non_finite(p, 2) {
+        Some(row) => Err(to_py(ModelError::non_finite(argument, row, "x or y is NaN or infinite"))),
+        None => Ok(p),
+    }
 }
 
 #[pyclass(name = "LineOfSight", module = "ctxmodels._core", frozen)]
@@ -165,8 +218,12 @@ impl PyLineOfSight {
     }
 
     /// Whether each target row of `targets` (M, 2) is visible from `sensor` (x, y).
-    fn visible<'py>(&self, py: Python<'py>, sensor: (f64, f64), targets: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        let t = points_slice(&targets, "targets")?;
+    fn visible<'py>(&self, py: Python<'py>, sensor: (f64, f64), targets: Bound<'py, PyArray2<f64>>) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        if !(sensor.0.is_finite() && sensor.1.is_finite()) {
+            return Err(value_error("sensor", format_args!("must be a finite (x, y) position, got {sensor:?}")));
+        }
+        let targets = borrow(&targets, "targets")?;
+        let t = finite_points(&targets, "targets")?;
         let sight = &self.0;
         let s = [sensor.0, sensor.1];
         let visible = detached(py, || Ok(t.chunks_exact(2).map(|q| sight.visible(s, [q[0], q[1]])).collect::<Vec<_>>()))?;
@@ -177,7 +234,15 @@ impl PyLineOfSight {
 #[pyclass(name = "DetectionModel", module = "ctxmodels._core", frozen)]
 pub struct PyDetectionModel(DetectionModel);
 
-fn rule_of(rule: &str, order: usize) -> PyResult<Rule> {
+/// Largest Gauss–Hermite order ([`Rule::gauss_hermite`]'s limit).
+const MAX_ORDER: usize = 32;
+
+fn rule_of(rule: &str, order: i64) -> PyResult<Rule> {
+    // Checked for every rule (as the Python layer does), not only where it is used.
+    let order = usize::try_from(order)
+        .ok()
+        .filter(|o| (1..=MAX_ORDER).contains(o))
+        .ok_or_else(|| value_error("order", format_args!("must be an integer in 1..{MAX_ORDER}, got {order}")))?;
     match rule {
         "mean" => Ok(Rule::mean()),
         "cubature" => Ok(Rule::cubature()),
@@ -223,18 +288,18 @@ impl PyDetectionModel {
         &self,
         py: Python<'py>,
         pose: (f64, f64, f64),
-        states: PyReadonlyArray2<'py, f64>,
+        states: Bound<'py, PyArray2<f64>>,
         position_mapping: (i64, i64),
-        out: Option<PyReadwriteArray1<'py, f64>>,
+        out: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
         let mapping = mapping_of(position_mapping)?;
-        let ncols = states.shape()[1];
-        let n = states.shape()[0];
+        let (n, ncols) = (states.shape()[0], states.shape()[1]);
+        let states = borrow(&states, "states")?;
         let data = slice(&states, "states")?;
-        let result = output(py, out, n)?;
-        let mut rw = result.readwrite();
-        let buffer = rw.as_slice_mut().map_err(|_| PyValueError::new_err("out: must be C-contiguous"))?;
+        let mut out = output(py, out, n, &[("states", data)])?;
+        let result = Bound::clone(&out);
+        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
         let model = &self.0;
         detached(py, || {
             if n == 0 {
@@ -242,7 +307,6 @@ impl PyDetectionModel {
             }
             model.at_pose(&pose).at_states(data, ncols, mapping, buffer)
         })?;
-        drop(rw);
         Ok(result)
     }
 
@@ -253,12 +317,12 @@ impl PyDetectionModel {
         &self,
         py: Python<'py>,
         pose: (f64, f64, f64),
-        means: PyReadonlyArray2<'py, f64>,
-        covars: PyReadonlyArray3<'py, f64>,
+        means: Bound<'py, PyArray2<f64>>,
+        covars: Bound<'py, PyArray3<f64>>,
         position_mapping: (i64, i64),
         rule: &str,
-        order: usize,
-        out: Option<PyReadwriteArray1<'py, f64>>,
+        order: i64,
+        out: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
         let mapping = mapping_of(position_mapping)?;
@@ -266,16 +330,15 @@ impl PyDetectionModel {
         let (n, ncols) = (means.shape()[0], means.shape()[1]);
         let cshape = covars.shape();
         if cshape[0] != n || cshape[1] != ncols || cshape[2] != ncols {
-            return Err(PyValueError::new_err(format!("covars: must have shape ({n}, {ncols}, {ncols}) to match means, got {cshape:?}")));
+            return Err(value_error("covars", format_args!("must have shape ({n}, {ncols}, {ncols}) to match means, got {cshape:?}")));
         }
+        let means = borrow(&means, "means")?;
         let m = slice(&means, "means")?;
-        if !covars.is_c_contiguous() {
-            return Err(PyValueError::new_err("covars: must be C-contiguous"));
-        }
-        let c = covars.as_slice().map_err(|_| PyValueError::new_err("covars: must be C-contiguous"))?;
-        let result = output(py, out, n)?;
-        let mut rw = result.readwrite();
-        let buffer = rw.as_slice_mut().map_err(|_| PyValueError::new_err("out: must be C-contiguous"))?;
+        let covars = borrow(&covars, "covars")?;
+        let c = slice(&covars, "covars")?;
+        let mut out = output(py, out, n, &[("means", m), ("covars", c)])?;
+        let result = Bound::clone(&out);
+        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
         let model = &self.0;
         detached(py, || {
             if n == 0 {
@@ -283,7 +346,6 @@ impl PyDetectionModel {
             }
             model.at_pose(&pose).expected_at_gaussians(m, c, ncols, mapping, &rule, buffer)
         })?;
-        drop(rw);
         Ok(result)
     }
 }
@@ -343,20 +405,21 @@ impl PyClutterModel {
         &self,
         py: Python<'py>,
         pose: (f64, f64, f64),
-        positions: PyReadonlyArray2<'py, f64>,
-        metadata: PyReadonlyArray2<'py, f64>,
-        out: Option<PyReadwriteArray1<'py, f64>>,
+        positions: Bound<'py, PyArray2<f64>>,
+        metadata: Bound<'py, PyArray2<f64>>,
+        out: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
-        let p = points_slice(&positions, "positions")?;
-        let m = slice(&metadata, "metadata")?;
         let n = positions.shape()[0];
-        let result = output(py, out, n)?;
-        let mut rw = result.readwrite();
-        let buffer = rw.as_slice_mut().map_err(|_| PyValueError::new_err("out: must be C-contiguous"))?;
+        let positions = borrow(&positions, "positions")?;
+        let p = points_slice(&positions, "positions")?;
+        let metadata = borrow(&metadata, "metadata")?;
+        let m = slice(&metadata, "metadata")?;
+        let mut out = output(py, out, n, &[("positions", p), ("metadata", m)])?;
+        let result = Bound::clone(&out);
+        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
         let model = &self.0;
         detached(py, || model.evaluate(&pose, p, m, buffer))?;
-        drop(rw);
         Ok(result)
     }
 }
@@ -371,7 +434,7 @@ fn mount(pose: (f64, f64, f64), forward: f64, left: f64, yaw: f64) -> PyResult<(
 /// Points and weights of an integration rule in standard-normal space.
 #[pyfunction]
 #[pyo3(signature = (rule, order = 3))]
-fn rule_points(rule: &str, order: usize) -> PyResult<(Vec<(f64, f64)>, Vec<f64>)> {
+fn rule_points(rule: &str, order: i64) -> PyResult<(Vec<(f64, f64)>, Vec<f64>)> {
     let r = rule_of(rule, order)?;
     Ok((r.points().iter().map(|p| (p[0], p[1])).collect(), r.weights().to_vec()))
 }

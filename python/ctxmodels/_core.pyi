@@ -1,8 +1,11 @@
 """Type stubs for ``ctxmodels._core``, the compiled Rust core (source: rust/python.rs).
 
 Array arguments must already be C-contiguous NumPy arrays of the stated dtype (rows of
-float64); the Python components (``ctxmodels.RangeBands`` and friends) convert and validate
-user input before calling in. ``out=`` buffers are filled in place and returned.
+float64; unaligned ones are copied); the Python components (``ctxmodels.RangeBands`` and
+friends) convert and validate user input before calling in. ``out=`` buffers (aligned,
+writeable) are filled in place and returned; one that overlaps an input of the call, or that
+another call is writing, is a ``ValueError`` naming ``out``. ``order`` must be in 1..32 for
+every rule.
 """
 from collections.abc import Sequence
 from typing import Literal, TypeAlias, final
@@ -39,7 +42,7 @@ class RangeBands:
         cls, edges: Sequence[float], values: Sequence[float], upper_owns: Sequence[bool]
     ) -> RangeBands: ...
     def at(self, ranges: _Floats) -> _Floats:
-        """Values at each of `ranges`."""
+        """Values at each of `ranges` (±inf lie beyond / before every edge; NaN is an error)."""
 
 @final
 class AngularSector:
@@ -54,7 +57,8 @@ class LandMask:
     def __new__(cls, polygons: Sequence[tuple[_Floats, Sequence[_Floats]]]) -> LandMask:
         """`polygons`: list of (shell, [holes]) with rings as (K, 2) float64 arrays."""
     def contains(self, points: _Floats) -> _Bools:
-        """Whether each (x, y) row of `points` is on land (boundary included)."""
+        """Whether each (x, y) row of `points` is on land (boundary included); NaN/±inf rows
+        are an error."""
     @property
     def vertex_count(self) -> int: ...
 
@@ -64,7 +68,8 @@ class LineOfSight:
 
     def __new__(cls, land: LandMask) -> LineOfSight: ...
     def visible(self, sensor: tuple[float, float], targets: _Floats) -> _Bools:
-        """Whether each target row of `targets` (M, 2) is visible from `sensor` (x, y)."""
+        """Whether each target row of `targets` (M, 2) is visible from `sensor` (x, y); NaN/±inf
+        are an error."""
 
 @final
 class DetectionModel:
