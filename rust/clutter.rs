@@ -119,6 +119,9 @@ impl ClutterModel {
                             let value = metadata[(first + i) * k + rule.column];
                             chunk[i] *= if value.is_nan() {
                                 rule.missing.unwrap_or(f64::NAN)
+                            } else if value.is_infinite() {
+                                // ±inf (an overflowed value) would pass as "at or above".
+                                f64::NAN
                             } else if value < rule.threshold {
                                 rule.below
                             } else {
@@ -136,12 +139,21 @@ impl ClutterModel {
             let problem = if self.uses_position && !(x.is_finite() && y.is_finite()) {
                 ("positions", "position is NaN or infinite".to_string())
             } else {
-                let column = self.factors.iter().find_map(|f| match f {
-                    ClutterFactor::Metadata(rule) if rule.missing.is_none() && metadata[row * k + rule.column].is_nan() => Some(rule.column),
+                let metadata_problem = self.factors.iter().find_map(|f| match f {
+                    ClutterFactor::Metadata(rule) => {
+                        let value = metadata[row * k + rule.column];
+                        if value.is_infinite() {
+                            Some(format!("metadata column {} is {value}; values must be finite (NaN = missing)", rule.column))
+                        } else if rule.missing.is_none() && value.is_nan() {
+                            Some(format!("metadata column {} is missing and the rule has no `missing` value", rule.column))
+                        } else {
+                            None
+                        }
+                    }
                     _ => None,
                 });
-                match column {
-                    Some(c) => ("metadata", format!("metadata column {c} is missing and the rule has no `missing` value")),
+                match metadata_problem {
+                    Some(message) => ("metadata", message),
                     None => ("factors", format!("the product of the clutter factors is {}, not a finite density > 0 (factors too small or too large)", chunk[i])),
                 }
             };
@@ -177,6 +189,18 @@ mod tests {
         assert_eq!(out, [1e-1, 1e-3, 1e-3]);
         let err = model.evaluate(&pose, &[0.0; 6], &[9.99, f64::NAN, 250.0], &mut out).unwrap_err();
         assert_eq!(err, ModelError::non_finite("metadata", 1, "metadata column 0 is missing and the rule has no `missing` value"));
+    }
+
+    #[test]
+    fn infinite_metadata_is_an_error_naming_metadata() {
+        let rule = MetadataThreshold { column: 0, threshold: 10.0, below: 1e-1, at_or_above: 1e-3, missing: Some(1.0) };
+        let model = ClutterModel::new(vec![ClutterFactor::Metadata(rule)]).unwrap();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        let mut out = [0.0; 3];
+        for bad in [f64::INFINITY, f64::NEG_INFINITY] {
+            let err = model.evaluate(&pose, &[0.0; 6], &[1.0, f64::NAN, bad], &mut out).unwrap_err();
+            assert_eq!(err, ModelError::non_finite("metadata", 2, format!("metadata column 0 is {bad}; values must be finite (NaN = missing)")));
+        }
     }
 
     #[test]
