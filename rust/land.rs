@@ -71,11 +71,36 @@ impl Edge {
 }
 
 /// A validated land mask with its containment index.
+///
+/// A mask smaller than [`TINY`] is validated and indexed in a frame scaled up by a power of
+/// two (exact): at 1e-200 m the products of coordinate differences in the area and
+/// orientation tests would underflow to 0. Masks of ordinary size use a scale of 1.
 #[derive(Debug, Clone)]
 pub struct LandMask {
+    /// As given (cleaned), in world coordinates.
     polygons: Vec<Polygon>,
+    /// In the index frame: world coordinates × `scale`.
     edges: Vec<Edge>,
     grid: Grid,
+    scale: f64,
+}
+
+/// Masks whose largest coordinate is below this (2⁻²⁰⁰) are scaled up to it.
+pub(crate) const TINY: f64 = f64::from_bits((1023 - 200) << 52);
+
+/// The power of two that brings `size` (the largest |coordinate|) up to about [`TINY`],
+/// or 1 for sizes that need no scaling.
+fn scale_for(size: f64) -> f64 {
+    if !(size > 0.0 && size < TINY) {
+        return 1.0;
+    }
+    // size ≥ 2⁻¹⁰⁷⁴, so the exponent is at most 1074 − 200: a normal power of two.
+    let exponent = -200 - size.log2().floor() as i64;
+    f64::from_bits(((exponent + 1023) as u64) << 52)
+}
+
+fn scale_ring(ring: &[Point], scale: f64) -> Vec<Point> {
+    ring.iter().map(|p| [p[0] * scale, p[1] * scale]).collect()
 }
 
 impl LandMask {
@@ -84,6 +109,21 @@ impl LandMask {
         if polygons.is_empty() {
             return Err(ModelError::invalid("polygons", "a land mask needs at least one polygon"));
         }
+        // NaN/inf fail validation below; unscaled, so its message quotes the vertex as given.
+        let size = polygons
+            .iter()
+            .flat_map(|p| p.shell.iter().chain(p.holes.iter().flatten()))
+            .flat_map(|v| [v[0].abs(), v[1].abs()])
+            .fold(0.0f64, |m, c| if c.is_finite() && m.is_finite() { m.max(c) } else { f64::INFINITY });
+        let scale = scale_for(size);
+        let polygons: Vec<Polygon> = if scale == 1.0 {
+            polygons
+        } else {
+            polygons
+                .iter()
+                .map(|p| Polygon { shell: scale_ring(&p.shell, scale), holes: p.holes.iter().map(|h| scale_ring(h, scale)).collect() })
+                .collect()
+        };
         let mut cleaned = Vec::with_capacity(polygons.len());
         let mut edges = Vec::new();
         // (polygon index, ring index within polygon, first edge, edge count) per ring.
@@ -106,15 +146,28 @@ impl LandMask {
         check_no_crossings(&edges, &rings)?;
         check_nesting(&cleaned)?;
         let grid = Grid::build(&edges);
-        Ok(LandMask { polygons: cleaned, edges, grid })
+        if scale != 1.0 {
+            // Back to world coordinates: dividing by a power of two undoes the scaling exactly.
+            for p in &mut cleaned {
+                p.shell = scale_ring(&p.shell, 1.0 / scale);
+                p.holes = p.holes.iter().map(|h| scale_ring(h, 1.0 / scale)).collect();
+            }
+        }
+        Ok(LandMask { polygons: cleaned, edges, grid, scale })
     }
 
     pub fn polygons(&self) -> &[Polygon] {
         &self.polygons
     }
 
+    /// The edges in the index frame (world coordinates × [`scale`](Self::scale)).
     pub(crate) fn edges(&self) -> &[Edge] {
         &self.edges
+    }
+
+    /// World → index frame factor: a power of two, 1 unless the mask is tiny.
+    pub(crate) fn scale(&self) -> f64 {
+        self.scale
     }
 
     pub fn vertex_count(&self) -> usize {
@@ -124,6 +177,12 @@ impl LandMask {
     /// Whether `p` is on land (boundary included).
     #[inline]
     pub fn contains(&self, p: Point) -> bool {
+        self.contains_scaled([p[0] * self.scale, p[1] * self.scale])
+    }
+
+    /// [`contains`](Self::contains) for a point already in the index frame.
+    #[inline]
+    pub(crate) fn contains_scaled(&self, p: Point) -> bool {
         match self.grid.contains(&self.edges, p) {
             Some(inside) => inside,
             None => self.grid.contains_row_exact(&self.edges, p),
@@ -174,10 +233,27 @@ fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) -> Result<Vec
         return Err(ModelError::invalid("polygons", format!("{name}: needs at least 3 distinct vertices, got {}", out.len())));
     }
     let area = signed_area(&out);
-    if area == 0.0 || !area.is_finite() {
-        return Err(ModelError::invalid("polygons", format!("{name}: has zero area (all vertices on a line)")));
+    if area == 0.0 {
+        // Exactly 0 is collinear, or a ring so much smaller than the rest of the mask that
+        // its area underflows: tell which, from the area at the ring's own scale.
+        let own = signed_area(&scale_ring(&out, scale_for(ring_size(&out))));
+        if own == 0.0 {
+            return Err(ModelError::invalid("polygons", format!("{name}: has zero area (all vertices on a line)")));
+        }
+        return Err(ModelError::invalid(
+            "polygons",
+            format!("{name}: is too small next to the rest of the mask (its area underflows at the mask's scale)"),
+        ));
+    }
+    if !area.is_finite() {
+        return Err(ModelError::invalid("polygons", format!("{name}: its area overflows (coordinates too large)")));
     }
     Ok(out)
+}
+
+/// The largest |coordinate| of a ring.
+fn ring_size(ring: &[Point]) -> f64 {
+    ring.iter().fold(0.0f64, |m, p| m.max(p[0].abs()).max(p[1].abs()))
 }
 
 pub(crate) fn signed_area(ring: &[Point]) -> f64 {
@@ -784,6 +860,25 @@ mod tests {
         assert!(LandMask::new(overlapping).unwrap_err().to_string().contains("lies on the land"));
         let nan = vec![[0.0, 0.0], [f64::NAN, 1.0], [2.0, 0.0]];
         assert!(LandMask::new(vec![Polygon { shell: nan, holes: vec![] }]).unwrap_err().to_string().contains("not finite"));
+    }
+
+    #[test]
+    fn tiny_rings_are_valid_land() {
+        for size in [1e-200, 1e-300, 5e-320, 2.0 * TINY] {
+            let mask = LandMask::new(vec![Polygon { shell: vec![[0.0, 0.0], [size, 0.0], [0.0, size]], holes: vec![] }]).unwrap();
+            assert_eq!(mask.polygons()[0].shell, vec![[0.0, 0.0], [size, 0.0], [0.0, size]], "world coordinates kept");
+            assert!(mask.contains([size / 4.0, size / 4.0]));
+            assert!(mask.contains([size, 0.0]), "vertex is land");
+            assert!(!mask.contains([0.75 * size, 0.75 * size]));
+            assert!(!mask.contains([-size, 0.0]));
+            assert!(!mask.contains([1.0, 1.0]) && !mask.contains([1e300, 0.0]));
+        }
+        let line = vec![[0.0, 0.0], [1e-200, 1e-200], [2e-200, 2e-200]];
+        assert!(LandMask::new(vec![Polygon { shell: line, holes: vec![] }]).unwrap_err().to_string().contains("zero area"));
+        // Next to a 1 km island a 1e-200 m rock cannot be represented: said so, not "zero area".
+        let rock = Polygon { shell: vec![[0.0, 0.0], [1e-200, 0.0], [0.0, 1e-200]], holes: vec![] };
+        let err = LandMask::new(vec![Polygon { shell: square(500.0, 500.0, 1000.0), holes: vec![] }, rock]).unwrap_err();
+        assert!(err.to_string().contains("too small"), "{err}");
     }
 
     #[test]

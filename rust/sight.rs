@@ -27,8 +27,10 @@ use std::sync::Arc;
 #[derive(Debug, Clone)]
 pub struct LineOfSight {
     land: Arc<LandMask>,
-    /// Coastline edges as (a, b), in the land mask's order.
+    /// Coastline edges as (a, b), in the land mask's order and index frame (world × `scale`,
+    /// a power of two that is 1 unless the mask is tiny; see [`LandMask`]).
     edges: Vec<[[f64; 2]; 2]>,
+    scale: f64,
     /// BVH over the edges' boxes, grown by `margin` so that rounding in the segment–box test
     /// never prunes an edge the segment touches.
     bvh: Bvh,
@@ -49,7 +51,8 @@ impl LineOfSight {
             })
             .collect();
         let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &boxes);
-        LineOfSight { land, edges, bvh }
+        let scale = land.scale();
+        LineOfSight { land, edges, scale, bvh }
     }
 
     pub fn land(&self) -> &Arc<LandMask> {
@@ -60,12 +63,23 @@ impl LineOfSight {
     /// [`from_point`](Self::from_point) for many targets from one sensor position).
     #[inline]
     pub fn visible(&self, sensor: [f64; 2], target: [f64; 2]) -> bool {
+        self.visible_scaled(self.to_index(sensor), self.to_index(target))
+    }
+
+    #[inline(always)]
+    fn to_index(&self, p: [f64; 2]) -> [f64; 2] {
+        [p[0] * self.scale, p[1] * self.scale]
+    }
+
+    /// [`visible`](Self::visible) for points already in the index frame.
+    #[inline]
+    fn visible_scaled(&self, sensor: [f64; 2], target: [f64; 2]) -> bool {
         if sensor == target {
-            return !self.land.contains(target);
+            return !self.land.contains_scaled(target);
         }
         let d = [target[0] - sensor[0], target[1] - sensor[1]];
         if !(d[0].is_finite() && d[1].is_finite()) {
-            return !self.land.contains(target);
+            return !self.land.contains_scaled(target);
         }
         let inv = [1.0 / d[0], 1.0 / d[1]];
         let blocked = self
@@ -77,7 +91,7 @@ impl LineOfSight {
             });
         // From a sensor at sea a target on land is always behind some coastline edge; the
         // containment test keeps the answer right for a sensor on land too.
-        !blocked && !self.land.contains(target)
+        !blocked && !self.land.contains_scaled(target)
     }
 
     /// The per-scan index for many targets seen from `sensor`.
@@ -138,7 +152,10 @@ struct BinEdge {
 #[derive(Debug, Clone)]
 pub struct VisibilityIndex<'a> {
     sight: &'a LineOfSight,
+    /// In world coordinates, as given.
     sensor: [f64; 2],
+    /// The sensor in the index frame.
+    sensor_scaled: [f64; 2],
     /// The sensor touches the coastline: every segment from it meets land.
     on_coast: bool,
     /// Too many edges per direction for angular lists: ask the BVH per target.
@@ -150,10 +167,11 @@ pub struct VisibilityIndex<'a> {
 }
 
 impl<'a> VisibilityIndex<'a> {
-    fn new(sight: &'a LineOfSight, sensor: [f64; 2]) -> Self {
+    fn new(sight: &'a LineOfSight, origin: [f64; 2]) -> Self {
         let edges = &sight.edges;
+        let sensor = sight.to_index(origin);
         let mut index =
-            VisibilityIndex { sight, sensor, on_coast: false, dense: false, bins: 1, bin_start: vec![0, 0], entries: Vec::new() };
+            VisibilityIndex { sight, sensor: origin, sensor_scaled: sensor, on_coast: false, dense: false, bins: 1, bin_start: vec![0, 0], entries: Vec::new() };
         let s = sensor;
         let s_size = s[0].abs().max(s[1].abs());
 
@@ -278,15 +296,16 @@ impl<'a> VisibilityIndex<'a> {
     /// Whether the segment sensor → `target` is free of land.
     #[inline]
     pub fn visible(&self, target: [f64; 2]) -> bool {
-        let s = self.sensor;
+        let s = self.sensor_scaled;
+        let target = self.sight.to_index(target);
         if s == target {
-            return !self.sight.land.contains(target);
+            return !self.sight.land.contains_scaled(target);
         }
         if self.on_coast {
             return false;
         }
         if self.dense {
-            return self.sight.visible(s, target);
+            return self.sight.visible_scaled(s, target);
         }
         let (dx, dy) = (target[0] - s[0], target[1] - s[1]);
         let r2 = dx * dx + dy * dy;
@@ -301,7 +320,7 @@ impl<'a> VisibilityIndex<'a> {
                 return false;
             }
         }
-        !self.sight.land.contains(target)
+        !self.sight.land.contains_scaled(target)
     }
 
     /// How many (bin, edge) entries the index holds (its size).
@@ -332,6 +351,22 @@ mod tests {
     fn island() -> LineOfSight {
         let shell = vec![[100.0, -10.0], [120.0, -10.0], [120.0, 10.0], [100.0, 10.0]];
         LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap()))
+    }
+
+    #[test]
+    fn tiny_island_shadows_like_a_large_one() {
+        // The island above shrunk by 1e-202: validated and cast in a scaled frame.
+        let k = 1e-202;
+        let shell = vec![[100.0 * k, -10.0 * k], [120.0 * k, -10.0 * k], [120.0 * k, 10.0 * k], [100.0 * k, 10.0 * k]];
+        let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap()));
+        let sensor = [0.0, 0.0];
+        let index = sight.from_point(sensor);
+        assert_eq!(index.sensor(), sensor);
+        for (target, visible) in [([200.0, 0.0], false), ([200.0, 30.0], true), ([110.0, 0.0], false), ([90.0, 0.0], true), ([-200.0, 0.0], true)] {
+            let t = [target[0] * k, target[1] * k];
+            assert_eq!(sight.visible(sensor, t), visible, "{target:?}");
+            assert_eq!(index.visible(t), visible, "{target:?}");
+        }
     }
 
     #[test]
