@@ -8,11 +8,14 @@ any Stone Soup component. On top of that, ctxmodels components are *immutable va
   hash accordingly;
 * assigning a Property after construction raises, because the Rust object a component
   compiles to is built once and cached — mutating the Python side would silently leave the
-  compiled model behind. Build a new component instead.
+  compiled model behind. Build a new component instead. For the same reason sequence
+  Properties are stored as tuples (nested sequences as nested tuples) and arrays as private
+  read-only copies: editing the list a component was built from changes nothing.
 """
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -35,13 +38,43 @@ def _frozen_value(value: Any) -> Any:
     return value
 
 
+def freeze(value: Any) -> Any:
+    """`value` with every list/tuple as a tuple and every array as a read-only private copy,
+    recursively (mapping values too, in a new dict); other values as they are."""
+    if isinstance(value, np.ndarray):
+        if not value.flags.writeable and value.flags.owndata:
+            return value  # already a private frozen copy
+        copy = np.array(value, copy=True, order="C")
+        copy.setflags(write=False)
+        return copy
+    if isinstance(value, (list, tuple)) and not hasattr(value, "_fields"):  # not namedtuples
+        return tuple(freeze(v) for v in value)
+    if isinstance(value, dict):
+        return {k: freeze(v) for k, v in value.items()}
+    return value
+
+
 class ModelComponent(Base):
     """Base of ctxmodels components: immutable, value-equal, cached compilation."""
 
     def __init__(self, *args, **kwargs):
         object.__setattr__(self, "_initialised", False)
         super().__init__(*args, **kwargs)
+        # Lists the caller keeps could otherwise be edited behind the compiled model.
+        for name in type(self).properties:
+            value = getattr(self, name)
+            frozen = freeze(value)
+            if frozen is not value:
+                setattr(self, name, frozen)
         object.__setattr__(self, "_initialised", True)
+
+    def _replace(self, name: str, value: Any) -> None:
+        """Sets Property `name` to its normalised `value` during construction."""
+        object.__setattr__(self, "_initialised", False)
+        try:
+            setattr(self, name, freeze(value))
+        finally:
+            object.__setattr__(self, "_initialised", True)
 
     def __setattr__(self, name, value):
         if getattr(self, "_initialised", False) and name in type(self).properties:
@@ -77,6 +110,12 @@ class ModelComponent(Base):
 
     def __setstate__(self, state):
         self.__dict__.update(state)
+        # Unpickled arrays come back writeable: make them private and read-only again.
+        for name in type(self).properties:
+            value = getattr(self, name, None)
+            frozen = freeze(value)
+            if frozen is not value:
+                self._replace(name, frozen)
 
 
 def as_float(value: Any, name: str, *, finite: bool = True) -> float:
@@ -95,21 +134,64 @@ def as_float_tuple(values: Any, name: str) -> tuple[float, ...]:
     return tuple(as_float(v, f"{name}[{i}]") for i, v in enumerate(values))
 
 
-def as_rows(array: Any, name: str, *, ncols: int | None = None) -> np.ndarray:
-    """A C-contiguous (N, D) float64 array from `array`, or a clear error naming it."""
+def as_sequence(values: Any, name: str, what: str = "items") -> tuple:
+    """`values` (a list, tuple or 1-D array) as a tuple, or a TypeError naming it."""
+    if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, (Sequence, np.ndarray)):
+        raise TypeError(f"{name}: expected a sequence of {what}, got {type(values).__name__}")
+    return tuple(values)
+
+
+def as_int(value: Any, name: str, *, low: int = 0, high: int | None = None) -> int:
+    """An integer of any type (Python or NumPy, not bool) in [low, high], naming `name`."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Integral, np.integer)):
+        raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {value!r}")
+    value = int(value)
+    if value < low or (high is not None and value > high):
+        bounds = f">= {low}" if high is None else f"in {low}..{high}"
+        raise ValueError(f"{name}: must be an integer {bounds}, got {value}")
+    return value
+
+
+# Column indices beyond this are certainly wrong (and would overflow the core's int64).
+_MAX_INDEX = 2**31
+
+
+def as_position_mapping(mapping: Any, name: str = "position_mapping") -> tuple[int, int]:
+    """Two different non-negative integer column indices, as a tuple of ints."""
+    if isinstance(mapping, (str, bytes, Mapping)) or not isinstance(mapping, (Sequence, np.ndarray)):
+        raise TypeError(f"{name}: expected two integer indices, got {mapping!r}")
+    indices = tuple(mapping)
+    if len(indices) != 2:
+        raise ValueError(f"{name}: must be two indices (x, y), got {len(indices)}: {indices!r}")
+    x, y = (as_int(i, name, high=_MAX_INDEX) for i in indices)
+    if x == y:
+        raise ValueError(f"{name}: x and y must be different indices, got ({x}, {y})")
+    return x, y
+
+
+def as_array(array: Any, name: str, ndim: int, shape_text: str | None = None) -> np.ndarray:
+    """A C-contiguous, aligned float64 array of `ndim` dimensions from `array`, or a clear
+    error naming it. Unaligned input (a view into a byte buffer) is copied: the core reads
+    it as f64."""
     try:
-        rows = np.asarray(array)
+        values = np.asarray(array)
     except Exception as err:  # ragged lists and the like
         raise TypeError(f"{name}: cannot be read as a numeric array ({err})") from None
-    if rows.dtype == object or not (np.issubdtype(rows.dtype, np.number) or rows.dtype == np.bool_):
-        raise TypeError(f"{name}: must be a numeric array, got dtype {rows.dtype}")
-    if np.iscomplexobj(rows):
-        raise TypeError(f"{name}: must be real, got dtype {rows.dtype}")
-    if rows.ndim != 2:
-        raise ValueError(f"{name}: must be a 2-D array of rows, got shape {rows.shape}")
+    if values.dtype == object or not (np.issubdtype(values.dtype, np.number) or values.dtype == np.bool_):
+        raise TypeError(f"{name}: must be a numeric array, got dtype {values.dtype}")
+    if np.iscomplexobj(values):
+        raise TypeError(f"{name}: must be real, got dtype {values.dtype}")
+    if values.ndim != ndim:
+        raise ValueError(f"{name}: must be {shape_text or f'a {ndim}-D array'}, got shape {values.shape}")
+    return np.require(values, dtype=np.float64, requirements=["C", "A"])
+
+
+def as_rows(array: Any, name: str, *, ncols: int | None = None) -> np.ndarray:
+    """A C-contiguous, aligned (N, D) float64 array from `array`, or a clear error naming it."""
+    rows = as_array(array, name, 2, "a 2-D array of rows")
     if ncols is not None and rows.shape[1] != ncols:
         raise ValueError(f"{name}: must have {ncols} columns, got shape {rows.shape}")
-    return np.ascontiguousarray(rows, dtype=np.float64)
+    return rows
 
 
 def frozen_copy(array: np.ndarray) -> np.ndarray:
@@ -120,8 +202,9 @@ def frozen_copy(array: np.ndarray) -> np.ndarray:
     return array
 
 
-def check_out(out: Any, n: int) -> np.ndarray | None:
-    """Validates a caller's `out=` buffer (float64, C-contiguous, writeable, length n)."""
+def check_out(out: Any, n: int, **inputs: np.ndarray) -> np.ndarray | None:
+    """Validates a caller's `out=` buffer (float64, C-contiguous, aligned, writeable, length
+    n, sharing no memory with the call's `inputs`)."""
     if out is None:
         return None
     if not isinstance(out, np.ndarray):
@@ -132,6 +215,12 @@ def check_out(out: Any, n: int) -> np.ndarray | None:
         raise ValueError(f"out: must have shape ({n},), got {out.shape}")
     if not out.flags.c_contiguous:
         raise ValueError("out: must be C-contiguous")
+    if not out.flags.aligned:
+        raise ValueError("out: must be aligned (allocate it with numpy.empty)")
     if not out.flags.writeable:
         raise ValueError("out: must be writeable")
+    for name, array in inputs.items():
+        # Inputs are contiguous here, so overlapping bounds mean shared memory.
+        if np.may_share_memory(out, array):
+            raise ValueError(f"out: overlaps {name}, an input of the same call; pass a separate buffer")
     return out

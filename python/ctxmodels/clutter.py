@@ -1,13 +1,13 @@
 """Clutter spatial density models: λ(z; S) as a product of factors per detection."""
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from stonesoup.base import Property
 
 from . import _core
-from ._component import ModelComponent, as_float, as_rows, check_out
+from ._component import ModelComponent, as_float, as_rows, as_sequence, check_out
 from .pose import Pose
 from .range_bands import RangeBands
 
@@ -66,9 +66,7 @@ class ClutterDensityModel(ModelComponent):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        object.__setattr__(self, "_initialised", False)
-        self.factors = tuple(self.factors)  # a tuple: no in-place edits behind the compiled model
-        object.__setattr__(self, "_initialised", True)
+        self._replace("factors", as_sequence(self.factors, "factors", "factors"))
         self._compiled()
 
     @property
@@ -99,8 +97,8 @@ class ClutterDensityModel(ModelComponent):
         return self._cached("core", build)
 
     def metadata_array(self, metadata, n: int) -> np.ndarray:
-        """(n, len(metadata_keys)) float64 from an array or a sequence of metadata mappings;
-        NaN where a key is absent."""
+        """(n, len(metadata_keys)) float64 from an array, a sequence of rows (values in
+        ``metadata_keys`` order) or a sequence of metadata mappings; NaN where a key is absent."""
         keys = self.metadata_keys
         if metadata is None:
             return np.full((n, len(keys)), np.nan)
@@ -109,9 +107,16 @@ class ClutterDensityModel(ModelComponent):
         if isinstance(metadata, (str, bytes)) or not isinstance(metadata, Sequence):
             raise TypeError(f"metadata: expected an (M, K) array or a sequence of mappings, "
                             f"got {type(metadata).__name__}")
-        rows = np.full((n, len(keys)), np.nan)
         if len(metadata) != n:
             raise ValueError(f"metadata: needs one entry per position ({n}), got {len(metadata)}")
+        mappings = [isinstance(entry, Mapping) for entry in metadata]
+        if not any(mappings) and n > 0:  # rows, like an (M, K) array
+            return as_rows(metadata, "metadata", ncols=len(keys))
+        if not all(mappings):
+            i = mappings.index(False)
+            raise TypeError(f"metadata: entry {i} is a {type(metadata[i]).__name__}; give every "
+                            f"detection a mapping, or every detection a row")
+        rows = np.full((n, len(keys)), np.nan)
         for i, entry in enumerate(metadata):
             for k, key in enumerate(keys):
                 if key in entry:
@@ -120,12 +125,17 @@ class ClutterDensityModel(ModelComponent):
                             value, (int, float, np.integer, np.floating)):
                         raise TypeError(f"metadata: detection {i} {key!r} must be a number, "
                                         f"got {type(value).__name__}")
-                    rows[i, k] = float(value)
+                    try:
+                        rows[i, k] = float(value)
+                    except OverflowError:  # an int beyond float range
+                        raise ValueError(f"metadata: detection {i} {key!r} is beyond the float "
+                                         f"range") from None
         return rows
 
     def evaluate(self, pose: Pose, positions, metadata=None, *, out=None) -> np.ndarray:
-        """λ at world ``positions`` (M, 2) with ``metadata`` (array or mappings)."""
+        """λ at world ``positions`` (M, 2) with ``metadata`` (array, rows or mappings)."""
         positions = as_rows(positions, "positions", ncols=2)
         n = positions.shape[0]
-        return self._compiled().evaluate(pose.as_tuple(), positions, self.metadata_array(metadata, n),
-                                         check_out(out, n))
+        metadata = self.metadata_array(metadata, n)
+        return self._compiled().evaluate(pose.as_tuple(), positions, metadata,
+                                         check_out(out, n, positions=positions, metadata=metadata))

@@ -7,7 +7,8 @@ import numpy as np
 from stonesoup.base import Property
 
 from . import _core
-from ._component import ModelComponent, as_float, as_rows, check_out
+from ._component import (ModelComponent, as_array, as_float, as_int, as_position_mapping, as_rows,
+                         as_sequence, check_out)
 from .land import LandMask, LineOfSight
 from .pose import Pose
 from .range_bands import RangeBands
@@ -17,6 +18,8 @@ DetectionFactor = float | RangeBands | AngularSector | LandMask | LineOfSight
 
 #: Integration rules for the expected P_D of a Gaussian (see :class:`SensorModel`).
 PD_RULES = ("mean", "cubature", "unscented", "gauss-hermite")
+#: Largest Gauss–Hermite order (nodes per axis).
+MAX_ORDER = 32
 
 
 class DetectionProbabilityModel(ModelComponent):
@@ -39,9 +42,7 @@ class DetectionProbabilityModel(ModelComponent):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        object.__setattr__(self, "_initialised", False)
-        self.factors = tuple(self.factors)  # a tuple: no in-place edits behind the compiled model
-        object.__setattr__(self, "_initialised", True)
+        self._replace("factors", as_sequence(self.factors, "factors", "factors"))
         self._compiled()
 
     def _compiled(self) -> _core.DetectionModel:
@@ -58,15 +59,24 @@ class DetectionProbabilityModel(ModelComponent):
     def evaluate(self, pose: Pose, states, position_mapping=(0, 2), *, out=None) -> np.ndarray:
         """P_D at each row of ``states`` (N, D) for a sensor at ``pose``."""
         rows = as_rows(states, "states")
-        return self._compiled().evaluate(pose.as_tuple(), rows, tuple(position_mapping),
-                                         check_out(out, rows.shape[0]))
+        mapping = _mapping_within(position_mapping, rows, "states")
+        return self._compiled().evaluate(pose.as_tuple(), rows, mapping,
+                                         check_out(out, rows.shape[0], states=rows))
 
     def expected(self, pose: Pose, means, covars, position_mapping=(0, 2), rule="cubature",
                  order=3, *, out=None) -> np.ndarray:
         """Expected P_D over Gaussians N(means[i], covars[i]) under an integration rule."""
         means = as_rows(means, "means")
-        covars = np.ascontiguousarray(np.asarray(covars, dtype=np.float64))
-        if covars.ndim != 3:
-            raise ValueError(f"covars: must be (N, D, D), got shape {covars.shape}")
-        return self._compiled().expected(pose.as_tuple(), means, covars, tuple(position_mapping),
-                                         rule, int(order), check_out(out, means.shape[0]))
+        covars = as_array(covars, "covars", 3, "(N, D, D)")
+        mapping = _mapping_within(position_mapping, means, "means")
+        order = as_int(order, "order", low=1, high=MAX_ORDER)
+        return self._compiled().expected(pose.as_tuple(), means, covars, mapping, rule, order,
+                                         check_out(out, means.shape[0], means=means, covars=covars))
+
+
+def _mapping_within(position_mapping, rows: np.ndarray, name: str) -> tuple[int, int]:
+    mapping = as_position_mapping(position_mapping)
+    if max(mapping) >= rows.shape[1]:
+        raise ValueError(f"position_mapping: {mapping} is out of range for {name} rows of "
+                         f"{rows.shape[1]} columns")
+    return mapping

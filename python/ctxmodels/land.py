@@ -68,13 +68,12 @@ class LandMask(ModelComponent):
     polygons: Sequence[Mapping] = Property(
         doc="Land polygons: each a (K, 2) vertex array, a (shell, holes) pair, a "
             "``{'shell': ..., 'holes': [...]}`` mapping or a shapely Polygon (a MultiPolygon "
-            "is accepted for the whole). Stored as mappings of float64 arrays.")
+            "is accepted for the whole). Stored as a tuple of ``{'shell': array, 'holes': "
+            "(arrays,)}`` with read-only float64 arrays.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        object.__setattr__(self, "_initialised", False)
-        self.polygons = normalise_polygons(self.polygons)
-        object.__setattr__(self, "_initialised", True)
+        self._replace("polygons", normalise_polygons(self.polygons))
         self._compiled()
 
     def _compiled(self) -> _core.LandMask:
@@ -86,7 +85,8 @@ class LandMask(ModelComponent):
         return self._compiled().vertex_count
 
     def contains(self, points) -> np.ndarray:
-        """Whether each (x, y) row of ``points`` is on land (boundary included)."""
+        """Whether each (x, y) row of ``points`` is on land (boundary included). A NaN or
+        infinite row raises :class:`ValueError`."""
         return self._compiled().contains(as_rows(points, "points", ncols=2))
 
 
@@ -110,7 +110,8 @@ class LineOfSight(ModelComponent):
         return self._cached("core", lambda: _core.LineOfSight(self.land._compiled()))
 
     def visible(self, sensor, targets) -> np.ndarray:
-        """Whether each (x, y) row of ``targets`` is visible from ``sensor`` (x, y)."""
+        """Whether each (x, y) row of ``targets`` is visible from ``sensor`` (x, y). A NaN
+        or infinite row raises :class:`ValueError`."""
         sensor = np.asarray(sensor, dtype=np.float64).ravel()
         if sensor.shape != (2,) or not np.all(np.isfinite(sensor)):
             raise ValueError(f"sensor: must be a finite (x, y) position, got {sensor}")

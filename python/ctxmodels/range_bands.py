@@ -7,7 +7,7 @@ import numpy as np
 from stonesoup.base import Property
 
 from . import _core
-from ._component import ModelComponent, as_float_tuple
+from ._component import ModelComponent, as_array, as_float_tuple
 
 
 class RangeBands(ModelComponent):
@@ -56,6 +56,15 @@ class RangeBands(ModelComponent):
             self._owners()))
 
     def __call__(self, ranges) -> np.ndarray:
-        """The band value at each range (array-like, metres)."""
-        r = np.ascontiguousarray(np.atleast_1d(np.asarray(ranges, dtype=np.float64)).ravel())
+        """The band value at each range (array-like, metres): the band above every edge it
+        has passed, so +inf gets the last band and -inf the first; NaN raises
+        :class:`ValueError`."""
+        r = as_array(np.atleast_1d(_numeric(ranges)).ravel(), "ranges", 1)
         return self._compiled().at(r)
+
+
+def _numeric(ranges):
+    try:
+        return np.asarray(ranges, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise TypeError(f"ranges: cannot be read as numbers ({err})") from None

@@ -6,9 +6,9 @@ from collections.abc import Sequence
 
 from stonesoup.base import Property
 
-from ._component import ModelComponent
+from ._component import ModelComponent, as_int, as_position_mapping
 from .clutter import ClutterDensityModel
-from .detection import PD_RULES, DetectionProbabilityModel
+from .detection import MAX_ORDER, PD_RULES, DetectionProbabilityModel
 from .pose import Mounting, Pose
 
 
@@ -43,17 +43,14 @@ class SensorModel(ModelComponent):
         if not isinstance(self.clutter, ClutterDensityModel):
             raise TypeError(f"clutter: expected a ClutterDensityModel, "
                             f"got {type(self.clutter).__name__}")
-        if isinstance(self.position_mapping, (str, bytes)) or not isinstance(
-                self.position_mapping, Sequence):
-            raise TypeError(f"position_mapping: expected two indices, got {self.position_mapping!r}")
-        mapping = tuple(self.position_mapping)
-        if len(mapping) != 2 or not all(isinstance(i, int) and i >= 0 for i in mapping) \
-                or mapping[0] == mapping[1]:
-            raise ValueError(f"position_mapping: must be two different indices >= 0, got {mapping}")
+        # Any integer type (NumPy's too), stored as a tuple of ints.
+        self._replace("position_mapping", as_position_mapping(self.position_mapping))
         if self.pd_evaluation not in PD_RULES:
             raise ValueError(f"pd_evaluation: must be one of {PD_RULES}, got {self.pd_evaluation!r}")
-        if not isinstance(self.pd_order, int) or not 1 <= self.pd_order <= 32:
-            raise ValueError(f"pd_order: must be an int in 1..32, got {self.pd_order!r}")
+        try:
+            self._replace("pd_order", as_int(self.pd_order, "pd_order", low=1, high=MAX_ORDER))
+        except TypeError as err:  # a non-integer order has always been a ValueError here
+            raise ValueError(str(err)) from None
         if self.mounting is not None and not isinstance(self.mounting, Mounting):
             raise TypeError(f"mounting: expected a Mounting, got {type(self.mounting).__name__}")
 
