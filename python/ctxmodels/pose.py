@@ -15,7 +15,7 @@ import numpy as np
 from stonesoup.base import Property
 
 from . import _core
-from ._component import ModelComponent, as_float, as_rows, frozen_copy
+from ._component import ModelComponent, as_float, as_rows, as_sequence, frozen_copy
 
 
 class Pose(ModelComponent):
@@ -74,6 +74,15 @@ def _seconds(timestamps: Sequence[datetime.datetime], epoch: datetime.datetime) 
     return np.array([(t - epoch).total_seconds() for t in timestamps], dtype=np.float64)
 
 
+def _is_aware(t: datetime.datetime) -> bool:
+    """Whether `t` is timezone-aware (naive and aware datetimes cannot be compared)."""
+    return t.utcoffset() is not None
+
+
+def _kind(aware: bool) -> str:
+    return "timezone-aware" if aware else "naive"
+
+
 class NavigationTrack(PoseSource):
     r"""Platform poses interpolated from a navigation log.
 
@@ -82,14 +91,15 @@ class NavigationTrack(PoseSource):
     :class:`ValueError` rather than extrapolating.
     """
 
-    timestamps: Sequence[datetime.datetime] = Property(doc="Strictly increasing log times.")
+    timestamps: Sequence[datetime.datetime] = Property(
+        doc="Strictly increasing log times, all naive or all timezone-aware (stored as a tuple).")
     positions: np.ndarray = Property(doc="(T, 2) world x/y positions, metres.")
     headings: np.ndarray = Property(doc="(T,) headings, radians counter-clockwise from +x.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         object.__setattr__(self, "_initialised", False)
-        self.timestamps = list(self.timestamps)
+        self.timestamps = as_sequence(self.timestamps, "timestamps", "datetimes")
         self.positions = frozen_copy(as_rows(self.positions, "positions", ncols=2))
         headings = np.asarray(self.headings)
         if headings.dtype == object or not (np.issubdtype(headings.dtype, np.integer)
@@ -102,6 +112,11 @@ class NavigationTrack(PoseSource):
             raise ValueError("timestamps: a navigation track needs at least one entry")
         if not all(isinstance(t, datetime.datetime) for t in self.timestamps):
             raise TypeError("timestamps: must be datetime.datetime objects")
+        aware = [_is_aware(t) for t in self.timestamps]
+        if any(a != aware[0] for a in aware):
+            k = aware.index(not aware[0])
+            raise TypeError(f"timestamps: mixes naive and timezone-aware datetimes (entry 0 is "
+                            f"{_kind(aware[0])}, entry {k} is {_kind(aware[k])})")
         if self.positions.shape[0] != n or self.headings.shape[0] != n:
             raise ValueError(
                 f"positions/headings: need one row per timestamp ({n}), got "
@@ -116,6 +131,9 @@ class NavigationTrack(PoseSource):
     def pose_at(self, timestamp: datetime.datetime) -> Pose:
         if not isinstance(timestamp, datetime.datetime):
             raise TypeError(f"timestamp: expected a datetime, got {type(timestamp).__name__}")
+        if _is_aware(timestamp) != _is_aware(self.timestamps[0]):
+            raise TypeError(f"timestamp: {timestamp} is {_kind(_is_aware(timestamp))} but the "
+                            f"navigation track's timestamps are {_kind(_is_aware(self.timestamps[0]))}")
         seconds = self._cached("seconds", lambda: _seconds(self.timestamps, self.timestamps[0]))
         t = (timestamp - self.timestamps[0]).total_seconds()
         if t < 0 or t > seconds[-1]:

@@ -24,13 +24,32 @@ from ..pose import PoseSource
 from ..sensor import SensorModel
 
 
-def _scans(source: Iterable, name: str) -> Iterator[tuple[datetime.datetime, set]]:
-    """``(time, detections)`` pairs of a reader, checked to be pairs and in time order."""
+def _time_kind(time) -> str | None:
+    """'naive' or 'timezone-aware' for a datetime (the two cannot be compared), else None."""
+    if isinstance(time, datetime.datetime):
+        return "timezone-aware" if time.utcoffset() is not None else "naive"
+    return None
+
+
+class _FirstTime:
+    """The first scan time seen across the streams of one merge, and whose it was."""
+
+    def __init__(self):
+        self.kind: str | None = None
+        self.where = ""
+
+
+def _scans(source: Iterable, name: str, label: str = "",
+           first: _FirstTime | None = None) -> Iterator[tuple[datetime.datetime, set]]:
+    """``(time, detections)`` pairs of a reader, checked to be pairs, in time order, and all
+    naive or all timezone-aware datetimes (also across the streams sharing `first`).
+    `label` says whose stream it is in messages (e.g. the sensor's name)."""
     try:
         iterator = iter(source)
     except TypeError:
         raise TypeError(f"{name}: expected a detector/reader iterable as (time, detections) "
                         f"pairs, got {type(source).__name__}") from None
+    first = first or _FirstTime()
     previous = None
     for item in iterator:
         try:
@@ -38,11 +57,30 @@ def _scans(source: Iterable, name: str) -> Iterator[tuple[datetime.datetime, set
         except (TypeError, ValueError):
             raise TypeError(f"{name}: each item must be a (time, detections) pair, "
                             f"got {item!r}") from None
-        if previous is not None and time < previous:
+        kind = _time_kind(time)
+        if kind is not None:
+            if first.kind is None:
+                first.kind, first.where = kind, f"{name}{label} at {time}"
+            elif kind != first.kind:
+                # Checked here: comparing the two kinds would raise a bare TypeError later.
+                raise TypeError(f"{name}: the scan at {time}{label} is {kind}, but the scan of "
+                                f"{first.where} is {first.kind}; use all naive or all "
+                                f"timezone-aware datetimes")
+        try:
+            backwards = previous is not None and time < previous
+        except TypeError:
+            raise TypeError(f"{name}: the scan time {time!r}{label} cannot be compared with the "
+                            f"previous one, {previous!r}") from None
+        if backwards:
             raise ValueError(f"{name}: scans must come in time order, but a scan at {time} "
                              f"follows one at {previous}")
         previous = time
         yield time, detections
+
+
+def _sensor_label(feeder) -> str:
+    name = getattr(getattr(feeder, "sensor_model", None), "name", "")
+    return f" (sensor {name!r})" if name else ""
 
 
 class ContextFeeder(DetectionFeeder):
@@ -79,8 +117,13 @@ class ContextFeeder(DetectionFeeder):
 
     @BufferedGenerator.generator_method
     def data_gen(self):
-        for time, detections in _scans(self.reader, "reader"):
-            context = self.sensor_model.context(self.pose_source.pose_at(time), time)
+        label = _sensor_label(self)
+        for time, detections in _scans(self.reader, "reader", label):
+            try:
+                pose = self.pose_source.pose_at(time)
+            except TypeError as err:  # e.g. naive scan times against an aware navigation log
+                raise TypeError(f"pose_source: no pose for the scan at {time}{label}: {err}") from err
+            context = self.sensor_model.context(pose, time)
             yield time, DetectionSet(detections, context)
 
 
@@ -113,7 +156,9 @@ class MultiSensorFeeder(DetectionFeeder):
 
     @BufferedGenerator.generator_method
     def data_gen(self):
-        streams = [_scans(feeder, f"feeders[{i}]") for i, feeder in enumerate(self.feeders)]
+        first = _FirstTime()
+        streams = [_scans(feeder, f"feeders[{i}]", _sensor_label(feeder), first)
+                   for i, feeder in enumerate(self.feeders)]
         # heapq.merge breaks equal keys by stream position: stable, and never compares sets.
         yield from heapq.merge(*streams, key=lambda scan: scan[0])
 
