@@ -85,9 +85,26 @@ impl ClutterModel {
     /// λ for M detections: world `positions` (M, 2) row-major and `metadata`
     /// (M, metadata_columns) row-major with NaN for "not present".
     pub fn evaluate(&self, pose: &Pose, positions: &[f64], metadata: &[f64], out: &mut [f64]) -> Result<()> {
+        self.evaluate_with_ranges(pose, positions, metadata, None, out)
+    }
+
+    /// As [`evaluate`](Self::evaluate), with the range bands read at `ranges[i]` where it is
+    /// not NaN: a bearing–range sensor's measured range, so band edges are exact instead of
+    /// depending on the polar → Cartesian → range round trip (which can land an ulp short).
+    pub fn evaluate_with_ranges(
+        &self, pose: &Pose, positions: &[f64], metadata: &[f64], ranges: Option<&[f64]>, out: &mut [f64],
+    ) -> Result<()> {
         let m = out.len();
         if positions.len() != 2 * m {
             return Err(ModelError::shape("positions", format!("must be ({m}, 2), got {} values", positions.len())));
+        }
+        if let Some(r) = ranges {
+            if r.len() != m {
+                return Err(ModelError::shape("ranges", format!("must have {m} entries, got {}", r.len())));
+            }
+            if let Some(row) = r.iter().position(|v| v.is_infinite()) {
+                return Err(ModelError::non_finite("ranges", row, "range is infinite (NaN = use the position)"));
+            }
         }
         let k = self.metadata_columns;
         if metadata.len() != k * m {
@@ -101,7 +118,12 @@ impl ClutterModel {
             for i in 0..chunk.len() {
                 let row = first + i;
                 let (x, y) = (positions[2 * row], positions[2 * row + 1]);
-                range[i] = ((x - origin[0]).powi(2) + (y - origin[1]).powi(2)).sqrt();
+                let measured = ranges.map_or(f64::NAN, |r| r[row]);
+                range[i] = if measured.is_nan() {
+                    ((x - origin[0]).powi(2) + (y - origin[1]).powi(2)).sqrt()
+                } else {
+                    measured
+                };
                 // NaN marks the row as not evaluable and survives every product below.
                 let unusable = self.uses_position && !(x.is_finite() && y.is_finite());
                 chunk[i] = if unusable { f64::NAN } else { 1.0 };
@@ -172,6 +194,22 @@ impl ClutterModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn measured_ranges_take_the_place_of_the_position_range() {
+        let bands = RangeBands::new(vec![1000.0], vec![1e-3, 1e-2], vec![true]).unwrap();
+        let model = ClutterModel::new(vec![ClutterFactor::Range(bands)]).unwrap();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        // positions an ulp short of the edge; the measured range is exactly on it
+        let short = 1000.0f64.next_down();
+        let positions = [short, 0.0, short, 0.0, short, 0.0];
+        let mut out = [0.0; 3];
+        model.evaluate_with_ranges(&pose, &positions, &[], Some(&[1000.0, f64::NAN, 999.0]), &mut out).unwrap();
+        assert_eq!(out, [1e-2, 1e-3, 1e-3]);
+        let err = model.evaluate_with_ranges(&pose, &positions, &[], Some(&[f64::INFINITY, 0.0, 0.0]), &mut out).unwrap_err();
+        assert_eq!(err, ModelError::non_finite("ranges", 0, "range is infinite (NaN = use the position)"));
+        assert!(model.evaluate_with_ranges(&pose, &positions, &[], Some(&[1.0]), &mut out).is_err());
+    }
 
     #[test]
     fn paper_lidar_area_rule() {

@@ -399,8 +399,9 @@ impl PyClutterModel {
         self.0.uses_position()
     }
 
-    /// λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing.
-    #[pyo3(signature = (pose, positions, metadata, out = None))]
+    /// λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing;
+    /// range bands read `ranges[i]` (a measured range) where given and not NaN.
+    #[pyo3(signature = (pose, positions, metadata, out = None, ranges = None))]
     fn evaluate<'py>(
         &self,
         py: Python<'py>,
@@ -408,6 +409,7 @@ impl PyClutterModel {
         positions: Bound<'py, PyArray2<f64>>,
         metadata: Bound<'py, PyArray2<f64>>,
         out: Option<Bound<'py, PyArray1<f64>>>,
+        ranges: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
         let n = positions.shape()[0];
@@ -415,11 +417,15 @@ impl PyClutterModel {
         let p = points_slice(&positions, "positions")?;
         let metadata = borrow(&metadata, "metadata")?;
         let m = slice(&metadata, "metadata")?;
-        let mut out = output(py, out, n, &[("positions", p), ("metadata", m)])?;
+        let ranges = ranges.map(|r| borrow(&r, "ranges")).transpose()?;
+        let r = ranges.as_ref().map(|r| slice(r, "ranges")).transpose()?;
+        let mut inputs = vec![("positions", p), ("metadata", m)];
+        inputs.extend(r.map(|r| ("ranges", r)));
+        let mut out = output(py, out, n, &inputs)?;
         let result = Bound::clone(&out);
         let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
         let model = &self.0;
-        detached(py, || model.evaluate(&pose, p, m, buffer))?;
+        detached(py, || model.evaluate_with_ranges(&pose, p, m, r, buffer))?;
         Ok(result)
     }
 }

@@ -7,7 +7,7 @@ and handed to Stone Soup trackers as per-scan :class:`DetectorContext` objects.
 """
 from ._core import rule_points
 from .clutter import ClutterDensityModel, MetadataThreshold
-from .context import DetectionSet, DetectorContext, detection_positions
+from .context import DetectionSet, DetectorContext, detection_positions, measured_ranges
 from .detection import DetectionProbabilityModel
 from .land import LandMask, LineOfSight
 from .pose import ConstantPose, Mounting, NavigationTrack, Pose, PoseSource
@@ -34,5 +34,6 @@ __all__ = [
     "RangeBands",
     "SensorModel",
     "detection_positions",
+    "measured_ranges",
     "rule_points",
 ]

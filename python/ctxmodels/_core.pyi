@@ -131,8 +131,10 @@ class ClutterModel:
         positions: _Floats,
         metadata: _Floats,
         out: _Floats | None = None,
+        ranges: _Floats | None = None,
     ) -> _Floats:
-        """λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing."""
+        """λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing;
+        range bands read `ranges[i]` (a measured range) where given and not NaN."""
 
 def mount(pose: _Pose, forward: float, left: float, yaw: float) -> _Pose:
     """The pose (x, y, heading) of a sensor mounted on a platform at `pose`."""

@@ -7,7 +7,7 @@ import numpy as np
 from stonesoup.base import Property
 
 from . import _core
-from ._component import ModelComponent, as_float, as_rows, as_sequence, check_out
+from ._component import ModelComponent, as_array, as_float, as_rows, as_sequence, check_out
 from .pose import Pose
 from .range_bands import RangeBands
 
@@ -132,10 +132,22 @@ class ClutterDensityModel(ModelComponent):
                                          f"range") from None
         return rows
 
-    def evaluate(self, pose: Pose, positions, metadata=None, *, out=None) -> np.ndarray:
-        """λ at world ``positions`` (M, 2) with ``metadata`` (array, rows or mappings)."""
+    def evaluate(self, pose: Pose, positions, metadata=None, *, ranges=None,
+                 out=None) -> np.ndarray:
+        """λ at world ``positions`` (M, 2) with ``metadata`` (array, rows or mappings).
+
+        ``ranges`` (M,), optional: the range from the sensor that range bands read for each
+        detection instead of the range of its position, NaN where there is none — a
+        bearing–range sensor's *measured* range, so a detection measured exactly on a band
+        edge falls in the band that owns the edge."""
         positions = as_rows(positions, "positions", ncols=2)
         n = positions.shape[0]
         metadata = self.metadata_array(metadata, n)
+        inputs = dict(positions=positions, metadata=metadata)
+        if ranges is not None:
+            ranges = as_array(ranges, "ranges", 1, f"({n},) ranges")
+            if ranges.shape != (n,):
+                raise ValueError(f"ranges: must have {n} entries, got shape {ranges.shape}")
+            inputs["ranges"] = ranges
         return self._compiled().evaluate(pose.as_tuple(), positions, metadata,
-                                         check_out(out, n, positions=positions, metadata=metadata))
+                                         check_out(out, n, **inputs), ranges)

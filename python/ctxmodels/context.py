@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from stonesoup.base import Base, Property
 from stonesoup.models.measurement.linear import LinearGaussian
+from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.numeric import Probability
 
 from .pose import Pose
@@ -106,6 +107,20 @@ def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.nda
     return positions
 
 
+def measured_ranges(detections: Sequence) -> np.ndarray:
+    """Each detection's measured range from its sensor, (M,): the range element of a 2-D
+    bearing–range measurement (Stone Soup's :class:`CartesianToBearingRange`, which measures
+    from its ``translation_offset``), NaN for any other detection. λ's range bands read it
+    instead of the range of the detection's reconstructed position, whose polar → Cartesian
+    → range round trip can land an ulp on the wrong side of a band edge."""
+    ranges = np.full(len(detections), np.nan)
+    for i, det in enumerate(detections):
+        model = getattr(det, "measurement_model", None)
+        if isinstance(model, CartesianToBearingRange) and len(model.mapping) == 2:
+            ranges[i] = float(np.asarray(det.state_vector, dtype=np.float64).ravel()[1])
+    return ranges
+
+
 def _particle_weights(weights, n: int) -> np.ndarray:
     """A particle state's weights as floats, checked: one finite, non-negative weight per
     particle, not all zero (the P_D average divides by their sum)."""
@@ -195,20 +210,26 @@ class DetectorContext(_UpstreamContext):
         return Probability(float(self.prob_detection_array(mean, covars)[0]))
 
     # --- clutter ---------------------------------------------------------------------------
-    def clutter_spatial_density_array(self, positions, metadata=None, *, out=None) -> np.ndarray:
+    def clutter_spatial_density_array(self, positions, metadata=None, *, ranges=None,
+                                      out=None) -> np.ndarray:
         """λ for M detections at world ``positions`` (M, 2); ``metadata`` an (M, K) array in
-        the clutter model's ``metadata_keys`` order or a sequence of metadata mappings."""
-        return self.sensor_model.clutter.evaluate(self.pose, positions, metadata, out=out)
+        the clutter model's ``metadata_keys`` order or a sequence of metadata mappings;
+        ``ranges`` (M,) measured ranges that range bands read instead (NaN: none)."""
+        return self.sensor_model.clutter.evaluate(self.pose, positions, metadata, ranges=ranges,
+                                                  out=out)
 
     def clutter_spatial_density_detections(self, detections: Sequence) -> np.ndarray:
         """λ of Stone Soup detections, in one array call."""
         detections = list(detections)
         clutter = self.sensor_model.clutter
+        ranges = None
         if clutter.uses_position:
             positions = detection_positions(detections, self.sensor_model.position_mapping)
+            ranges = measured_ranges(detections)
         else:
             positions = np.zeros((len(detections), 2))
-        return clutter.evaluate(self.pose, positions, [d.metadata for d in detections])
+        return clutter.evaluate(self.pose, positions, [d.metadata for d in detections],
+                                ranges=ranges)
 
     def clutter_spatial_density(self, detection) -> float:
         """λ of one detection (position from its measurement model, metadata from
@@ -216,5 +237,6 @@ class DetectorContext(_UpstreamContext):
         return float(self.clutter_spatial_density_detections([detection])[0])
 
 
-__all__ = ["DetectionSet", "DetectorContext", "detection_positions", "require_array_context"]
+__all__ = ["DetectionSet", "DetectorContext", "detection_positions", "measured_ranges",
+           "require_array_context"]
 
