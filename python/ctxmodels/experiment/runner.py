@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import csv
+import hashlib
 import json
 import math
 import os
@@ -74,6 +75,9 @@ class JobResult:
     scans: int
     track_count: int
     tracks: list = field(default_factory=list)  # [(times, xy)] when job.keep_tracks
+    #: SHA-256 of every reported track state (time, mean, covariance), in track order: equal
+    #: digests mean bit-identical tracks.
+    digest: str = ""
 
 
 def drop_distractor_states(tracks, run, times, mapping=(0, 2)) -> list:
@@ -84,7 +88,7 @@ def drop_distractor_states(tracks, run, times, mapping=(0, 2)) -> list:
         return list(tracks)
     wanted = set(times)
     vessels_at: dict = {}
-    for truth in run.truths:
+    for truth in run.truth_by_id.values():  # by id, not set order
         for state in truth.states:
             if state.timestamp in wanted:
                 vessels_at.setdefault(state.timestamp, []).append(
@@ -116,6 +120,7 @@ def drop_distractor_states(tracks, run, times, mapping=(0, 2)) -> list:
 
 def run_job(job: Job) -> JobResult:
     """Simulates the scenario, runs the tracker over both sensors' scans, scores it."""
+    from ..stonesoup.ordering import in_track_order
     from .trackers import TRACKERS, build_tracker
 
     spec = TRACKERS[job.tracker]
@@ -129,11 +134,14 @@ def run_job(job: Job) -> JobResult:
         scans += 1
     seconds = time.perf_counter() - started
     times = run.radar_times
-    reported = [track for track in all_tracks if len(track)]
+    # By content, not set (address) order: the metrics then see the same track order in
+    # every process.
+    reported = [track for track in in_track_order(all_tracks) if len(track)]
     if job.static_distractors:
         reported = drop_distractor_states(reported, run, times)
-    hota = metrics.hota(run.truths, reported, times)
-    gospa = metrics.gospa(run.truths, reported, times)
+    truths = list(run.truth_by_id.values())  # by id, not set (address) order
+    hota = metrics.hota(truths, reported, times)
+    gospa = metrics.gospa(truths, reported, times)
     kept = []
     if job.keep_tracks:
         epoch = times[0]
@@ -141,7 +149,23 @@ def run_job(job: Job) -> JobResult:
             kept.append(([(s.timestamp - epoch).total_seconds() for s in track.states],
                          [[float(s.state_vector[0]), float(s.state_vector[2])]
                           for s in track.states]))
-    return JobResult(job, hota, gospa, seconds, scans, len(reported), kept)
+    return JobResult(job, hota, gospa, seconds, scans, len(reported), kept,
+                     tracks_digest(reported))
+
+
+def tracks_digest(tracks) -> str:
+    """SHA-256 over the tracks' states (timestamp, state vector, covariance bytes) in the
+    given order."""
+    digest = hashlib.sha256()
+    for track in tracks:
+        digest.update(b"track")
+        for state in track.states:
+            digest.update(str(state.timestamp).encode())
+            digest.update(np.ascontiguousarray(state.state_vector, dtype=np.float64).tobytes())
+            covar = getattr(state, "covar", None)
+            if covar is not None:
+                digest.update(np.ascontiguousarray(covar, dtype=np.float64).tobytes())
+    return digest.hexdigest()
 
 
 @dataclass
