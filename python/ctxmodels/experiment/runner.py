@@ -33,6 +33,7 @@ from __future__ import annotations
 import concurrent.futures
 import csv
 import hashlib
+import io
 import json
 import math
 import os
@@ -45,6 +46,8 @@ import numpy as np
 from stonesoup.types.track import Track
 
 from . import metrics
+from .executors import (InlineExecutor, sigint_blocked, stop_now, worker_ignores_sigint,
+                        write_atomic)
 from .scenarios import SCENARIOS, LidarConfig, RadarConfig, make_scenario
 
 #: Scenario names in table order, and the short labels of the results table.
@@ -294,24 +297,27 @@ class ExperimentResults:
         return "\n".join(lines)
 
     def save(self, folder: str | Path) -> dict[str, Path]:
+        """Writes results.md, .csv and .json to ``folder``; each file appears complete or
+        not at all (written beside its final name, then renamed)."""
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         paths = {"markdown": folder / "results.md", "csv": folder / "results.csv",
                  "json": folder / "results.json"}
-        paths["markdown"].write_text(self.table_markdown() + "\n")
-        with paths["csv"].open("w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(["tracker", "scenario", "seed", "hota_percent", "deta", "assa",
-                             "gospa_rms", "tracks", "scans", "seconds"])
-            for r in sorted(self.results, key=lambda r: (r.job.tracker, r.job.scenario, r.job.seed)):
-                writer.writerow([r.job.tracker, r.job.scenario, r.job.seed,
-                                 f"{100 * r.hota.hota:.4f}", f"{r.hota.deta:.6f}",
-                                 f"{r.hota.assa:.6f}", f"{r.gospa.rms:.4f}", r.track_count,
-                                 r.scans, f"{r.seconds:.3f}"])
+        table = io.StringIO(newline="")
+        writer = csv.writer(table)
+        writer.writerow(["tracker", "scenario", "seed", "hota_percent", "deta", "assa",
+                         "gospa_rms", "tracks", "scans", "seconds"])
+        for r in sorted(self.results, key=lambda r: (r.job.tracker, r.job.scenario, r.job.seed)):
+            writer.writerow([r.job.tracker, r.job.scenario, r.job.seed,
+                             f"{100 * r.hota.hota:.4f}", f"{r.hota.deta:.6f}",
+                             f"{r.hota.assa:.6f}", f"{r.gospa.rms:.4f}", r.track_count,
+                             r.scans, f"{r.seconds:.3f}"])
         summary = {"config": {k: (list(v) if isinstance(v, (list, tuple)) else v)
                               for k, v in asdict(self.config).items()},
                    "wall_seconds": self.wall_seconds, "scores": self.scores()}
-        paths["json"].write_text(json.dumps(summary, indent=2, default=float))
+        write_atomic(paths["markdown"], self.table_markdown() + "\n")
+        write_atomic(paths["csv"], table.getvalue())
+        write_atomic(paths["json"], json.dumps(summary, indent=2, default=float))
         return paths
 
 
@@ -319,40 +325,44 @@ def run_experiment(config: ExperimentConfig,
                    executor: concurrent.futures.Executor | None = None,
                    progress: bool = True) -> ExperimentResults:
     """Runs every job of ``config`` on ``executor`` (default: a process pool with
-    ``config.workers`` processes) and collects the results."""
+    ``config.workers`` processes) and collects the results.
+
+    On Ctrl-C (KeyboardInterrupt) or a failed job, the queued jobs are cancelled and, with
+    the default pool, the worker processes are stopped at once; the exception propagates."""
     jobs = config.jobs()
     started = time.perf_counter()
     own = executor is None
     if own:
-        workers = config.workers or os.cpu_count() or 1
-        executor = (concurrent.futures.ProcessPoolExecutor(max_workers=workers) if workers > 1
-                    else _InlineExecutor())
+        # More processes than jobs would only sit idle.
+        workers = min(config.workers or os.cpu_count() or 1, max(len(jobs), 1))
+        executor = (concurrent.futures.ProcessPoolExecutor(max_workers=workers,
+                                                           initializer=worker_ignores_sigint)
+                    if workers > 1 else InlineExecutor())
     results = []
+    futures = []
+    bar = _progress(len(jobs), progress)
     try:
         # Longest jobs first keeps the pool busy to the end.
         order = sorted(jobs, key=lambda j: (j.tracker.startswith("jpda"), j.duration or 0), reverse=True)
-        futures = [executor.submit(run_job, job) for job in order]
-        bar = _progress(len(futures), progress)
+        # Workers are forked while submitting: SIGINT stays blocked until each has set
+        # its own handler, so a Ctrl-C in that window cannot raise inside a new worker.
+        with sigint_blocked(own and isinstance(executor, concurrent.futures.ProcessPoolExecutor)):
+            futures = [executor.submit(run_job, job) for job in order]
         for future in concurrent.futures.as_completed(futures):
             results.append(future.result())
             bar.update(1)
-        bar.close()
+    except BaseException:
+        # Without this, shutdown() below would first run every queued job.
+        if own:
+            stop_now(executor)
+        for future in futures:
+            future.cancel()
+        raise
     finally:
+        bar.close()
         if own:
             executor.shutdown()
     return ExperimentResults(config, results, time.perf_counter() - started)
-
-
-class _InlineExecutor(concurrent.futures.Executor):
-    """Runs jobs in the calling process (one worker, or debugging)."""
-
-    def submit(self, fn, /, *args, **kwargs):
-        future = concurrent.futures.Future()
-        try:
-            future.set_result(fn(*args, **kwargs))
-        except BaseException as err:  # handed to the caller through the future
-            future.set_exception(err)
-        return future
 
 
 def _progress(total: int, enabled: bool):

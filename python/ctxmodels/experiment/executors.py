@@ -1,0 +1,102 @@
+"""How the experiment runs its jobs and writes its files so that Ctrl-C is clean.
+
+A terminal's Ctrl-C (SIGINT) reaches the whole process group. The default process pool's
+workers ignore it (:func:`worker_ignores_sigint`) and the parent stops them at once
+(:func:`stop_now`), instead of ``shutdown()`` first running every queued job. Files are
+written beside their final name and renamed (:func:`write_atomic`), and steps that must not
+be cut short hold Ctrl-C back until they end (:func:`sigint_deferred`).
+"""
+from __future__ import annotations
+
+import concurrent.futures
+import contextlib
+import os
+import signal
+import threading
+from pathlib import Path
+
+
+def write_atomic(path: Path, text: str) -> None:
+    """Writes ``text`` to a temporary name in the same folder, then renames it: an
+    interrupted write never leaves a truncated file under the final name."""
+    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    try:
+        with partial.open("w", newline="") as handle:
+            handle.write(text)
+        os.replace(partial, path)
+    except BaseException:
+        partial.unlink(missing_ok=True)
+        raise
+
+
+def worker_ignores_sigint() -> None:
+    """Pool initializer. A terminal's Ctrl-C reaches the whole process group; the workers
+    ignore it (each would print a traceback and the pool would break mid-job), and the
+    parent stops them (:func:`stop_now`)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+@contextlib.contextmanager
+def sigint_blocked(active: bool = True):
+    """Blocks SIGINT in this thread (pending until exit); processes forked meanwhile inherit
+    the block until :func:`worker_ignores_sigint` lifts it."""
+    if not active or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+@contextlib.contextmanager
+def sigint_deferred():
+    """Holds back Ctrl-C around steps that must not be cut short; a Ctrl-C meanwhile is
+    raised on exit. (Swaps the Python handler: a signal mask would not do, since another
+    thread — tqdm's monitor, say — can take the signal and the main thread still raises.)"""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is None:
+        yield  # only the main thread ever raises KeyboardInterrupt
+        return
+    caught = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if caught and callable(previous):
+        previous(signal.SIGINT, None)
+
+
+def stop_now(executor: concurrent.futures.Executor) -> None:
+    """Cancels the queued jobs and ends the worker processes without waiting for the jobs
+    they are running (which ignore SIGINT and may take many minutes)."""
+    if not isinstance(executor, concurrent.futures.ProcessPoolExecutor):
+        return
+    with sigint_deferred():  # a second Ctrl-C must not leave workers behind
+        processes = list((getattr(executor, "_processes", None) or {}).values())
+        executor.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            process.terminate()
+        for process in processes:
+            process.join(timeout=5)
+            if process.is_alive():
+                process.kill()
+                process.join(timeout=5)
+
+
+class InlineExecutor(concurrent.futures.Executor):
+    """Runs jobs in the calling process (one worker, or debugging)."""
+
+    def submit(self, fn, /, *args, **kwargs):
+        future = concurrent.futures.Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except Exception as err:  # handed to the caller through the future
+            future.set_exception(err)
+        # KeyboardInterrupt and SystemExit propagate: a Ctrl-C must stop the whole run,
+        # not fail one job and go on with the next.
+        return future
