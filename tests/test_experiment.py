@@ -101,10 +101,13 @@ def test_cli_experiment_and_coverage(tmp_path, capsys):
     assert png.read_bytes()[:4] == b"\x89PNG"
 
 
-def test_cli_rejects_unknown_tracker():
-    with pytest.raises(ValueError, match="trackers"):
+def test_cli_rejects_unknown_tracker(capsys):
+    with pytest.raises(SystemExit) as exit_:
         main(["experiment", "--trackers", "nope", "--seeds", "1", "--duration", "1",
               "--no-plots", "--quiet", "--workers", "1"])
+    assert exit_.value.code == 2 and "--trackers" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="trackers"):  # the library-level check
+        ExperimentConfig(trackers=["nope"]).jobs()
 
 
 def test_tracks_on_static_objects_are_distractors():

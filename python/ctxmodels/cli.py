@@ -3,9 +3,19 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
 import math
+import os
+import shutil
 import sys
+import tempfile
 from pathlib import Path
+
+from .cli_validation import (MAX_BEARING_STD_DEG, MAX_COORDINATE, MAX_LIDAR_CLUTTER,
+                             MAX_RADAR_CLUTTER, MAX_RESOLUTION, MAX_SEEDS, MIN_DURATION,
+                             UsageError, check_coverage, check_experiment,
+                             check_writable_folder, integer, number)
 
 #: Figures the experiment draws for its plot seed: scenario → trackers (paper Fig. 4).
 FIGURES = {
@@ -17,9 +27,6 @@ FIGURES = {
 
 def _experiment(args) -> int:
     from .experiment.runner import ExperimentConfig, run_experiment
-    from .experiment.trackers import TRACKERS
-    if args.trackers == ["all"]:
-        args.trackers = list(TRACKERS)
     radar, lidar = _simulated_sensors(args)
     config = ExperimentConfig(scenarios=args.scenarios, trackers=args.trackers,
                               seeds=list(range(args.seed_start, args.seed_start + args.seeds)),
@@ -27,16 +34,114 @@ def _experiment(args) -> int:
                               static_distractors=not args.static_as_false,
                               plot_seed=None if args.no_plots else args.seed_start,
                               radar=radar, lidar=lidar)
+    for tracker in dict.fromkeys(t for t, _ in args.skipped):
+        print(f"ctxmodels experiment: {tracker} does not run on "
+              f"{', '.join(s for t, s in args.skipped if t == tracker)}; skipped there",
+              file=sys.stderr)
     print(f"ctxmodels experiment: {len(config.jobs())} runs "
           f"({len(args.scenarios)} scenarios × trackers × {args.seeds} seeds), "
           f"{args.duration:g} s each, {config.workers or 'all'} workers", file=sys.stderr)
-    results = run_experiment(config, progress=not args.quiet)
-    print(results.table_markdown())
-    paths = results.save(args.output)
-    if not args.no_plots:
-        paths.update(_draw(results, Path(args.output)))
-    print("\nwrote " + ", ".join(str(p) for p in paths.values()), file=sys.stderr)
+    folder = args.folder
+    results = None
+    try:
+        results = run_experiment(config, progress=not args.quiet)
+        print(results.table_markdown())
+        try:
+            with folder.staging() as stage:
+                staged = results.save(stage)
+                if not args.no_plots:
+                    staged.update(_draw(results, stage))
+                folder.commit(stage)
+        except OSError as err:  # e.g. a full disk: the previous outputs stay as they were
+            folder.discard()
+            print(f"ctxmodels experiment: cannot write to {folder.path}: {err}", file=sys.stderr)
+            return 1
+    except KeyboardInterrupt:
+        folder.discard()
+        done = (f"the results were written to {folder.path}" if folder.committed else
+                ("pending runs cancelled, " if results is None else "")
+                + f"nothing written to {folder.path}")
+        print(f"ctxmodels experiment: interrupted; {done}", file=sys.stderr)
+        return 130
+    except BaseException:
+        folder.discard()
+        raise
+    print("\nwrote " + ", ".join(str(folder.path / p.name) for p in staged.values()),
+          file=sys.stderr)
     return 0
+
+
+class OutputFolder:
+    """The experiment's --output folder. Checked (created, probe file written) before any
+    run; written only after every run has finished: the files are made in a hidden staging
+    folder inside it and then renamed into place. A run replaces the outputs of the previous
+    run in the folder — the files named in its manifest — and never touches other files."""
+
+    MANIFEST = ".ctxmodels-outputs.json"
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.created = check_writable_folder(self.path)
+        self.committed = False
+
+    def previous(self) -> set[str]:
+        """Names of the files the previous run wrote here (that still exist)."""
+        try:
+            names = json.loads((self.path / self.MANIFEST).read_text())["files"]
+        except FileNotFoundError:
+            # Written before manifests existed: ctxmodels' fixed names, if it left results.json.
+            names = _output_names() if (self.path / "results.json").is_file() else []
+        except (OSError, ValueError, KeyError, TypeError):
+            names = []  # unreadable manifest: delete nothing
+        if not isinstance(names, list):
+            return set()
+        # Plain names only: a manifest must not reach outside the folder.
+        return {n for n in names if isinstance(n, str) and n not in ("", ".", "..")
+                and Path(n).name == n and (self.path / n).is_file()}
+
+    @contextlib.contextmanager
+    def staging(self):
+        stage = Path(tempfile.mkdtemp(prefix=".ctxmodels-staging-", dir=self.path))
+        try:
+            yield stage
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
+
+    def commit(self, stage: Path) -> None:
+        from .experiment.executors import sigint_deferred, write_atomic
+        new = {p.name for p in stage.iterdir()}
+        old = self.previous()
+        manifest = self.path / self.MANIFEST
+        with sigint_deferred():  # a Ctrl-C now would mix two runs' files
+            # The manifest covers both runs while files move, so a crash loses track of none.
+            write_atomic(manifest, json.dumps({"files": sorted(old | new)}, indent=1))
+            for name in new:
+                os.replace(stage / name, self.path / name)
+            for name in old - new:
+                (self.path / name).unlink(missing_ok=True)
+            write_atomic(manifest, json.dumps({"files": sorted(new)}, indent=1))
+            self.committed = True
+
+    def discard(self) -> None:
+        """After a run that wrote nothing: remove the folder if this run created it."""
+        if self.created and not self.committed:
+            with contextlib.suppress(OSError):
+                self.path.rmdir()  # only when empty
+
+
+def _output_names() -> list[str]:
+    """Every file name ``ctxmodels experiment`` writes."""
+    from .experiment.scenarios import SCENARIOS
+    from .experiment.trackers import TRACKERS
+    names = ["results.md", "results.csv", "results.json"]
+    for scenario in SCENARIOS:
+        names += [f"coverage_{scenario}.png"] + [f"tracks_{scenario}_{t}.png" for t in TRACKERS]
+    return names
+
+
+def _check_experiment(args) -> None:
+    check_experiment(args)
+    args.folder = OutputFolder(args.output)  # last: no folder is created for a bad command
 
 
 def _simulated_sensors(args):
@@ -55,20 +160,6 @@ def _simulated_sensors(args):
     radar = dataclasses.replace(RadarConfig(), **radar_changes) if radar_changes else None
     lidar = dataclasses.replace(LidarConfig(), **lidar_changes) if lidar_changes else None
     return radar, lidar
-
-
-def _non_negative(text: str) -> float:
-    value = float(text)
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"expected a finite number ≥ 0, got {text!r}")
-    return value
-
-
-def _positive(text: str) -> float:
-    value = _non_negative(text)
-    if value == 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
-    return value
 
 
 def _draw(results, folder: Path) -> dict:
@@ -111,19 +202,21 @@ def _coverage(args) -> int:
     land = []
     if args.scenario:
         land = make_scenario(args.scenario, 0, 1.0).land
-    if args.model:
-        from stonesoup.serialise import YAML
-        models = {}
-        for file in args.model:
-            model = YAML().load(Path(file).read_text())
-            models[getattr(model, "name", "") or Path(file).stem] = model
-    else:
+    models = args.models  # loaded and checked by check_coverage
+    if models is None:
         models = paper_sensor_models(land=land)
         models = {name: models[name] for name in args.sensors}
     pose = (args.pose[0], args.pose[1], math.radians(args.pose[2]))
-    plot_coverage(args.output, models, pose, extents=args.extent, land=land,
-                  resolution=args.resolution, title=args.title)
-    print(f"wrote {args.output}", file=sys.stderr)
+    output = Path(args.output)
+    # Drawn beside the target, then renamed: an interrupted run leaves no truncated image.
+    partial = output.with_name(f".{output.stem}.{os.getpid()}.partial{output.suffix}")
+    try:
+        plot_coverage(partial, models, pose, extents=args.extent, land=land,
+                      resolution=args.resolution, title=args.title)
+        os.replace(partial, output)
+    finally:
+        partial.unlink(missing_ok=True)
+    print(f"wrote {output}", file=sys.stderr)
     return 0
 
 
@@ -141,6 +234,7 @@ def _list(args) -> int:
 
 def parser() -> argparse.ArgumentParser:
     from .experiment.scenarios import SCENARIOS
+    from .experiment.trackers import TRACKERS
     main = argparse.ArgumentParser(
         prog="ctxmodels",
         description="Context-aware sensor models for Stone Soup trackers: run the paper's "
@@ -158,19 +252,31 @@ def parser() -> argparse.ArgumentParser:
     exp.add_argument("--scenarios", nargs="+", default=list(SCENARIOS), choices=list(SCENARIOS),
                      metavar="NAME", help=f"scenarios to run (default: all of {list(SCENARIOS)})")
     exp.add_argument("--trackers", nargs="+", default=None, metavar="NAME",
+                     choices=list(TRACKERS) + ["all"],
                      help="trackers to compare, or 'all' (default: the paper's five and the "
-                          "line-of-sight GM-PHD; `ctxmodels list` names them all)")
-    exp.add_argument("--seeds", type=int, default=2, help="Monte Carlo seeds per scenario (default 2)")
-    exp.add_argument("--seed-start", type=int, default=0, help="first seed (default 0)")
-    exp.add_argument("--duration", type=float, default=60.0,
-                     help="seconds of each scenario to simulate (default 60, which keeps the "
-                          "default run within ~5 min on 2 cores). The scenarios are 480 s long; "
-                          "on 2 cores `--duration 480 --seeds 3` of the GM-PHD trackers takes "
-                          "~22 min, while one 480 s JPDA run alone takes over 15 min (it "
-                          "confirms hundreds of clutter tracks)")
-    exp.add_argument("--workers", type=int, default=None,
-                     help="parallel processes (default: one per core)")
-    exp.add_argument("--output", default="results", help="output folder (default ./results)")
+                          "line-of-sight GM-PHD; `ctxmodels list` names them all). Trackers "
+                          "run only on the scenarios they are made for (gmphd-sight needs the "
+                          "islands' land, the JPDAs run on the paper's two scenarios); a "
+                          "named tracker that fits none of --scenarios is an error")
+    exp.add_argument("--seeds", type=integer(1, MAX_SEEDS), default=2,
+                     help=f"Monte Carlo seeds per scenario, 1–{MAX_SEEDS} (default 2)")
+    exp.add_argument("--seed-start", type=integer(0), default=0,
+                     help="first seed, ≥ 0 (default 0)")
+    exp.add_argument("--duration", type=number(), default=60.0,
+                     help=f"seconds of each scenario to simulate, {MIN_DURATION:g} (one tick "
+                          "of the simulation's clock) up to the scenario's length (default 60, "
+                          "which keeps the default run within ~5 min on 2 cores). The "
+                          "scenarios are 480 s long; on 2 cores `--duration 480 "
+                          "--seeds 3` of the GM-PHD trackers takes ~22 min, while one 480 s "
+                          "JPDA run alone takes over 15 min (it confirms hundreds of clutter "
+                          "tracks)")
+    exp.add_argument("--workers", type=integer(1), default=None,
+                     help="parallel processes, ≥ 1 (default: one per core)")
+    exp.add_argument("--output", default="results",
+                     help="output folder, created if needed (default ./results). Written only "
+                          "when every run has finished; a run replaces the files the previous "
+                          "run wrote there (listed in its .ctxmodels-outputs.json) and leaves "
+                          "other files alone")
     exp.add_argument("--stock", action="store_true",
                      help="run the stock Stone Soup GM-PHD components instead of ctxmodels' "
                           "fast drop-ins (same results, slower; for verification)")
@@ -182,16 +288,22 @@ def parser() -> argparse.ArgumentParser:
     sim = exp.add_argument_group(
         "simulated sensors (sensitivity studies: these change the simulated truth only, "
         "never the trackers' models)")
-    sim.add_argument("--radar-clutter", nargs=2, type=_non_negative, metavar=("NEAR", "FAR"),
-                     default=None,
+    # Bounded so that the simulated scans (drawn up front) cannot exhaust memory.
+    sim.add_argument("--radar-clutter", nargs=2, type=number(0, MAX_RADAR_CLUTTER),
+                     metavar=("NEAR", "FAR"), default=None,
                      help="mean radar clutter returns per scan inside / beyond 1000 m (default "
                           "5 32, i.e. 1e-3 and 1e-2 per rad·m: the paper's context-aware λ; "
-                          "5 3.2 makes the uniform λ = 1e-3 true everywhere)")
-    sim.add_argument("--lidar-clutter", type=_non_negative, metavar="N", default=None,
-                     help="mean lidar clutter segments per scan within 80 m (default 3)")
-    sim.add_argument("--radar-bearing-std", type=_positive, metavar="DEG", default=None,
-                     help="radar bearing noise σ in degrees (default 1)")
-    exp.set_defaults(run=_experiment)
+                          "5 3.2 makes the uniform λ = 1e-3 true everywhere); each ≥ 0, "
+                          f"NEAR + FAR ≤ {MAX_RADAR_CLUTTER:g}")
+    sim.add_argument("--lidar-clutter", type=number(0, MAX_LIDAR_CLUTTER), metavar="N",
+                     default=None,
+                     help="mean lidar clutter segments per scan within 80 m (default 3; "
+                          f"0–{MAX_LIDAR_CLUTTER:g})")
+    sim.add_argument("--radar-bearing-std", type=number(0, MAX_BEARING_STD_DEG, above=True),
+                     metavar="DEG", default=None,
+                     help=f"radar bearing noise σ in degrees (default 1; > 0, ≤ "
+                          f"{MAX_BEARING_STD_DEG:g})")
+    exp.set_defaults(run=_experiment, check=_check_experiment, error=exp.error)
 
     cov = commands.add_parser(
         "coverage", help="draw a sensor model's P_D coverage map",
@@ -203,25 +315,39 @@ def parser() -> argparse.ArgumentParser:
                      help="SensorModel files (Stone Soup YAML) instead of the paper's models")
     cov.add_argument("--scenario", choices=list(SCENARIOS), default=None,
                      help="draw with this scenario's land (e.g. islands)")
-    cov.add_argument("--pose", nargs=3, type=float, default=(0.0, 0.0, 90.0),
+    cov.add_argument("--pose", nargs=3, type=number(-MAX_COORDINATE, MAX_COORDINATE),
+                     default=(0.0, 0.0, 90.0),
                      metavar=("X", "Y", "HEADING_DEG"),
                      help="platform pose: metres, metres, degrees counter-clockwise from +x "
                           "(default 0 0 90: facing +y)")
-    cov.add_argument("--extent", nargs="+", type=float, default=[1800.0, 100.0],
+    cov.add_argument("--extent", nargs="+", type=number(0, MAX_COORDINATE, above=True),
+                     default=[1800.0, 100.0],
                      help="half-widths of the maps in metres, one row each (default 1800 100)")
-    cov.add_argument("--resolution", type=int, default=400, help="grid points per side")
+    cov.add_argument("--resolution", type=integer(2, MAX_RESOLUTION), default=400,
+                     help=f"grid points per side, 2–{MAX_RESOLUTION} (default 400)")
     cov.add_argument("--title", default="", help="figure title")
-    cov.add_argument("--output", default="coverage.png", help="PNG file to write")
-    cov.set_defaults(run=_coverage)
+    cov.add_argument("--output", default="coverage.png",
+                     help="PNG file to write (its folder must exist)")
+    cov.set_defaults(run=_coverage, check=check_coverage, error=cov.error)
 
     lst = commands.add_parser("list", help="list the scenarios and trackers")
-    lst.set_defaults(run=_list)
+    lst.set_defaults(run=_list, check=lambda args: None, error=lst.error)
     return main
 
 
 def main(argv=None) -> int:
-    args = parser().parse_args(argv)
-    return args.run(args)
+    """Runs a command; returns its exit code. User errors exit with code 2 and a usage
+    message (SystemExit) before any work starts; Ctrl-C returns 130 without a traceback."""
+    try:
+        args = parser().parse_args(argv)
+        try:
+            args.check(args)
+        except UsageError as err:
+            args.error(str(err))
+        return args.run(args)
+    except KeyboardInterrupt:
+        print("ctxmodels: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":
