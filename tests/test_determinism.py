@@ -29,6 +29,7 @@ from ctxmodels.stonesoup import (MultiMeasurementInitiator, MultiTargetMixtureTr
                                  in_stable_order, in_track_order)
 from ctxmodels.stonesoup.ordering import track_key
 from test_stonesoup_jpda import MEASUREMENT, TRANSITION, tutorial_scans
+from test_stonesoup_jpda import _tracker as tutorial_tracker
 
 # One job per scenario (islands with the tracker the issue measured varying), one JPDA job.
 # Scores and a digest of every track state are compared: before the stable order, the JPDA
@@ -139,16 +140,11 @@ class StockInStableOrder(StockTracker):
 
 def _tracker(tracker_cls, initiator_cls, scans):
     predictor, updater = KalmanPredictor(TRANSITION), KalmanUpdater(MEASUREMENT)
-    initiator = initiator_cls(
-        prior_state=GaussianState(np.zeros((4, 1)), np.diag([0, 1, 0, 1])),
-        measurement_model=MEASUREMENT, deleter=UpdateTimeStepsDeleter(2),
-        data_associator=GNNWith2DAssignment(
-            DistanceHypothesiser(predictor, updater, Mahalanobis(), missed_distance=3)),
-        updater=updater, min_points=2)
     hypothesiser = PDAHypothesiser(predictor, updater, clutter_spatial_density=0.125,
                                    prob_detect=0.9)
-    return tracker_cls(initiator=initiator, deleter=UpdateTimeStepsDeleter(3), detector=scans,
-                       data_associator=JPDAwithEHM2(hypothesiser), updater=updater)
+    return tutorial_tracker(hypothesiser, UpdateTimeStepsDeleter(3), JPDAwithEHM2,
+                            detector=scans, tracker_cls=tracker_cls,
+                            initiator_cls=initiator_cls)
 
 
 def _states(track):

@@ -361,11 +361,12 @@ def test_bad_context_values_raise_naming_the_context(scans):
 
 # --- P_D = 0: the track is left alone ----------------------------------------------------------
 
-def _tracker(hypothesiser, deleter, associator=JPDA, detector=None, tracker_cls=None):
+def _tracker(hypothesiser, deleter, associator=JPDA, detector=None, tracker_cls=None,
+             initiator_cls=MultiMeasurementInitiator):
     """The tutorial's tracker: JPDA-type association, tracks started by a
     MultiMeasurementInitiator (GNN on Mahalanobis distance, two points)."""
     predictor, updater = hypothesiser.predictor, hypothesiser.updater
-    initiator = MultiMeasurementInitiator(
+    initiator = initiator_cls(
         prior_state=GaussianState(np.zeros((4, 1)), np.diag([0, 1, 0, 1])),
         measurement_model=MEASUREMENT,
         deleter=UpdateTimeStepsDeleter(2),
