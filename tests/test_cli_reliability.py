@@ -252,7 +252,21 @@ def test_folder_from_before_manifests_and_a_hostile_manifest(tmp_path):
     assert cli.OutputFolder(folder).previous() == set()
 
 
-def test_ctrl_c_while_outputs_move_in_leaves_one_complete_run(tmp_path, monkeypatch):
+def _default_sigint():
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+@pytest.fixture
+def sigint_raises():
+    """SIGINT raises KeyboardInterrupt in this process for the test, as in a terminal, also
+    when the suite was started with SIGINT ignored (a background job)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_while_outputs_move_in_leaves_one_complete_run(tmp_path, monkeypatch,
+                                                              sigint_raises):
     out = tmp_path / "out"
     out.mkdir()
     for name in ("results.md", "tracks_formation_jpda.png"):
@@ -338,8 +352,11 @@ def test_ctrl_c_stops_the_run(target, workers, previous, tmp_path):
     argv = [sys.executable, "-m", "ctxmodels.cli", "experiment", "--scenarios", "mixed-range",
             "--trackers", "gmphd-context", "--seeds", "8", "--duration", "120", "--workers",
             workers, "--no-plots", "--quiet", "--output", str(out)]
+    # Its own process group, as in a shell; SIGINT at its default disposition, as in a
+    # terminal (a job started in the background, as CI may start this suite, inherits
+    # SIGINT ignored, and Python then never raises KeyboardInterrupt).
     process = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               start_new_session=True)  # its own process group, as in a shell
+                               start_new_session=True, preexec_fn=_default_sigint)
     stderr: list[str] = []
     reader = threading.Thread(target=lambda: stderr.extend(process.stderr), daemon=True)
     reader.start()
