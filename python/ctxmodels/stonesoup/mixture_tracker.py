@@ -100,7 +100,7 @@ class MultiMeasurementInitiator(_StockMultiMeasurementInitiator):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._holding: dict[Track, None] = {}
+        self._holding: dict[Track, int] = {}  # holding track -> its number of points
 
     @property
     def holding_tracks(self) -> set[Track]:
@@ -109,7 +109,13 @@ class MultiMeasurementInitiator(_StockMultiMeasurementInitiator):
     @holding_tracks.setter
     def holding_tracks(self, tracks) -> None:
         # The stock constructor assigns an empty set; any assignment keeps a stable order.
-        self._holding = dict.fromkeys(in_track_order(tracks))
+        self._holding = {track: self._points(track) for track in in_track_order(tracks)}
+
+    def _counts(self, state) -> bool:
+        return not self.updates_only or isinstance(state, Update)
+
+    def _points(self, track) -> int:
+        return sum(1 for state in track.states if self._counts(state))
 
     def initiate(self, detections, timestamp, **kwargs) -> set[Track]:
         detections = in_stable_order(detections)
@@ -124,20 +130,23 @@ class MultiMeasurementInitiator(_StockMultiMeasurementInitiator):
             for track in holding:
                 hypothesis = associations[track]
                 if hypothesis:
-                    track.append(self.updater.update(hypothesis))
+                    state = self.updater.update(hypothesis)
                     associated.add(id(hypothesis.measurement))
                 else:
-                    track.append(hypothesis.prediction)
-                points = sum(1 for state in track
-                             if not self.updates_only or isinstance(state, Update))
+                    state = hypothesis.prediction
+                track.append(state)
+                # a running count of the track's points, not a walk over its states
+                points = self._holding[track] + self._counts(state)
                 if points >= self.min_points:
                     sure_tracks.add(track)
                     del self._holding[track]
+                else:
+                    self._holding[track] = points
             for track in self.deleter.delete_tracks(set(self._holding)):
                 del self._holding[track]
         remaining = [d for d in detections if id(d) not in associated]
         for track in in_track_order(self.initiator.initiate(remaining, timestamp)):
-            self._holding[track] = None
+            self._holding[track] = self._points(track)
         return sure_tracks
 
 
