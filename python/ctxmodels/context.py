@@ -53,29 +53,27 @@ def _state_of(hypothesis_or_state: Any):
 
 
 def _position_indices(model, position_mapping, i) -> list[int]:
-    """Which indices of ``model``'s state space hold x and y: ``position_mapping`` when the
-    model measures both of those indices, otherwise the first two indices it maps (Stone
-    Soup's models list position first). Raises when the model maps fewer than two."""
+    """The x/y indices of ``model``'s state space: ``position_mapping``, which the model must
+    map (measure) both of; anything else would read some other state entry as a position."""
     mapping = [int(m) for m in getattr(model, "mapping", ())]
     wanted = [int(m) for m in position_mapping]
     if all(m in mapping for m in wanted):
         return wanted
-    if len(mapping) >= 2:
-        return mapping[:2]
     raise ValueError(f"detections: detection {i}'s measurement model {type(model).__name__} "
-                     f"maps state indices {tuple(mapping)}; a world (x, y) position (needed "
-                     "for λ and births) needs a model that maps at least two")
+                     f"maps state indices {tuple(mapping)}, which do not include the sensor's "
+                     f"position_mapping {tuple(wanted)}; give the SensorModel the x/y indices "
+                     "of the state its detections' models measure")
 
 
 def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.ndarray:
     """World (x, y) of each detection, (M, 2), from each detection's *own* measurement
     model: through its ``inverse_function`` (bearing–range and other non-linear models) or
-    the pseudo-inverse of a linear model's matrix, read at that model's x/y indices —
-    ``position_mapping`` when the model maps both, else the first two indices the model
-    maps (so a 6-D model with ``mapping=(0, 3)`` gives x from index 0 and y from index 3).
-    A model that maps fewer than two indices, or a detection whose vector does not have the
-    model's ``ndim_meas`` rows, raises ValueError. Linear detections sharing a model are
-    converted in one matrix product."""
+    the pseudo-inverse of a linear model's matrix, read at the ``position_mapping`` indices
+    of that model's state space. A model that does not map both of those indices (a 6-D
+    model with ``mapping=(0, 3)`` against ``(0, 2)``, a 1-D model), or a detection whose
+    vector does not have the model's ``ndim_meas`` rows, raises ValueError: the state space
+    of the detections must be the one the sensor's ``position_mapping`` describes. Linear
+    detections sharing a model are converted in one matrix product."""
     positions = np.empty((len(detections), 2))
     linear_groups: dict[int, list[int]] = {}
     for i, det in enumerate(detections):
@@ -109,16 +107,36 @@ def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.nda
 
 def measured_ranges(detections: Sequence) -> np.ndarray:
     """Each detection's measured range from its sensor, (M,): the range element of a 2-D
-    bearing–range measurement (Stone Soup's :class:`CartesianToBearingRange`, which measures
-    from its ``translation_offset``), NaN for any other detection. λ's range bands read it
-    instead of the range of the detection's reconstructed position, whose polar → Cartesian
-    → range round trip can land an ulp on the wrong side of a band edge."""
+    bearing–range measurement (Stone Soup's :class:`CartesianToBearingRange`, measured from
+    its ``translation_offset``), NaN for any other detection."""
     ranges = np.full(len(detections), np.nan)
     for i, det in enumerate(detections):
         model = getattr(det, "measurement_model", None)
         if isinstance(model, CartesianToBearingRange) and len(model.mapping) == 2:
             ranges[i] = float(np.asarray(det.state_vector, dtype=np.float64).ravel()[1])
     return ranges
+
+
+#: How far (relative) a measured range may lie from the range of the detection's position
+#: from the context's pose and still be read as the same range: far above the round trip's
+#: ulps, far below any physical lever arm.
+_RANGE_AGREEMENT = 1e-9
+
+
+def ranges_for_bands(detections: Sequence, positions: np.ndarray, pose: Pose) -> np.ndarray:
+    """The ranges λ's range bands read, (M,): a detection's measured range
+    (:func:`measured_ranges`) where it agrees with the range of its position from ``pose``
+    to within a relative :data:`_RANGE_AGREEMENT` and is ≥ 0, NaN (use the position)
+    elsewhere. So a detection measured exactly on a band edge falls in the band that owns
+    the edge, instead of wherever the polar → Cartesian → range round trip (an ulp either
+    way) puts it; a detection measured from elsewhere (another lever arm) keeps the range
+    from the context's pose."""
+    measured = measured_ranges(detections)
+    from_pose = np.hypot(positions[:, 0] - pose.x, positions[:, 1] - pose.y)
+    with np.errstate(invalid="ignore"):
+        agree = (measured >= 0) & (np.abs(measured - from_pose)
+                                   <= _RANGE_AGREEMENT * np.maximum(1.0, from_pose))
+    return np.where(agree, measured, np.nan)
 
 
 def _particle_weights(weights, n: int) -> np.ndarray:
@@ -225,7 +243,7 @@ class DetectorContext(_UpstreamContext):
         ranges = None
         if clutter.uses_position:
             positions = detection_positions(detections, self.sensor_model.position_mapping)
-            ranges = measured_ranges(detections)
+            ranges = ranges_for_bands(detections, positions, self.pose)
         else:
             positions = np.zeros((len(detections), 2))
         return clutter.evaluate(self.pose, positions, [d.metadata for d in detections],

@@ -13,6 +13,7 @@ from stonesoup.types.state import ParticleState
 
 from ctxmodels import (ClutterDensityModel, DetectionProbabilityModel, Pose, RangeBands,
                        SensorModel, detection_positions, measured_ranges)
+from ctxmodels.context import ranges_for_bands
 
 RADAR = SensorModel(
     detection=DetectionProbabilityModel(factors=[RangeBands(edges=(50, 1612),
@@ -21,18 +22,30 @@ RADAR = SensorModel(
 CONTEXT = RADAR.context(Pose(x=0.0, y=0.0, heading=0.0), None)
 
 
-def test_lambda_reads_a_six_dimensional_models_own_mapping():
-    # state [x, vx, ax, y, vy, ay]: y is index 3, which the sensor's (0, 2) does not name
+def test_lambda_reads_positions_in_the_detection_models_state_space():
+    # state [x, vx, ax, y, vy, ay]: y is index 3. Against the sensor's default (0, 2), index
+    # 2 (ax) used to be read as y; now that is an error, and a sensor whose position_mapping
+    # names the 6-D state's x/y reads the model's own x and y.
     model = LinearGaussian(ndim_state=6, mapping=(0, 3), noise_covar=np.eye(2))
     near = Detection(np.array([[10.0], [900.0]]), measurement_model=model)  # r ≈ 900 m
     far = Detection(np.array([[10.0], [1100.0]]), measurement_model=model)  # r ≈ 1100 m
-    np.testing.assert_array_equal(detection_positions([near, far]),
+    with pytest.raises(ValueError, match=r"^detections: detection 0's measurement model "
+                                         r"LinearGaussian maps state indices \(0, 3\).*"
+                                         r"position_mapping \(0, 2\)"):
+        CONTEXT.clutter_spatial_density_detections([near, far])
+    six_d = SensorModel(detection=RADAR.detection, clutter=RADAR.clutter,
+                        position_mapping=(0, 3)).context(Pose(x=0.0, y=0.0, heading=0.0), None)
+    np.testing.assert_array_equal(detection_positions([near, far], (0, 3)),
                                   [[10.0, 900.0], [10.0, 1100.0]])
-    assert CONTEXT.clutter_spatial_density_detections([near, far]).tolist() == [1e-3, 1e-2]
-    # a 4-D model that maps the sensor's indices keeps them, whatever else it maps
+    assert six_d.clutter_spatial_density_detections([near, far]).tolist() == [1e-3, 1e-2]
+    # a model measuring more than position keeps the sensor's indices: x and y, not x and vx
     full = LinearGaussian(ndim_state=4, mapping=(0, 1, 2, 3), noise_covar=np.eye(4))
     det = Detection(np.array([[3.0], [-1.0], [1500.0], [2.0]]), measurement_model=full)
     np.testing.assert_array_equal(detection_positions([det]), [[3.0, 1500.0]])
+    # a velocity-only model has no position: an error, not (vx, vy)
+    velocity = LinearGaussian(ndim_state=4, mapping=(1, 3), noise_covar=np.eye(2))
+    with pytest.raises(ValueError, match="maps state indices \\(1, 3\\)"):
+        detection_positions([Detection(np.ones((2, 1)), measurement_model=velocity)])
 
 
 def test_lambda_of_a_one_dimensional_model_raises_naming_detections():
@@ -94,7 +107,48 @@ def test_bearing_range_detection_on_a_band_edge_uses_its_measured_range():
     assert context.clutter_spatial_density_detections([linear]).tolist() == [1e-2]
 
 
+def test_measured_range_is_read_only_where_it_agrees_with_the_context_pose():
+    """A bearing–range detection measured from another point (a lever arm the detection
+    model has and the context's pose lacks) keeps the range from the context's pose, and a
+    negative measured range (noise near the sensor) is never read as a range."""
+    context = RADAR.context(Pose(x=0.0, y=0.0, heading=0.0), None)
+    offset = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2),
+                                     translation_offset=np.array([[5.0], [0.0]]))
+    # 999 m from (5, 0) along +x is 1004 m from the context's pose: the far band
+    det = Detection(np.array([[0.0], [999.0]]), measurement_model=offset)
+    assert context.clutter_spatial_density_detections([det]).tolist() == [1e-2]
+    at_origin = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
+    negative = Detection(np.array([[0.0], [-3.0]]), measurement_model=at_origin)
+    assert np.isnan(ranges_for_bands([negative], detection_positions([negative]),
+                                     context.pose)[0])
+
+
 @pytest.mark.parametrize("ranges, message", [([np.inf], "infinite"), ([1.0, 2.0], "1 entries")])
 def test_bad_measured_ranges_raise_naming_ranges(ranges, message):
     with pytest.raises(ValueError, match=f"^ranges: .*{message}"):
         CONTEXT.clutter_spatial_density_array(np.zeros((1, 2)), [{}], ranges=np.array(ranges))
+
+
+def test_pda_lambda_of_a_detection_does_not_depend_on_the_other_detections():
+    """A detection without its own model (measured by the updater's model) used to send the
+    whole scan through another position rule that ignored measured ranges."""
+    from stonesoup.predictor.kalman import KalmanPredictor
+    from stonesoup.models.transition.linear import (CombinedLinearGaussianTransitionModel,
+                                                    ConstantVelocity)
+    from stonesoup.updater.kalman import ExtendedKalmanUpdater
+    from ctxmodels.stonesoup import PDAHypothesiser
+    pose = Pose(x=12.3, y=-45.6, heading=0.3)
+    context = RADAR.context(pose, None)
+    model = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2),
+                                    translation_offset=np.array([[12.3], [-45.6]]))
+    on_edge = [Detection(np.array([[b], [1000.0]]), measurement_model=model)
+               for b in np.linspace(-3.1, 3.1, 100)]
+    modelless = Detection(np.array([[0.5], [1000.0]]))  # the updater's model measures it
+    hypothesiser = PDAHypothesiser(
+        KalmanPredictor(CombinedLinearGaussianTransitionModel([ConstantVelocity(0.1)] * 2)),
+        ExtendedKalmanUpdater(measurement_model=model), clutter_spatial_density=1e-3,
+        prob_detect=0.9)
+    alone = hypothesiser._evaluate_clutter(context, on_edge)
+    mixed = hypothesiser._evaluate_clutter(context, on_edge + [modelless])
+    assert np.asarray(alone).tolist() == [1e-2] * 100
+    assert np.asarray(mixed).tolist() == [1e-2] * 101

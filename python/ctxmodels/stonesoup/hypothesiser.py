@@ -25,15 +25,13 @@ import numpy as np
 from stonesoup.functions import batch_multivariate_normal_logpdf
 from stonesoup.hypothesiser.probability import PDAHypothesiser as _StockPDAHypothesiser
 from stonesoup.measures import SquaredMahalanobis
-from stonesoup.models.base import LinearModel
-from stonesoup.types.detection import MissedDetection
+from stonesoup.types.detection import Detection, MissedDetection
 from stonesoup.types.hypothesis import SingleProbabilityHypothesis
 from stonesoup.types.multihypothesis import MultipleHypothesis
 from stonesoup.types.numeric import Probability
 from stonesoup.types.state import State, StateMutableSequence
 from stonesoup.types.update import Update
 
-from ..context import detection_positions
 
 
 def scan_context(detections, kwargs: dict):
@@ -181,30 +179,14 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         if clutter is None or not clutter.uses_position \
                 or all(det.measurement_model is not None for det in detections):
             return context.clutter_spatial_density_detections(detections)
-        # Detections without their own model are measured by the updater's model.
-        positions = self._positions(detections, context.sensor_model.position_mapping)
-        return context.clutter_spatial_density_array(positions,
-                                                     [det.metadata for det in detections])
-
-    def _positions(self, detections, mapping):
+        # Detections without their own model are measured by the updater's model: give
+        # them that model, so every detection's λ follows one rule (position and range).
         default = self.updater.measurement_model
-        positions = np.empty((len(detections), 2))
-        own = [i for i, det in enumerate(detections) if det.measurement_model is not None]
-        if own:
-            positions[own] = detection_positions([detections[i] for i in own], mapping)
-        for i, det in enumerate(detections):
-            if det.measurement_model is not None:
-                continue
-            if isinstance(default, LinearModel):
-                state = np.linalg.pinv(default.matrix()) @ np.asarray(det.state_vector)
-            elif hasattr(default, "inverse_function"):
-                state = default.inverse_function(State(det.state_vector))
-            else:
-                raise ValueError(f"detections: detection {i} has no measurement model and the "
-                                 f"updater's {type(default).__name__} cannot be inverted, so "
-                                 "its position (needed for λ) is unknown")
-            positions[i] = np.asarray(state, dtype=np.float64).ravel()[list(mapping)]
-        return positions
+        return context.clutter_spatial_density_detections([
+            det if det.measurement_model is not None else Detection(
+                det.state_vector, timestamp=det.timestamp, measurement_model=default,
+                metadata=det.metadata)
+            for det in detections])
 
     # --- P_D record for observability-aware deletion ---------------------------------------
     def _record(self, track, timestamp, prob_detect: float) -> None:
