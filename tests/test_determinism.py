@@ -187,3 +187,36 @@ def test_initiator_equals_stock_initiator():
             [_states(t) for t in in_track_order(stock.holding_tracks)]
         released += len(a)
     assert released >= 2
+
+
+def test_drop_ins_keep_the_stock_live_sets_and_nested_initiators():
+    """``tracks`` and ``holding_tracks`` are the live sets, as stock: what a user removes
+    stays removed; a stock initiator nested inside the drop-in gets a set, as stock."""
+    scans = tutorial_scans(seed=6, steps=12, clutter_max=3)
+    tracker = _tracker(MultiTargetMixtureTracker, MultiMeasurementInitiator, scans)
+    assert tracker.tracks is tracker._tracks
+    removed = None
+    for k, (_, tracks) in enumerate(tracker):
+        assert tracks is tracker.tracks and set(tracker.tracks_in_order) == tracks
+        if removed is None and tracks:
+            removed = next(iter(in_track_order(tracks)))
+            tracker.tracks.remove(removed)
+        assert removed not in tracker.tracks
+    assert removed is not None
+    holder = tracker.initiator
+    assert holder.holding_tracks is not None and isinstance(holder.holding_tracks, set)
+    # a stock M-of-N initiator as the inner one (it subtracts sets from what it is given)
+    predictor, updater = KalmanPredictor(TRANSITION), KalmanUpdater(MEASUREMENT)
+    inner = StockInitiator(prior_state=GaussianState(np.zeros((4, 1)), np.diag([0, 1, 0, 1])),
+                           measurement_model=MEASUREMENT, deleter=UpdateTimeStepsDeleter(2),
+                           data_associator=GNNWith2DAssignment(DistanceHypothesiser(
+                               predictor, updater, Mahalanobis(), missed_distance=3)),
+                           updater=updater, min_points=1)
+    outer = MultiMeasurementInitiator(
+        prior_state=inner.prior_state, measurement_model=MEASUREMENT,
+        deleter=UpdateTimeStepsDeleter(2), data_associator=inner.data_associator,
+        updater=updater, min_points=2, initiator=inner)
+    released = 0
+    for time, detections in scans:
+        released += len(outer.initiate(set(detections), time))
+    assert released > 0

@@ -36,42 +36,42 @@ from .ordering import in_stable_order, in_track_order
 
 
 class MultiTargetMixtureTracker(_StockMixtureTracker):
-    """:class:`stonesoup.tracker.simple.MultiTargetMixtureTracker` with tracks kept in
+    """:class:`stonesoup.tracker.simple.MultiTargetMixtureTracker` visiting its tracks in
     creation order and each scan's detections in value order (see the module docstring).
-    ``tracks`` is a ``set``, as stock; :attr:`tracks_in_order` lists them in creation
-    order."""
+    ``tracks`` is the live ``set``, as stock; :attr:`tracks_in_order` lists it in creation
+    order (tracks added to the set from outside join in
+    :func:`~ctxmodels.stonesoup.ordering.track_key` order)."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._ordered: dict[Track, None] = {}  # creation order (a dict keeps it)
-
-    @property
-    def tracks(self) -> set[Track]:
-        return set(self._ordered)
+        self._order: dict[Track, None] = {}  # creation order (a dict keeps it)
 
     @property
     def tracks_in_order(self) -> list[Track]:
-        """The live tracks in creation order (new tracks of one scan in
-        :func:`~ctxmodels.stonesoup.ordering.track_key` order)."""
-        return list(self._ordered)
+        live = self._tracks
+        order = dict.fromkeys(t for t in self._order if t in live)
+        order.update(dict.fromkeys(in_track_order(t for t in live if t not in order)))
+        self._order = order
+        return list(order)
 
     def __next__(self) -> tuple[datetime.datetime, set[Track]]:
         time, detections = next(self.detector_iter)
         detections = in_stable_order(detections)
-        tracks = list(self._ordered)
+        tracks = self.tracks_in_order
         associations = self.data_associator.associate(tracks, detections, time)
         taken = set()
         for track in tracks:
-            multihypothesis = associations[track]
+            multihypothesis = associations.get(track)
+            if multihypothesis is None:
+                continue  # stock updates the tracks the associator answered for
             track.append(self._posterior(multihypothesis))
             missed_weight = next(hyp.weight for hyp in multihypothesis if not hyp)
             taken.update(id(hyp.measurement) for hyp in multihypothesis
                          if hyp and hyp.weight > missed_weight)
-        for track in self.deleter.delete_tracks(set(tracks)):
-            self._ordered.pop(track, None)
-        unassociated = [d for d in detections if id(d) not in taken]
-        for track in in_track_order(self.initiator.initiate(set(unassociated), time)):
-            self._ordered[track] = None
+        self._tracks -= self.deleter.delete_tracks(self._tracks)
+        new = self.initiator.initiate({d for d in detections if id(d) not in taken}, time)
+        self._tracks |= new
+        self._order.update(dict.fromkeys(in_track_order(new)))
         return time, self.tracks
 
     def _posterior(self, multihypothesis):
@@ -92,30 +92,28 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
 
 
 class MultiMeasurementInitiator(_StockMultiMeasurementInitiator):
-    """:class:`stonesoup.initiator.simple.MultiMeasurementInitiator` with its holding tracks
-    kept in creation order and the detections in value order (see the module docstring).
+    """:class:`stonesoup.initiator.simple.MultiMeasurementInitiator` visiting its holding
+    tracks in creation order and the detections in value order (see the module docstring).
 
-    ``holding_tracks`` is a ``set``, as stock. A holding track is released (returned) once
-    it has ``min_points`` states (updates only, with ``updates_only``)."""
+    ``holding_tracks`` is the live ``set``, as stock. A holding track is released (returned)
+    once it has ``min_points`` states (updates only, with ``updates_only``), counted as
+    states are appended here rather than by walking the track at every scan (so states
+    added to a holding track from outside are not counted)."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._holding: dict[Track, int] = {}  # holding track -> its number of points
-
-    @property
-    def holding_tracks(self) -> set[Track]:
-        return set(self._holding)
-
-    @holding_tracks.setter
-    def holding_tracks(self, tracks) -> None:
-        # The stock constructor assigns an empty set; any assignment keeps a stable order.
-        self._holding = {track: self._points(track) for track in in_track_order(tracks)}
+        self._points: dict[Track, int] = {}  # holding track -> its points, creation order
 
     def _counts(self, state) -> bool:
         return not self.updates_only or isinstance(state, Update)
 
-    def _points(self, track) -> int:
-        return sum(1 for state in track.states if self._counts(state))
+    def _holding_in_order(self) -> list[Track]:
+        live = self.holding_tracks
+        points = {t: n for t, n in self._points.items() if t in live}
+        for track in in_track_order(t for t in live if t not in points):
+            points[track] = sum(1 for state in track.states if self._counts(state))
+        self._points = points
+        return list(points)
 
     def initiate(self, detections, timestamp, **kwargs) -> set[Track]:
         detections = in_stable_order(detections)
@@ -124,29 +122,28 @@ class MultiMeasurementInitiator(_StockMultiMeasurementInitiator):
                           if isinstance(d.measurement_model, (ReversibleModel, LinearModel))]
         sure_tracks = set()
         associated = set()
-        if self._holding:
-            holding = list(self._holding)
+        if self.holding_tracks:
+            holding = self._holding_in_order()
             associations = self.data_associator.associate(holding, detections, timestamp)
             for track in holding:
-                hypothesis = associations[track]
+                hypothesis = associations.get(track)
+                if hypothesis is None:
+                    continue  # stock updates the tracks the associator answered for
                 if hypothesis:
                     state = self.updater.update(hypothesis)
                     associated.add(id(hypothesis.measurement))
                 else:
                     state = hypothesis.prediction
                 track.append(state)
-                # a running count of the track's points, not a walk over its states
-                points = self._holding[track] + self._counts(state)
+                points = self._points[track] = self._points[track] + self._counts(state)
                 if points >= self.min_points:
                     sure_tracks.add(track)
-                    del self._holding[track]
-                else:
-                    self._holding[track] = points
-            for track in self.deleter.delete_tracks(set(self._holding)):
-                del self._holding[track]
-        remaining = [d for d in detections if id(d) not in associated]
-        for track in in_track_order(self.initiator.initiate(remaining, timestamp)):
-            self._holding[track] = self._points(track)
+                    self.holding_tracks.remove(track)
+            self.holding_tracks -= self.deleter.delete_tracks(self.holding_tracks)
+        new = self.initiator.initiate({d for d in detections if id(d) not in associated},
+                                      timestamp)
+        self.holding_tracks |= new
+        self._holding_in_order()  # counts the new tracks' points, in track_key order
         return sure_tracks
 
 

@@ -48,8 +48,8 @@ def _metadata_key(metadata) -> str:
 
 
 def detection_key(detection, _model_keys: dict | None = None) -> tuple:
-    """A sort key from a detection's values: measurement vector, metadata, measurement
-    model (type and Properties). Never its identity or memory address."""
+    """A sort key from a detection's values: time, type, measurement vector, metadata,
+    measurement model (type and Properties). Never its identity or memory address."""
     model = getattr(detection, "measurement_model", None)
     if _model_keys is None:
         model_key = "" if model is None else f"{type(model).__qualname__}{model!r}"
@@ -58,7 +58,9 @@ def detection_key(detection, _model_keys: dict | None = None) -> tuple:
         if model_key is None:
             model_key = _model_keys[id(model)] = \
                 "" if model is None else f"{type(model).__qualname__}{model!r}"
-    return (_vector_bytes(detection), _metadata_key(getattr(detection, "metadata", None)),
+    timestamp = getattr(detection, "timestamp", None)
+    return ("" if timestamp is None else timestamp.isoformat(), type(detection).__qualname__,
+            _vector_bytes(detection), _metadata_key(getattr(detection, "metadata", None)),
             model_key)
 
 
@@ -70,14 +72,37 @@ def in_stable_order(detections) -> OrderedDetections:
     return OrderedDetections(ordered, getattr(detections, "detector_context", None))
 
 
-def track_key(track) -> tuple:
-    """A sort key from a track's content: when and where it started, then its length and
-    last state. Never its identity or (random) ``id``."""
-    if len(track) == 0:
-        return (0,)
-    first, last = track.states[0], track.states[-1]
-    return (1, first.timestamp, _vector_bytes(first), len(track), last.timestamp,
-            _vector_bytes(last))
+class _TrackKey:
+    """Orders tracks by when and where they started, then length and last state, and only
+    on a tie there by every state's time and vector (rarely needed, so computed lazily)."""
+
+    __slots__ = ("track", "head")
+
+    def __init__(self, track):
+        self.track = track
+        if len(track) == 0:
+            self.head = (0,)
+        else:
+            first, last = track.states[0], track.states[-1]
+            self.head = (1, first.timestamp, _vector_bytes(first), len(track),
+                         last.timestamp, _vector_bytes(last))
+
+    def _all(self) -> list:
+        return [(str(s.timestamp), _vector_bytes(s)) for s in self.track.states]
+
+    def __lt__(self, other: "_TrackKey") -> bool:
+        if self.head != other.head:
+            return self.head < other.head
+        return self._all() < other._all()
+
+    def __eq__(self, other) -> bool:
+        return self.head == other.head and self._all() == other._all()
+
+
+def track_key(track) -> _TrackKey:
+    """A sort key from a track's content (never its identity or random ``id``): tracks with
+    equal keys hold the same states, so which comes first changes no number."""
+    return _TrackKey(track)
 
 
 def in_track_order(tracks: Iterable) -> list:
