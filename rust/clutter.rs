@@ -65,7 +65,10 @@ impl ClutterModel {
                     for v in [rule.below, rule.at_or_above].into_iter().chain(rule.missing) {
                         check_density(i, v)?;
                     }
-                    metadata_columns = metadata_columns.max(rule.column + 1);
+                    let columns = rule.column.checked_add(1).ok_or_else(|| {
+                        ModelError::invalid("column", format!("metadata column {} is out of range", rule.column))
+                    })?;
+                    metadata_columns = metadata_columns.max(columns);
                 }
             }
         }
@@ -194,6 +197,12 @@ impl ClutterModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_metadata_column_beyond_usize_is_an_error_not_an_overflow() {
+        let rule = MetadataThreshold { column: usize::MAX, threshold: 10.0, below: 1e-1, at_or_above: 1e-3, missing: None };
+        assert!(ClutterModel::new(vec![ClutterFactor::Metadata(rule)]).is_err());
+    }
 
     #[test]
     fn measured_ranges_take_the_place_of_the_position_range() {
