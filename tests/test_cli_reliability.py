@@ -201,6 +201,51 @@ def test_coverage_of_a_saved_sensor_model(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cov.png", "radar.yaml"]
 
 
+def test_coverage_refuses_two_models_of_one_name_and_bad_mathtext(tmp_path, capsys):
+    from stonesoup.serialise import YAML
+
+    from ctxmodels.experiment.sensors import paper_sensor_models
+    first, second = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    for path in (first, second):  # both hold the model named "radar"
+        path.write_text(YAML().dumps(paper_sensor_models()["radar"]))
+    png = tmp_path / "cov.png"
+    line = usage_error(["coverage", "--model", str(first), str(second), "--output", str(png)],
+                       capsys)
+    assert "argument --model" in line and "second model named 'radar'" in line
+    line = usage_error(["coverage", "--title", "$\\foo$", "--output", str(png)], capsys)
+    assert "argument --title" in line and "mathtext" in line
+    assert not png.exists()
+
+
+def test_an_early_interrupt_leaves_no_empty_output_folder(tmp_path, monkeypatch):
+    """Ctrl-C before any run started (while the jobs are listed): the folder this run
+    created is removed again."""
+    from ctxmodels.experiment import runner
+
+    def interrupted(self):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(runner.ExperimentConfig, "jobs", interrupted)
+    out = tmp_path / "fresh"
+    assert main(["experiment", *TINY, "--output", str(out)]) == 130
+    assert not out.exists()
+
+
+def test_a_ctrl_c_held_back_under_the_default_action_still_ends_the_process():
+    """sigint_deferred restores SIG_DFL and re-raises the held-back SIGINT: the process
+    dies of SIGINT instead of carrying on."""
+    code = ("import os, signal, time\n"
+            "from ctxmodels.experiment.executors import sigint_deferred\n"
+            "signal.signal(signal.SIGINT, signal.SIG_DFL)\n"
+            "with sigint_deferred():\n"
+            "    os.kill(os.getpid(), signal.SIGINT)\n"
+            "    time.sleep(0.2)\n"
+            "    print('held', flush=True)\n"
+            "print('carried on', flush=True)\n")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            timeout=60, preexec_fn=_default_sigint)
+    assert result.stdout == "held\n" and result.returncode == -signal.SIGINT
+
+
 def test_usage_error_from_the_console_command(tmp_path):
     # End to end through a real process: exit status 2, one message, no traceback.
     done = subprocess.run([sys.executable, "-m", "ctxmodels.cli", "experiment", "--duration",

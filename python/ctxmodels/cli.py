@@ -26,6 +26,15 @@ FIGURES = {
 
 
 def _experiment(args) -> int:
+    folder = args.folder
+    try:
+        return _run_experiment(args, folder)
+    except BaseException:
+        folder.discard()  # an early Ctrl-C or error leaves no empty output folder behind
+        raise
+
+
+def _run_experiment(args, folder) -> int:
     from .experiment.runner import ExperimentConfig, run_experiment
     radar, lidar = _simulated_sensors(args)
     config = ExperimentConfig(scenarios=args.scenarios, trackers=args.trackers,
@@ -41,7 +50,6 @@ def _experiment(args) -> int:
     print(f"ctxmodels experiment: {len(config.jobs())} runs "
           f"({len(args.scenarios)} scenarios × trackers × {args.seeds} seeds), "
           f"{args.duration:g} s each, {config.workers or 'all'} workers", file=sys.stderr)
-    folder = args.folder
     results = None
     try:
         results = run_experiment(config, progress=not args.quiet)

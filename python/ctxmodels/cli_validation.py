@@ -143,6 +143,14 @@ def check_coverage(args) -> None:
     if not output.parent.is_dir():
         raise UsageError(f"argument --output: folder {output.parent} does not exist")
     check_writable_folder(output.parent)
+    if "$" in args.title:  # matplotlib reads $...$ as mathtext, and fails only when drawing
+        from matplotlib.mathtext import MathTextParser
+        try:
+            MathTextParser("path").parse(args.title)
+        except Exception as err:
+            first = (str(err).strip().splitlines() or [type(err).__name__])[0]
+            raise UsageError(f"argument --title: not valid mathtext ({first}); "
+                             "escape a literal dollar as \\$") from None
 
 
 def load_models(files) -> dict:
@@ -167,5 +175,9 @@ def load_models(files) -> dict:
         if not isinstance(model, SensorModel):
             raise UsageError(f"argument --model: {file} holds a {type(model).__name__}, "
                              f"not a ctxmodels SensorModel")
-        models[model.name or Path(file).stem] = model
+        name = model.name or Path(file).stem
+        if name in models:
+            raise UsageError(f"argument --model: {file} holds a second model named {name!r}; "
+                             "each map needs its own name")
+        models[name] = model
     return models

@@ -67,8 +67,11 @@ def sigint_deferred():
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
-    if caught and callable(previous):
-        previous(signal.SIGINT, None)
+    if caught:
+        if callable(previous):
+            previous(signal.SIGINT, None)
+        elif previous == signal.SIG_DFL:
+            signal.raise_signal(signal.SIGINT)  # the default action, now that it is back
 
 
 def stop_now(executor: concurrent.futures.Executor) -> None:
