@@ -74,13 +74,11 @@ def _seconds(timestamps: Sequence[datetime.datetime], epoch: datetime.datetime) 
     return np.array([(t - epoch).total_seconds() for t in timestamps], dtype=np.float64)
 
 
-def _is_aware(t: datetime.datetime) -> bool:
-    """Whether `t` is timezone-aware (naive and aware datetimes cannot be compared)."""
-    return t.utcoffset() is not None
-
-
-def _kind(aware: bool) -> str:
-    return "timezone-aware" if aware else "naive"
+def time_kind(time) -> str | None:
+    """'naive' or 'timezone-aware' for a datetime (the two cannot be compared), else None."""
+    if isinstance(time, datetime.datetime):
+        return "timezone-aware" if time.utcoffset() is not None else "naive"
+    return None
 
 
 class NavigationTrack(PoseSource):
@@ -112,11 +110,11 @@ class NavigationTrack(PoseSource):
             raise ValueError("timestamps: a navigation track needs at least one entry")
         if not all(isinstance(t, datetime.datetime) for t in self.timestamps):
             raise TypeError("timestamps: must be datetime.datetime objects")
-        aware = [_is_aware(t) for t in self.timestamps]
-        if any(a != aware[0] for a in aware):
-            k = aware.index(not aware[0])
+        kinds = [time_kind(t) for t in self.timestamps]
+        if any(kind != kinds[0] for kind in kinds):
+            k = next(i for i, kind in enumerate(kinds) if kind != kinds[0])
             raise TypeError(f"timestamps: mixes naive and timezone-aware datetimes (entry 0 is "
-                            f"{_kind(aware[0])}, entry {k} is {_kind(aware[k])})")
+                            f"{kinds[0]}, entry {k} is {kinds[k]})")
         if self.positions.shape[0] != n or self.headings.shape[0] != n:
             raise ValueError(
                 f"positions/headings: need one row per timestamp ({n}), got "
@@ -131,9 +129,9 @@ class NavigationTrack(PoseSource):
     def pose_at(self, timestamp: datetime.datetime) -> Pose:
         if not isinstance(timestamp, datetime.datetime):
             raise TypeError(f"timestamp: expected a datetime, got {type(timestamp).__name__}")
-        if _is_aware(timestamp) != _is_aware(self.timestamps[0]):
-            raise TypeError(f"timestamp: {timestamp} is {_kind(_is_aware(timestamp))} but the "
-                            f"navigation track's timestamps are {_kind(_is_aware(self.timestamps[0]))}")
+        if time_kind(timestamp) != time_kind(self.timestamps[0]):
+            raise TypeError(f"timestamp: {timestamp} is {time_kind(timestamp)} but the "
+                            f"navigation track's timestamps are {time_kind(self.timestamps[0])}")
         seconds = self._cached("seconds", lambda: _seconds(self.timestamps, self.timestamps[0]))
         t = (timestamp - self.timestamps[0]).total_seconds()
         if t < 0 or t > seconds[-1]:

@@ -20,15 +20,8 @@ from stonesoup.feeder.base import DetectionFeeder
 from stonesoup.reader import Reader
 
 from ..context import DetectionSet
-from ..pose import PoseSource
+from ..pose import PoseSource, time_kind
 from ..sensor import SensorModel
-
-
-def _time_kind(time) -> str | None:
-    """'naive' or 'timezone-aware' for a datetime (the two cannot be compared), else None."""
-    if isinstance(time, datetime.datetime):
-        return "timezone-aware" if time.utcoffset() is not None else "naive"
-    return None
 
 
 class _FirstTime:
@@ -57,7 +50,7 @@ def _scans(source: Iterable, name: str, label: str = "",
         except (TypeError, ValueError):
             raise TypeError(f"{name}: each item must be a (time, detections) pair, "
                             f"got {item!r}") from None
-        kind = _time_kind(time)
+        kind = time_kind(time)
         if kind is not None:
             if first.kind is None:
                 first.kind, first.where = kind, f"{name}{label} at {time}"
