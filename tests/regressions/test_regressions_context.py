@@ -85,13 +85,18 @@ def test_good_particle_weights_give_the_weighted_mean():
     assert float(CONTEXT.prob_detection(state)) == pytest.approx(1.2 / 6, rel=1e-15)
 
 
+def _radar_at_edge_pose():
+    """The radar's context at a pose, and a bearing–range model measuring from it."""
+    context = RADAR.context(Pose(x=12.3, y=-45.6, heading=0.3), None)
+    model = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2),
+                                    translation_offset=np.array([[12.3], [-45.6]]))
+    return context, model
+
+
 def test_bearing_range_detection_on_a_band_edge_uses_its_measured_range():
     """Measured at exactly 1000 m (the radar's λ edge, owned by the far band): the polar →
     Cartesian → range round trip lands an ulp short for about a quarter of bearings."""
-    pose = Pose(x=12.3, y=-45.6, heading=0.3)
-    context = RADAR.context(pose, None)
-    model = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2),
-                                    translation_offset=np.array([[12.3], [-45.6]]))
+    context, model = _radar_at_edge_pose()
     detections = [Detection(np.array([[bearing], [1000.0]]), measurement_model=model)
                   for bearing in np.linspace(-3.1, 3.1, 400)]
     assert context.clutter_spatial_density_detections(detections).tolist() == [1e-2] * 400
@@ -137,10 +142,7 @@ def test_pda_lambda_of_a_detection_does_not_depend_on_the_other_detections():
                                                     ConstantVelocity)
     from stonesoup.updater.kalman import ExtendedKalmanUpdater
     from ctxmodels.stonesoup import PDAHypothesiser
-    pose = Pose(x=12.3, y=-45.6, heading=0.3)
-    context = RADAR.context(pose, None)
-    model = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2),
-                                    translation_offset=np.array([[12.3], [-45.6]]))
+    context, model = _radar_at_edge_pose()
     on_edge = [Detection(np.array([[b], [1000.0]]), measurement_model=model)
                for b in np.linspace(-3.1, 3.1, 100)]
     modelless = Detection(np.array([[0.5], [1000.0]]))  # the updater's model measures it
