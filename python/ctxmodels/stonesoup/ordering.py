@@ -59,7 +59,7 @@ def detection_key(detection, _model_keys: dict | None = None) -> tuple:
             model_key = _model_keys[id(model)] = \
                 "" if model is None else f"{type(model).__qualname__}{model!r}"
     timestamp = getattr(detection, "timestamp", None)
-    return ("" if timestamp is None else timestamp.isoformat(), type(detection).__qualname__,
+    return ("" if timestamp is None else str(timestamp), type(detection).__qualname__,
             _vector_bytes(detection), _metadata_key(getattr(detection, "metadata", None)),
             model_key)
 
