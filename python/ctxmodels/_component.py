@@ -158,6 +158,10 @@ _MAX_INDEX = 2**31
 
 def as_position_mapping(mapping: Any, name: str = "position_mapping") -> tuple[int, int]:
     """Two different non-negative integer column indices, as a tuple of ints."""
+    if type(mapping) is tuple and len(mapping) == 2 and type(mapping[0]) is int \
+            and type(mapping[1]) is int and 0 <= mapping[0] <= _MAX_INDEX \
+            and 0 <= mapping[1] <= _MAX_INDEX and mapping[0] != mapping[1]:
+        return mapping  # already canonical (a SensorModel's own): nothing to convert
     if isinstance(mapping, (str, bytes, Mapping)) or not isinstance(mapping, (Sequence, np.ndarray)):
         raise TypeError(f"{name}: expected two integer indices, got {mapping!r}")
     indices = tuple(mapping)
@@ -173,6 +177,9 @@ def as_array(array: Any, name: str, ndim: int, shape_text: str | None = None) ->
     """A C-contiguous, aligned float64 array of `ndim` dimensions from `array`, or a clear
     error naming it. Unaligned input (a view into a byte buffer) is copied: the core reads
     it as f64."""
+    if type(array) is np.ndarray and array.dtype == np.float64 and array.ndim == ndim \
+            and array.flags.c_contiguous and array.flags.aligned:
+        return array  # the common case, as np.require would return it: no checks to run
     try:
         values = np.asarray(array)
     except Exception as err:  # ragged lists and the like
