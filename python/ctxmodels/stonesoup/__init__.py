@@ -26,6 +26,9 @@
   content.
 * :class:`CachedCombinedLinearGaussianTransitionModel`: F(Δt), Q(Δt) computed once per
   scan interval.
+* :class:`AnalyticCartesianToBearingRange`: the stock bearing–range measurement model with
+  its exact Jacobian instead of a finite difference, so an extended Kalman filter's output
+  no longer depends on the last bit of its inputs.
 """
 from .birth import MeasurementDrivenBirth
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
@@ -35,6 +38,7 @@ from .fast_reducer import FastGaussianMixtureReducer
 from .fast_updater import FastLCCUpdater, FastPHDUpdater
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .hypothesiser import PDAHypothesiser
+from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracker
 from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
@@ -42,6 +46,7 @@ from .pointprocess import CircularRegion, LCCUpdater, PHDUpdater, PointProcessMu
 from .transition import CachedCombinedLinearGaussianTransitionModel
 
 __all__ = [
+    "AnalyticCartesianToBearingRange",
     "BernoulliParticleUpdater",
     "CachedCombinedLinearGaussianTransitionModel",
     "CircularRegion",
