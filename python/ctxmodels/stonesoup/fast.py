@@ -34,8 +34,11 @@ finite-difference Jacobian, reproduced operation for operation (step
 :math:`\delta_i = \max(10^8\,\mathrm{spacing}(x_i), 10^{-8})`, bearing differences wrapped to
 :math:`[-\pi, \pi)`): that Jacobian carries round-off of order :math:`10^{-8}`, so matching
 the stock filter to better than that needs the same floating-point operations, not an
-analytic Jacobian. Other models fall back to the stock updater's ``predict_measurement`` per
-component (still one call per component, not per pair).
+analytic Jacobian. For
+:class:`~ctxmodels.stonesoup.measurement.AnalyticCartesianToBearingRange` it is that model's
+closed-form Jacobian, computed for all components by the elementwise code the model runs for
+one (so bit for bit its ``jacobian``). Other models fall back to the stock updater's
+``predict_measurement`` per component (still one call per component, not per pair).
 
 Stacked ``matmul`` calls run the same BLAS kernel per matrix as the stock single-matrix
 products, so predicted means are bit-for-bit the stock ones.
@@ -57,6 +60,12 @@ from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.prediction import GaussianMeasurementPrediction, GaussianStatePrediction
 from stonesoup.types.state import CreatableFromState
 from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
+
+from .measurement import (
+    AnalyticCartesianToBearingRange,
+    bearing_range_jacobians,
+    rotated_offsets,
+)
 
 _TWO_PI = 2.0 * np.pi
 
@@ -328,6 +337,35 @@ def _bearing_range_batch(model, means, covars):
     return pred, innov, cross, jac
 
 
+def _bearing_range_prediction(rotated):
+    """(bearing, range) ``(N, 2)`` from sensor-frame points, with the stock function's
+    operations (``cart2pol``, then the wrap of the typed ``Bearing`` sum)."""
+    return np.stack([mod_bearing(0.0 + np.arctan2(rotated[:, 1], rotated[:, 0])),
+                     0.0 + np.sqrt(rotated[:, 0] ** 2 + rotated[:, 1] ** 2)], axis=1)
+
+
+def _analytic_bearing_range_batch(model, means, covars, timestamp):
+    """:class:`AnalyticCartesianToBearingRange`: the model's closed-form Jacobian for all
+    states at once (the same elementwise code its ``jacobian`` runs for one state); a state
+    at the sensor (ρ = 0) takes the model's own finite-difference fallback."""
+    ndim = means.shape[1]
+    x = means[..., 0]
+    rotation = model.rotation_matrix
+    if len(x):
+        rotated = rotated_offsets(rotation, model.mapping, model.translation_offset, x)
+    else:
+        rotated = np.empty((0, 3))
+    jac, at_sensor = bearing_range_jacobians(rotation, model.mapping, rotated, ndim)
+    for i in np.flatnonzero(at_sensor):
+        state = GaussianStatePrediction(means[i].view(StateVector),
+                                        covars[i].view(CovarianceMatrix), timestamp=timestamp)
+        jac[i] = model.jacobian(state)
+    pred = _bearing_range_prediction(rotated)
+    cross = covars @ jac.transpose(0, 2, 1)
+    innov = (jac @ cross) + np.asarray(model.covar(), dtype=np.float64)
+    return pred, innov, cross, jac
+
+
 def _angle_rows_of(vector) -> dict:
     rows = {}
     for row, value in enumerate(np.asarray(vector, dtype=object).ravel()):
@@ -353,6 +391,9 @@ def measurement_batch(updater, model, means: np.ndarray, covars: np.ndarray,
     if kind is ExtendedKalmanUpdater and type(model) is CartesianToBearingRange \
             and len(model.mapping) == 2:
         pred, innov, cross, jac = _bearing_range_batch(model, means, covars)
+        return MeasurementBatch(model, pred, innov, cross, jac, {0: Bearing}, None)
+    if kind is ExtendedKalmanUpdater and type(model) is AnalyticCartesianToBearingRange:
+        pred, innov, cross, jac = _analytic_bearing_range_batch(model, means, covars, timestamp)
         return MeasurementBatch(model, pred, innov, cross, jac, {0: Bearing}, None)
     objects = [updater.predict_measurement(
         GaussianStatePrediction(m.view(StateVector), c.view(CovarianceMatrix), timestamp=timestamp),

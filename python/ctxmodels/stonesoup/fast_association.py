@@ -47,7 +47,9 @@ transition model, detections with value equality. Tracks whose state is not a pl
 Gaussian (one whose prediction is a
 :class:`~stonesoup.types.prediction.GaussianStatePrediction`) are hypothesised by the stock
 hypothesiser, the rest batched. Measurement models other than linear Gaussian and (extended
-Kalman) bearing–range use the stock ``predict_measurement`` on the batched predictions.
+Kalman) bearing–range (the stock model or
+:class:`~ctxmodels.stonesoup.measurement.AnalyticCartesianToBearingRange`) use the stock
+``predict_measurement`` on the batched predictions.
 """
 from __future__ import annotations
 
@@ -85,6 +87,7 @@ from .fast import (
     vector_views,
     wrap_plan,
 )
+from .measurement import AnalyticCartesianToBearingRange
 
 #: Screening margin, relative to :math:`\sum |\delta_k S^+_{kl} \delta_l|` (see module doc).
 SCREEN_MARGIN = 1e-6
@@ -133,8 +136,11 @@ def _batchable_model(updater, model) -> bool:
         return False
     if type(model) is LinearGaussian:
         return True
-    return (kind is ExtendedKalmanUpdater and type(model) is CartesianToBearingRange
-            and len(model.mapping) == 2)
+    if kind is not ExtendedKalmanUpdater:
+        return False
+    if type(model) is AnalyticCartesianToBearingRange:
+        return True
+    return type(model) is CartesianToBearingRange and len(model.mapping) == 2
 
 
 class _Predictions:
