@@ -1,0 +1,136 @@
+use super::*;
+
+fn cv(dt: f64) -> (Vec<f64>, Vec<f64>) {
+    // constant velocity on [x, vx, y, vy], q = 1
+    let mut f = vec![0.0; 16];
+    let mut q = vec![0.0; 16];
+    for b in [0, 2] {
+        f[b * 4 + b] = 1.0;
+        f[b * 4 + b + 1] = dt;
+        f[(b + 1) * 4 + b + 1] = 1.0;
+        q[b * 4 + b] = dt.powi(3) / 3.0;
+        q[b * 4 + b + 1] = dt.powi(2) / 2.0;
+        q[(b + 1) * 4 + b] = dt.powi(2) / 2.0;
+        q[(b + 1) * 4 + b + 1] = dt;
+    }
+    (f, q)
+}
+
+fn diagonal(values: [f64; 4]) -> Vec<f64> {
+    let mut m = vec![0.0; 16];
+    for (i, v) in values.iter().enumerate() {
+        m[i * 4 + i] = *v;
+    }
+    m
+}
+
+fn position_model() -> MeasurementModel {
+    MeasurementModel::Linear { matrix: vec![1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], noise: vec![1.0, 0.0, 0.0, 1.0], ndim_meas: 2 }
+}
+
+fn params() -> UpdateParams {
+    UpdateParams { prob_survival: 1.0, gate: 3.0, squared: false, include_all: false, normalise: true, skip_undetectable: true, time: 7, force_symmetric: false }
+}
+
+#[test]
+fn prediction_is_f_x_and_f_p_ft_plus_q() {
+    let mut mixture = Mixture::new(4);
+    mixture.extend(&[1.0, 2.0, 3.0, -1.0], &diagonal([1.0; 4]), &[0.5], &[BIRTH], &[0]).unwrap();
+    let (f, q) = cv(2.0);
+    mixture.predict(&[0], &f, &q).unwrap();
+    assert_eq!(mixture.mean(0), &[5.0, 2.0, 1.0, -1.0]);
+    // var(x) = 1 + dt² + dt³/3
+    assert!((mixture.covar(0)[0] - (1.0 + 4.0 + 8.0 / 3.0)).abs() < 1e-12);
+}
+
+#[test]
+fn one_detection_gives_the_kalman_update_and_the_phd_weights() {
+    let mut mixture = Mixture::new(4);
+    let tag = mixture.reserve_tags(1);
+    mixture.extend(&[0.0, 0.0, 0.0, 0.0], &diagonal([1.0; 4]), &[0.8], &[tag], &[0]).unwrap();
+    mixture.update(&position_model(), &[1.0, 0.0], &[0.5], &[0.1], &params()).unwrap();
+    assert_eq!(mixture.len(), 2);
+    // S = 2 I, K = diag-ish 1/2 on positions: posterior x = 0.5, var 0.5
+    assert!((mixture.mean(0)[0] - 0.5).abs() < 1e-15);
+    assert!((mixture.covar(0)[0] - 0.5).abs() < 1e-15);
+    let q = (-0.25f64).exp() / (2.0 * std::f64::consts::PI * 2.0);
+    let detected = 0.5 * 0.8 * q;
+    assert!((mixture.weights[0] - detected / (detected + 0.1)).abs() < 1e-15);
+    assert!((mixture.weights[1] - 0.4).abs() < 1e-15);
+    assert_eq!(mixture.tags, vec![tag, tag]);
+    assert_eq!(mixture.times, vec![7, 7]);
+}
+
+#[test]
+fn births_get_fresh_tags_and_no_missed_term() {
+    let mut mixture = Mixture::new(4);
+    mixture.extend(&[0.0; 4], &diagonal([1.0; 4]), &[1e-4], &[BIRTH], &[0]).unwrap();
+    mixture.update(&position_model(), &[0.5, 0.5, 50.0, 50.0], &[1.0], &[1e-3, 1e-3], &params()).unwrap();
+    assert_eq!(mixture.len(), 1, "the far detection is not gated; the missed birth is dropped");
+    assert_ne!(mixture.tags[0], BIRTH);
+}
+
+#[test]
+fn undetectable_components_keep_their_weight() {
+    let mut mixture = Mixture::new(4);
+    let tag = mixture.reserve_tags(1);
+    mixture.extend(&[0.0; 4], &diagonal([1.0; 4]), &[0.9], &[tag], &[0]).unwrap();
+    mixture.update(&position_model(), &[0.1, 0.1], &[0.0], &[1e-3], &params()).unwrap();
+    assert_eq!(mixture.weights, vec![0.9]);
+}
+
+#[test]
+fn reduce_prunes_merges_and_renames_shared_tags() {
+    let mut mixture = Mixture::new(4);
+    let tag = mixture.reserve_tags(2);
+    let means = [0.0, 0.0, 0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 100.0, 0.0, 0.0, 0.0, 200.0, 0.0, 0.0, 0.0];
+    let mut covars = diagonal([1.0; 4]);
+    for _ in 0..3 {
+        covars.extend(diagonal([1.0; 4]));
+    }
+    mixture.extend(&means, &covars, &[0.6, 0.3, 0.2, 1e-9], &[tag, tag, tag, tag + 1], &[0; 4]).unwrap();
+    let params = ReduceParams { pruning: true, prune_threshold: 1e-6, merging: true, merge_threshold: 16.0, truncating: true, max_components: usize::MAX, max_distance: None };
+    mixture.reduce(&params).unwrap();
+    assert_eq!(mixture.len(), 2);
+    let share = 1e-9 / 3.0;
+    assert!((mixture.weights[0] - (0.9 + 2.0 * share)).abs() < 1e-15);
+    assert!((mixture.mean(0)[0] - 0.1 * (0.3 + share) / (0.9 + 2.0 * share)).abs() < 1e-15);
+    assert_eq!(mixture.tags[0], tag);
+    assert!(mixture.tags[1] > tag + 1, "the lighter component sharing the tag gets a fresh one");
+}
+
+#[test]
+fn truncate_keeps_the_heaviest() {
+    let mut mixture = Mixture::new(1);
+    let tag = mixture.reserve_tags(3);
+    mixture.extend(&[0.0, 10.0, 20.0], &[1.0, 1.0, 1.0], &[0.2, 0.5, 0.3], &[tag, tag + 1, tag + 2], &[0; 3]).unwrap();
+    let params = ReduceParams { pruning: false, prune_threshold: 0.0, merging: false, merge_threshold: 16.0, truncating: true, max_components: 2, max_distance: None };
+    mixture.reduce(&params).unwrap();
+    assert_eq!(mixture.tags, vec![tag + 1, tag + 2]);
+    assert!((mixture.weights[0] - 0.6).abs() < 1e-15);
+}
+
+#[test]
+fn bad_inputs_name_the_argument() {
+    let mut mixture = Mixture::new(4);
+    mixture.extend(&[0.0; 4], &diagonal([1.0; 4]), &[0.5], &[BIRTH], &[0]).unwrap();
+    let err = mixture.update(&position_model(), &[0.0, 0.0], &[1.5], &[0.1], &params()).unwrap_err();
+    assert_eq!(err.argument(), "prob_detection");
+    let err = mixture.update(&position_model(), &[0.0, f64::NAN], &[0.5], &[0.1], &params()).unwrap_err();
+    assert_eq!(err.argument(), "detections");
+    let err = mixture.extend(&[f64::NAN; 4], &diagonal([1.0; 4]), &[0.5], &[BIRTH], &[0]).unwrap_err();
+    assert_eq!(err.argument(), "means");
+    let err = mixture.predict(&[1], &cv(1.0).0, &cv(1.0).1).unwrap_err();
+    assert_eq!(err.argument(), "group");
+}
+
+#[test]
+fn a_scan_without_detections_keeps_only_missed_terms() {
+    let mut mixture = Mixture::new(4);
+    let tag = mixture.reserve_tags(1);
+    mixture.extend(&[0.0; 8], &[diagonal([1.0; 4]), diagonal([1.0; 4])].concat(), &[0.5, 1e-4], &[tag, BIRTH], &[0, 0]).unwrap();
+    let empty = MeasurementModel::Linear { matrix: vec![0.0; 4], noise: vec![1.0], ndim_meas: 1 };
+    mixture.update(&empty, &[], &[0.4, 0.4], &[], &params()).unwrap();
+    assert_eq!(mixture.tags, vec![tag]);
+    assert!((mixture.weights[0] - 0.3).abs() < 1e-15);
+}

@@ -1,0 +1,232 @@
+//! The GM-PHD measurement update of one scan (see the module docs of [`super`]).
+
+use super::linalg::{general_inverse_into, matmul, matmul_bt, matvec, quadratic_form, spd_inverse_into, symmetric_product};
+use super::measurement::MeasurementModel;
+use super::{Mixture, BIRTH};
+use crate::error::{ModelError, Result};
+
+/// The settings of the stock components that take part in the update.
+#[derive(Debug, Clone, Copy)]
+pub struct UpdateParams {
+    /// `PHDUpdater.prob_survival` (applied to every non-birth term).
+    pub prob_survival: f64,
+    /// `DistanceHypothesiser.missed_distance`: a pair is gated when its distance is below it.
+    pub gate: f64,
+    /// The gate measures the squared Mahalanobis distance (`SquaredMahalanobis`).
+    pub squared: bool,
+    /// `DistanceHypothesiser.include_all`: every pair is gated.
+    pub include_all: bool,
+    /// `PHDUpdater.normalisation`.
+    pub normalise: bool,
+    /// A pair whose component has `P_D = 0` makes no term (the context-aware updater);
+    /// otherwise it makes a zero-weight one, as the stock updater does.
+    pub skip_undetectable: bool,
+    /// Time given to every updated component (the scan's).
+    pub time: i64,
+    /// The Kalman updater's `force_symmetric_covariance`: posteriors `(P + Pᵀ) / 2`.
+    pub force_symmetric: bool,
+}
+
+/// Per-component measurement prediction.
+///
+/// Round-off makes covariances slightly non-symmetric, and the standard-form update can grow
+/// that asymmetry; the stock semantics are kept for such matrices too: the gate and the gain
+/// use the plain inverse of `S` (NumPy's `inv`), the likelihood reads `S`'s lower triangle
+/// (SciPy's `eigh`).
+struct Linearised {
+    predicted: Vec<f64>,   // N×m
+    inverse: Vec<f64>,     // N×m×m, S⁻¹
+    symmetric_inverse: Vec<f64>, // N×m×m, the inverse of S's lower triangle, mirrored
+    log_det: Vec<f64>,     // N, of S's lower triangle; NaN: not positive definite
+    gain: Vec<f64>,        // N×D×m, K = P Hᵀ S⁻¹
+    posterior: Vec<f64>,   // N×D×D, P − K S Kᵀ (symmetrised on request)
+}
+
+fn linearise(mixture: &Mixture, model: &MeasurementModel, force_symmetric: bool) -> Result<Linearised> {
+    let (n, d, m) = (mixture.len(), mixture.ndim, model.ndim_meas());
+    let mut out = Linearised {
+        predicted: vec![0.0; n * m],
+        inverse: vec![0.0; n * m * m],
+        symmetric_inverse: vec![0.0; n * m * m],
+        log_det: vec![0.0; n],
+        gain: vec![0.0; n * d * m],
+        posterior: vec![0.0; n * d * d],
+    };
+    let noise = model.noise();
+    let mut h = vec![0.0; m * d];
+    let mut cross = vec![0.0; d * m];
+    let mut innovation = vec![0.0; m * m];
+    let mut gain_s = vec![0.0; d * m];
+    let mut correction = vec![0.0; d * d];
+    let mut scratch = vec![0.0; 2 * m * m.max(1)];
+    for i in 0..n {
+        let x = mixture.mean(i);
+        let p = mixture.covar(i);
+        model.linearise(x, &mut out.predicted[i * m..(i + 1) * m], &mut h);
+        matmul_bt(p, &h, d, d, m, &mut cross); // P Hᵀ
+        matmul(&h, &cross, m, d, m, &mut innovation); // H (P Hᵀ)
+        for k in 0..m * m {
+            innovation[k] += noise[k];
+        }
+        let symmetric_inverse = &mut out.symmetric_inverse[i * m * m..(i + 1) * m * m];
+        // not positive definite: only a gated pair, whose likelihood needs the
+        // determinant, is an error (see `update`)
+        out.log_det[i] = spd_inverse_into(&innovation, m, symmetric_inverse, &mut scratch).unwrap_or(f64::NAN);
+        let inverse = &mut out.inverse[i * m * m..(i + 1) * m * m];
+        let symmetric = (0..m).all(|r| (0..r).all(|c| innovation[r * m + c] == innovation[c * m + r]));
+        if symmetric && !out.log_det[i].is_nan() {
+            inverse.copy_from_slice(symmetric_inverse);
+        } else {
+            general_inverse_into(&innovation, m, inverse, &mut scratch);
+        }
+        let gain = &mut out.gain[i * d * m..(i + 1) * d * m];
+        matmul(&cross, inverse, d, m, m, gain);
+        matmul(gain, &innovation, d, m, m, &mut gain_s); // K S
+        symmetric_product(&gain_s, gain, d, m, &mut correction); // (K S) Kᵀ
+        let posterior = &mut out.posterior[i * d * d..(i + 1) * d * d];
+        for (k, value) in posterior.iter_mut().enumerate() {
+            *value = p[k] - correction[k];
+        }
+        if force_symmetric {
+            // (P + Pᵀ) / 2, as Stone Soup's force_symmetric_covariance
+            for r in 0..d {
+                for c in 0..r {
+                    let mean = (posterior[r * d + c] + posterior[c * d + r]) / 2.0;
+                    posterior[r * d + c] = mean;
+                    posterior[c * d + r] = mean;
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn check_inputs(mixture: &Mixture, model: &MeasurementModel, detections: &[f64], prob_detection: &[f64], clutter: &[f64], params: &UpdateParams) -> Result<usize> {
+    model.validate(mixture.ndim)?;
+    let m = model.ndim_meas();
+    if detections.len() % m != 0 {
+        return Err(ModelError::shape("detections", format!("expected rows of {m} values")));
+    }
+    let count = detections.len() / m;
+    if let Some(row) = (0..count).find(|&j| !detections[j * m..(j + 1) * m].iter().all(|v| v.is_finite())) {
+        return Err(ModelError::non_finite("detections", row, "measurement vectors must be finite"));
+    }
+    if prob_detection.len() != mixture.len() {
+        return Err(ModelError::shape("prob_detection", format!("expected one value per component ({}), got {}", mixture.len(), prob_detection.len())));
+    }
+    if let Some(row) = prob_detection.iter().position(|p| !(0.0..=1.0).contains(p)) {
+        return Err(ModelError::invalid("prob_detection", format!("row {row} is not a probability in [0, 1]: {}", prob_detection[row])));
+    }
+    if clutter.len() != count {
+        return Err(ModelError::shape("clutter", format!("expected one value per detection ({count}), got {}", clutter.len())));
+    }
+    if let Some(row) = clutter.iter().position(|c| !c.is_finite() || *c < 0.0) {
+        return Err(ModelError::invalid("clutter", format!("row {row} must be finite and >= 0, got {}", clutter[row])));
+    }
+    if !(params.prob_survival.is_finite() && (0.0..=1.0).contains(&params.prob_survival)) {
+        return Err(ModelError::invalid("prob_survival", format!("must be a probability in [0, 1], got {}", params.prob_survival)));
+    }
+    if params.gate.is_nan() {
+        return Err(ModelError::invalid("missed_distance", "must not be NaN"));
+    }
+    Ok(count)
+}
+
+impl Mixture {
+    /// Replaces the (predicted) mixture by its update with the detections of one scan:
+    /// `detections` (M×m, bearings as floats), `prob_detection` per component, `clutter`
+    /// (λ) per detection.
+    pub fn update(&mut self, model: &MeasurementModel, detections: &[f64], prob_detection: &[f64], clutter: &[f64], params: &UpdateParams) -> Result<()> {
+        let count = check_inputs(self, model, detections, prob_detection, clutter, params)?;
+        let (n, d, m) = (self.len(), self.ndim, model.ndim_meas());
+        // (no detections: only the missed-detection terms, nothing to linearise)
+        let lin = if count > 0 { linearise(self, model, params.force_symmetric)? } else { linearise(&Mixture::new(d), model, false)? };
+
+        // The gate, pair by pair: d(ẑ, z) with ẑ − z wrapped, as the stock measure takes it.
+        let mut gated: Vec<Vec<usize>> = vec![Vec::new(); count];
+        let mut delta = vec![0.0; m];
+        for i in 0..if count > 0 { n } else { 0 } {
+            let predicted = &lin.predicted[i * m..(i + 1) * m];
+            let inverse = &lin.inverse[i * m * m..(i + 1) * m * m];
+            for (j, members) in gated.iter_mut().enumerate() {
+                if !params.include_all {
+                    model.difference(predicted, &detections[j * m..(j + 1) * m], &mut delta);
+                    let squared = quadratic_form(inverse, &delta, m);
+                    let distance = if params.squared { squared } else { squared.sqrt() };
+                    if !(distance < params.gate) {
+                        continue;
+                    }
+                }
+                members.push(i);
+            }
+        }
+
+        let mut out = Mixture { ndim: d, next_tag: self.next_tag, ..Default::default() };
+        let log_norm = m as f64 * (2.0 * std::f64::consts::PI).ln();
+        let mut raw = vec![0.0; m];
+        let mut innovation = vec![0.0; m];
+        let mut correction = vec![0.0; d];
+        for (j, members) in gated.iter().enumerate() {
+            let z = &detections[j * m..(j + 1) * m];
+            let first = out.len();
+            let mut weight_sum = 0.0;
+            for &i in members {
+                let pd = prob_detection[i];
+                if params.skip_undetectable && pd == 0.0 {
+                    continue;
+                }
+                if lin.log_det[i].is_nan() {
+                    return Err(ModelError::invalid(
+                        "measurement_model",
+                        format!("the innovation covariance of component {i} is not positive definite, so detection {j}'s likelihood is undefined (its covariance has lost positive definiteness)"),
+                    ));
+                }
+                let predicted = &lin.predicted[i * m..(i + 1) * m];
+                let inverse = &lin.symmetric_inverse[i * m * m..(i + 1) * m * m];
+                // N(z; ẑ, S) on the plain values (the stock pdf sees floats: no wrap)
+                for k in 0..m {
+                    raw[k] = z[k] - predicted[k];
+                }
+                let likelihood = (-0.5 * (log_norm + lin.log_det[i] + quadratic_form(inverse, &raw, m))).exp();
+                // p_S applies to detected births too: the stock hypothesiser hands their
+                // detection hypotheses predictions with a fresh tag, not the birth tag
+                let weight = pd * self.weights[i] * likelihood * params.prob_survival;
+                weight_sum += weight;
+                // Kalman posterior with the wrapped innovation z − ẑ
+                model.difference(z, predicted, &mut innovation);
+                matvec(&lin.gain[i * d * m..(i + 1) * d * m], &innovation, d, m, &mut correction);
+                let x = self.mean(i);
+                out.means.extend(x.iter().zip(&correction).map(|(a, b)| a + b));
+                out.covars.extend_from_slice(&lin.posterior[i * d * d..(i + 1) * d * d]);
+                out.weights.push(weight);
+                let tag = if self.tags[i] == BIRTH { out.fresh_tag() } else { self.tags[i] };
+                out.tags.push(tag);
+                out.times.push(params.time);
+            }
+            if params.normalise {
+                let normaliser = weight_sum + clutter[j];
+                for weight in &mut out.weights[first..] {
+                    *weight /= normaliser;
+                }
+            }
+        }
+        for i in 0..n {
+            if self.tags[i] == BIRTH {
+                continue;
+            }
+            out.means.extend_from_slice(self.mean(i));
+            out.covars.extend_from_slice(self.covar(i));
+            out.weights.push(self.weights[i] * (1.0 - prob_detection[i]) * 1.0 * params.prob_survival);
+            out.tags.push(self.tags[i]);
+            out.times.push(params.time);
+        }
+        // As stock: no zero weights (the reducer would divide by them).
+        for weight in &mut out.weights {
+            if *weight == 0.0 {
+                *weight = f64::EPSILON;
+            }
+        }
+        *self = out;
+        Ok(())
+    }
+}
