@@ -8,7 +8,7 @@ another call is writing, is a ``ValueError`` naming ``out``. ``order`` must be i
 every rule.
 """
 from collections.abc import Sequence
-from typing import Literal, TypeAlias, final
+from typing import Any, Literal, TypeAlias, final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -17,10 +17,12 @@ __all__ = [
     "AngularSector",
     "ClutterModel",
     "DetectionModel",
+    "GaussianMixtureArrays",
     "LandMask",
     "LineOfSight",
     "MetadataThreshold",
     "RangeBands",
+    "ScanMeasurementModel",
     "mount",
     "rule_points",
 ]
@@ -141,3 +143,105 @@ def mount(pose: _Pose, forward: float, left: float, yaw: float) -> _Pose:
 
 def rule_points(rule: _Rule, order: int = 3) -> tuple[list[tuple[float, float]], list[float]]:
     """Points and weights of an integration rule in standard-normal space."""
+
+# --- GM-PHD scan core (rust/gmphd, binding rust/python/mixture.rs) -----------------------
+
+@final
+class ScanMeasurementModel:
+    """A measurement model the scan core can linearise."""
+
+    @staticmethod
+    def linear(matrix: _Floats, noise: _Floats) -> ScanMeasurementModel:
+        """`z = H x + v`, `v ~ N(0, R)`: `matrix` (m, D), `noise` (m, m)."""
+    @staticmethod
+    def bearing_range(
+        mapping: tuple[int, int],
+        offset: tuple[float, float],
+        rotation: _Floats,
+        noise: _Floats,
+        analytic: bool,
+    ) -> ScanMeasurementModel:
+        """Bearing–range of the state's `mapping` (x, y) seen from `offset` (x, y) through the
+        3×3 `rotation`; `noise` (2, 2); `analytic`: closed-form Jacobian, else Stone Soup's
+        finite difference."""
+    @property
+    def ndim_meas(self) -> int: ...
+
+@final
+class GaussianMixtureArrays:
+    """Gaussian components as arrays, updated scan by scan in place (see `ctxmodels.gmphd`)."""
+
+    def __new__(cls, ndim: int) -> GaussianMixtureArrays: ...
+    def __len__(self) -> int: ...
+    @property
+    def ndim(self) -> int: ...
+    @property
+    def next_tag(self) -> int: ...
+    def reserve_tags(self, count: int) -> int:
+        """`count` fresh tags; returns the first."""
+    def extend(
+        self,
+        means: _Floats,
+        covars: _Floats,
+        weights: _Floats,
+        tags: Sequence[int],
+        times: Sequence[int],
+    ) -> None:
+        """Appends components: `means` (N, D), `covars` (N, D, D), `weights` (N,), `tags`
+        (0 = birth, others reserved), `times` (integer clock)."""
+    def distinct_times(self) -> list[int]:
+        """The distinct component times, ascending."""
+    def predict(
+        self, from_times: Sequence[int], now: int, transitions: _Floats, noises: _Floats
+    ) -> None:
+        """Kalman prediction to `now`: components stamped `from_times[g]` use
+        `transitions[g]`, `noises[g]`; all then take the time `now`."""
+    def update(
+        self,
+        model: ScanMeasurementModel,
+        detections: _Floats,
+        prob_detection: _Floats,
+        clutter: _Floats,
+        *,
+        prob_survival: float,
+        missed_distance: float,
+        squared: bool,
+        include_all: bool,
+        normalise: bool,
+        skip_undetectable: bool,
+        time: int,
+        force_symmetric: bool = False,
+    ) -> None:
+        """The GM-PHD update with one scan's `detections` (M, m), `prob_detection` per
+        component and `clutter` (λ) per detection."""
+    def retain(self, keep: Sequence[bool]) -> None:
+        """Keeps the components whose flag is true."""
+    def retain_inside_circle(
+        self, position_mapping: tuple[int, int], centre: tuple[float, float], radius: float
+    ) -> None:
+        """Keeps the components whose `position_mapping` x/y lies in the disc of `radius`
+        around `centre` (boundary included)."""
+    def take_from(self, other: GaussianMixtureArrays, take: Sequence[bool]) -> None:
+        """Moves the components of `other` whose flag in `take` is true to the end of this
+        mixture, in order; the others stay in `other`."""
+    def retain_position_std(self, position_mapping: tuple[int, int], max_std: float) -> None:
+        """Keeps the components with `√(tr P_xy / 2) ≤ max_std`."""
+    def reduce(
+        self,
+        *,
+        pruning: bool,
+        prune_threshold: float,
+        merging: bool,
+        merge_threshold: float,
+        truncating: bool,
+        max_components: int,
+        kdtree_max_distance: float | None = None,
+    ) -> None:
+        """Prune, merge (and make tags unique), truncate, as `GaussianMixtureReducer`."""
+    def means(self) -> _Floats: ...
+    def covars(self) -> _Floats: ...
+    def weights(self) -> _Floats: ...
+    def tags(self) -> NDArray[np.uint64]: ...
+    def times(self) -> NDArray[np.int64]: ...
+    def __reduce__(self) -> tuple[Any, ...]: ...
+    def __setstate__(self, state: tuple[Any, ...]) -> None: ...

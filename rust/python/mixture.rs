@@ -1,0 +1,238 @@
+//! Binding of the GM-PHD scan core ([`crate::gmphd`]): a mutable Gaussian mixture kept as
+//! arrays between scans, and the measurement models it updates with.
+
+use super::{borrow, detached, slice, value_error};
+use crate::gmphd::{Jacobian, MeasurementModel, Mixture, ReduceParams, UpdateParams};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+
+/// A measurement model the scan core can linearise.
+#[pyclass(name = "ScanMeasurementModel", module = "ctxmodels._core", frozen)]
+pub struct PyScanMeasurementModel(MeasurementModel);
+
+#[pymethods]
+impl PyScanMeasurementModel {
+    /// `z = H x + v`, `v ~ N(0, R)`: `matrix` (m, D), `noise` (m, m).
+    #[staticmethod]
+    fn linear(matrix: Bound<'_, PyArray2<f64>>, noise: Bound<'_, PyArray2<f64>>) -> PyResult<Self> {
+        let m = matrix.shape()[0];
+        if noise.shape() != [m, m] {
+            return Err(value_error("noise", format_args!("must be ({m}, {m}) for a ({m}, D) matrix, got {:?}", noise.shape())));
+        }
+        let h = borrow(&matrix, "matrix")?;
+        let r = borrow(&noise, "noise")?;
+        Ok(Self(MeasurementModel::Linear { matrix: slice(&h, "matrix")?.to_vec(), noise: slice(&r, "noise")?.to_vec(), ndim_meas: m }))
+    }
+
+    /// Bearing–range of the state's `mapping` (x, y) seen from `offset` (x, y) through the
+    /// 3×3 `rotation`; `noise` (2, 2); `analytic`: closed-form Jacobian, else Stone Soup's
+    /// finite difference.
+    #[staticmethod]
+    fn bearing_range(mapping: (usize, usize), offset: (f64, f64), rotation: Bound<'_, PyArray2<f64>>, noise: Bound<'_, PyArray2<f64>>, analytic: bool) -> PyResult<Self> {
+        if rotation.shape() != [3, 3] {
+            return Err(value_error("rotation", format_args!("must be (3, 3), got {:?}", rotation.shape())));
+        }
+        if noise.shape() != [2, 2] {
+            return Err(value_error("noise", format_args!("must be (2, 2), got {:?}", noise.shape())));
+        }
+        let rotation = borrow(&rotation, "rotation")?;
+        let noise = borrow(&noise, "noise")?;
+        let mut rot = [0.0; 9];
+        rot.copy_from_slice(slice(&rotation, "rotation")?);
+        let mut r = [0.0; 4];
+        r.copy_from_slice(slice(&noise, "noise")?);
+        let jacobian = if analytic { Jacobian::Analytic } else { Jacobian::FiniteDifference };
+        Ok(Self(MeasurementModel::BearingRange { mapping: [mapping.0, mapping.1], offset: [offset.0, offset.1], rotation: rot, noise: r, jacobian }))
+    }
+
+    #[getter]
+    fn ndim_meas(&self) -> usize {
+        self.0.ndim_meas()
+    }
+}
+
+/// Gaussian components as arrays, updated scan by scan in place (see `ctxmodels.gmphd`).
+#[pyclass(name = "GaussianMixtureArrays", module = "ctxmodels._core")]
+pub struct PyGaussianMixtureArrays(Mixture);
+
+fn shape_error(argument: &str, expected: String, got: &[usize]) -> PyErr {
+    value_error(argument, format_args!("must have shape {expected}, got {got:?}"))
+}
+
+#[pymethods]
+impl PyGaussianMixtureArrays {
+    #[new]
+    fn new(ndim: usize) -> PyResult<Self> {
+        if ndim == 0 {
+            return Err(value_error("ndim", "must be at least 1"));
+        }
+        Ok(Self(Mixture::new(ndim)))
+    }
+
+    fn __len__(&self) -> usize {
+        self.0.len()
+    }
+
+    #[getter]
+    fn ndim(&self) -> usize {
+        self.0.ndim
+    }
+
+    #[getter]
+    fn next_tag(&self) -> u64 {
+        self.0.next_tag
+    }
+
+    /// `count` fresh tags; returns the first.
+    fn reserve_tags(&mut self, count: u64) -> u64 {
+        self.0.reserve_tags(count)
+    }
+
+    /// Appends components: `means` (N, D), `covars` (N, D, D), `weights` (N,), `tags`
+    /// (0 = birth, others reserved), `times` (integer clock).
+    fn extend(&mut self, means: Bound<'_, PyArray2<f64>>, covars: Bound<'_, PyArray3<f64>>, weights: Bound<'_, PyArray1<f64>>, tags: Vec<u64>, times: Vec<i64>) -> PyResult<()> {
+        let (n, d) = (weights.len(), self.0.ndim);
+        if means.shape() != [n, d] {
+            return Err(shape_error("means", format!("({n}, {d})"), means.shape()));
+        }
+        if covars.shape() != [n, d, d] {
+            return Err(shape_error("covars", format!("({n}, {d}, {d})"), covars.shape()));
+        }
+        let (m, c, w) = (borrow(&means, "means")?, borrow(&covars, "covars")?, borrow(&weights, "weights")?);
+        self.0.extend(slice(&m, "means")?, slice(&c, "covars")?, slice(&w, "weights")?, &tags, &times).map_err(super::to_py)
+    }
+
+    /// The distinct component times, ascending.
+    fn distinct_times(&self) -> Vec<i64> {
+        self.0.distinct_times()
+    }
+
+    /// Kalman prediction to `now`: components stamped `from_times[g]` use
+    /// `transitions[g]`, `noises[g]`; all then take the time `now`.
+    fn predict(&mut self, py: Python<'_>, from_times: Vec<i64>, now: i64, transitions: Bound<'_, PyArray3<f64>>, noises: Bound<'_, PyArray3<f64>>) -> PyResult<()> {
+        let d = self.0.ndim;
+        let g = from_times.len();
+        if transitions.shape() != [g, d, d] || noises.shape() != [g, d, d] {
+            return Err(shape_error("transitions", format!("({g}, {d}, {d}) for both transitions and noises"), transitions.shape()));
+        }
+        let (f, q) = (borrow(&transitions, "transitions")?, borrow(&noises, "noises")?);
+        let (f, q) = (slice(&f, "transitions")?, slice(&q, "noises")?);
+        let mixture = &mut self.0;
+        detached(py, || mixture.predict_from(&from_times, now, f, q))
+    }
+
+    /// The GM-PHD update with one scan's `detections` (M, m), `prob_detection` per
+    /// component and `clutter` (λ) per detection.
+    #[pyo3(signature = (model, detections, prob_detection, clutter, *, prob_survival, missed_distance, squared, include_all, normalise, skip_undetectable, time, force_symmetric = false))]
+    #[allow(clippy::too_many_arguments)]
+    fn update(
+        &mut self,
+        py: Python<'_>,
+        model: &PyScanMeasurementModel,
+        detections: Bound<'_, PyArray2<f64>>,
+        prob_detection: Bound<'_, PyArray1<f64>>,
+        clutter: Bound<'_, PyArray1<f64>>,
+        prob_survival: f64,
+        missed_distance: f64,
+        squared: bool,
+        include_all: bool,
+        normalise: bool,
+        skip_undetectable: bool,
+        time: i64,
+        force_symmetric: bool,
+    ) -> PyResult<()> {
+        let m = model.0.ndim_meas();
+        if detections.shape()[1] != m && detections.len() > 0 {
+            return Err(shape_error("detections", format!("(M, {m})"), detections.shape()));
+        }
+        let (z, pd, lam) = (borrow(&detections, "detections")?, borrow(&prob_detection, "prob_detection")?, borrow(&clutter, "clutter")?);
+        let (z, pd, lam) = (slice(&z, "detections")?, slice(&pd, "prob_detection")?, slice(&lam, "clutter")?);
+        let params = UpdateParams { prob_survival, gate: missed_distance, squared, include_all, normalise, skip_undetectable, time, force_symmetric };
+        let mixture = &mut self.0;
+        let model = &model.0;
+        detached(py, || mixture.update(model, z, pd, lam, &params))
+    }
+
+    /// Keeps the components whose flag is true.
+    fn retain(&mut self, keep: Vec<bool>) -> PyResult<()> {
+        self.0.retain(&keep).map_err(super::to_py)
+    }
+
+    /// Keeps the components whose `position_mapping` x/y lies in the disc of `radius`
+    /// around `centre` (boundary included).
+    fn retain_inside_circle(&mut self, position_mapping: (usize, usize), centre: (f64, f64), radius: f64) -> PyResult<()> {
+        self.0.retain_inside_circle([position_mapping.0, position_mapping.1], [centre.0, centre.1], radius).map_err(super::to_py)
+    }
+
+    /// Moves the components of `other` whose flag in `take` is true to the end of this
+    /// mixture, in order; the others stay in `other`.
+    fn take_from(&mut self, other: &Bound<'_, Self>, take: Vec<bool>) -> PyResult<()> {
+        let mut other = other.try_borrow_mut().map_err(|_| value_error("other", "must be another mixture than this one"))?;
+        self.0.take_from(&mut other.0, &take).map_err(super::to_py)
+    }
+
+    /// Keeps the components with `√(tr P_xy / 2) ≤ max_std`.
+    fn retain_position_std(&mut self, position_mapping: (usize, usize), max_std: f64) -> PyResult<()> {
+        if !(max_std.is_finite() && max_std > 0.0) {
+            return Err(value_error("max_position_std", format_args!("must be finite and > 0, got {max_std}")));
+        }
+        self.0.retain_position_std([position_mapping.0, position_mapping.1], max_std).map_err(super::to_py)
+    }
+
+    /// Prune, merge (and make tags unique), truncate, as `GaussianMixtureReducer`.
+    #[pyo3(signature = (*, pruning, prune_threshold, merging, merge_threshold, truncating, max_components, kdtree_max_distance = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn reduce(&mut self, py: Python<'_>, pruning: bool, prune_threshold: f64, merging: bool, merge_threshold: f64, truncating: bool, max_components: u64, kdtree_max_distance: Option<f64>) -> PyResult<()> {
+        let params = ReduceParams { pruning, prune_threshold, merging, merge_threshold, truncating, max_components: usize::try_from(max_components).unwrap_or(usize::MAX), max_distance: kdtree_max_distance };
+        let mixture = &mut self.0;
+        detached(py, || mixture.reduce(&params))
+    }
+
+    fn means<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let (n, d) = (self.0.len(), self.0.ndim);
+        Ok(PyArray1::from_slice(py, &self.0.means).reshape([n, d])?)
+    }
+
+    fn covars<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let (n, d) = (self.0.len(), self.0.ndim);
+        Ok(PyArray1::from_slice(py, &self.0.covars).reshape([n, d, d])?)
+    }
+
+    fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.0.weights)
+    }
+
+    fn tags<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
+        PyArray1::from_slice(py, &self.0.tags)
+    }
+
+    fn times<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        PyArray1::from_slice(py, &self.0.times)
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+        let py = slf.py();
+        let this = slf.borrow();
+        let state = (this.means(py)?, this.covars(py)?, this.weights(py), this.tags(py).to_vec()?, this.times(py).to_vec()?, this.0.next_tag);
+        (slf.get_type(), (this.0.ndim,), state).into_pyobject(py)
+    }
+
+    fn __setstate__(&mut self, state: (Bound<'_, PyArray2<f64>>, Bound<'_, PyArray3<f64>>, Bound<'_, PyArray1<f64>>, Vec<u64>, Vec<i64>, u64)) -> PyResult<()> {
+        let (means, covars, weights, tags, times, next_tag) = state;
+        let mut mixture = Mixture::new(self.0.ndim);
+        mixture.next_tag = next_tag;
+        std::mem::swap(&mut self.0, &mut mixture);
+        let result = self.extend(means, covars, weights, tags, times);
+        if result.is_err() {
+            std::mem::swap(&mut self.0, &mut mixture);
+        }
+        result
+    }
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyScanMeasurementModel>()?;
+    m.add_class::<PyGaussianMixtureArrays>()?;
+    Ok(())
+}
