@@ -75,34 +75,90 @@ def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.nda
     of the detections must be the one the sensor's ``position_mapping`` describes. Linear
     detections sharing a model are converted in one matrix product."""
     positions = np.empty((len(detections), 2))
-    linear_groups: dict[int, list[int]] = {}
+    groups: dict[int, list[int]] = {}  # by measurement model, in first-appearance order
     for i, det in enumerate(detections):
         model = getattr(det, "measurement_model", None)
         if model is None:
             raise ValueError(f"detections: detection {i} has no measurement model, so its "
                              "position (needed for λ) is unknown")
-        vector = np.asarray(det.state_vector)
-        ndim_meas = getattr(model, "ndim_meas", None)
-        if ndim_meas is not None and vector.shape not in ((ndim_meas, 1), (ndim_meas,)):
-            raise ValueError(f"detections: detection {i} has a state vector of shape "
-                             f"{vector.shape}, but its measurement model "
-                             f"{type(model).__name__} measures {ndim_meas} values")
-        if isinstance(model, LinearGaussian):
-            linear_groups.setdefault(id(model), []).append(i)
-        elif hasattr(model, "inverse_function"):
-            state = np.asarray(model.inverse_function(det), dtype=np.float64).ravel()
-            positions[i] = state[_position_indices(model, position_mapping, i)]
-        else:
-            raise ValueError(f"detections: detection {i}'s measurement model "
-                             f"{type(model).__name__} has no inverse_function")
-    for indices in linear_groups.values():
+        groups.setdefault(id(model), []).append(i)
+    for indices in groups.values():
         model = detections[indices[0]].measurement_model
-        xy = _position_indices(model, position_mapping, indices[0])
-        z = np.column_stack([np.asarray(detections[i].state_vector, dtype=np.float64).ravel()
-                             for i in indices])
-        states = np.linalg.pinv(model.matrix()) @ z
-        positions[indices] = states[xy].T
+        vectors = _measurement_vectors(detections, indices, getattr(model, "ndim_meas", None))
+        if isinstance(model, LinearGaussian):
+            xy = _position_indices(model, position_mapping, indices[0])
+            positions[indices] = (_pseudo_inverse(model.matrix()) @ vectors.T)[xy].T
+        elif _batched_bearing_range(model):
+            xy = _position_indices(model, position_mapping, indices[0])
+            positions[indices] = _bearing_range_inverse(model, vectors)[:, xy]
+        elif hasattr(model, "inverse_function"):
+            for i in indices:
+                state = np.asarray(model.inverse_function(detections[i]),
+                                   dtype=np.float64).ravel()
+                positions[i] = state[_position_indices(model, position_mapping, i)]
+        else:
+            raise ValueError(f"detections: detection {indices[0]}'s measurement model "
+                             f"{type(model).__name__} has no inverse_function")
     return positions
+
+
+def _measurement_vectors(detections: Sequence, indices: list, ndim_meas) -> np.ndarray:
+    """The measurement vectors of ``detections[indices]`` as float rows (K, m); ValueError
+    naming the first detection whose vector is not ``ndim_meas`` long (if given)."""
+    vectors = [detections[i].state_vector for i in indices]
+    try:
+        stacked = np.array(vectors, dtype=np.float64)
+    except (TypeError, ValueError):
+        stacked = None
+    if stacked is not None and stacked.ndim == 3 and stacked.shape[2] == 1:
+        stacked = stacked[..., 0]
+    if stacked is not None and stacked.ndim == 2 \
+            and (ndim_meas is None or stacked.shape[1] == ndim_meas):
+        return stacked
+    for i, vector in zip(indices, vectors):
+        shape = np.shape(vector)
+        if ndim_meas is not None and shape not in ((ndim_meas, 1), (ndim_meas,)):
+            raise ValueError(f"detections: detection {i} has a state vector of shape {shape}, "
+                             f"but its measurement model {type(detections[i].measurement_model).__name__} "
+                             f"measures {ndim_meas} values")
+    raise ValueError(f"detections: detections {indices} have state vectors of different "
+                     "shapes or non-numeric values")
+
+
+_PSEUDO_INVERSES: dict = {}
+
+
+def _pseudo_inverse(matrix) -> np.ndarray:
+    """``pinv`` of a linear model's matrix, cached by value (scans often bring a new model
+    object with the same matrix)."""
+    matrix = np.ascontiguousarray(matrix, dtype=np.float64)
+    key = (matrix.shape, matrix.tobytes())
+    inverse = _PSEUDO_INVERSES.get(key)
+    if inverse is None:
+        if len(_PSEUDO_INVERSES) >= 64:
+            _PSEUDO_INVERSES.clear()
+        inverse = _PSEUDO_INVERSES[key] = np.linalg.pinv(matrix)
+    return inverse
+
+
+def _batched_bearing_range(model) -> bool:
+    """A 2-D bearing–range model whose inverse :func:`_bearing_range_inverse` computes."""
+    return (isinstance(model, CartesianToBearingRange)
+            and type(model).inverse_function is CartesianToBearingRange.inverse_function
+            and len(model.mapping) == 2
+            and model.rotation_offset[0] == 0 and model.rotation_offset[1] == 0)
+
+
+def _bearing_range_inverse(model, polar: np.ndarray) -> np.ndarray:
+    """``model.inverse_function`` of K (bearing, range) rows at once, (K, ndim_state): the
+    polar-to-Cartesian point rotated back to the world and shifted by the offset."""
+    bearing, rng = polar[:, 0], polar[:, 1]
+    xyz = np.array([rng * np.cos(bearing), rng * np.sin(bearing), np.zeros(len(polar))])
+    xy = (np.linalg.inv(model.rotation_matrix) @ xyz)[0:2]
+    states = np.zeros((len(polar), model.ndim_state))
+    offset = np.asarray(model.translation_offset, dtype=np.float64)[:2, 0]
+    states[:, list(model.mapping[:2])] = (xy + offset[:, np.newaxis]).T
+    return states
 
 
 def measured_ranges(detections: Sequence) -> np.ndarray:
@@ -236,13 +292,17 @@ class DetectorContext(_UpstreamContext):
         return self.sensor_model.clutter.evaluate(self.pose, positions, metadata, ranges=ranges,
                                                   out=out)
 
-    def clutter_spatial_density_detections(self, detections: Sequence) -> np.ndarray:
-        """λ of Stone Soup detections, in one array call."""
+    def clutter_spatial_density_detections(self, detections: Sequence,
+                                           positions=None) -> np.ndarray:
+        """λ of Stone Soup detections, in one array call. ``positions``: their (M, 2) world
+        positions if already computed (:func:`detection_positions` with the sensor model's
+        ``position_mapping``)."""
         detections = list(detections)
         clutter = self.sensor_model.clutter
         ranges = None
         if clutter.uses_position:
-            positions = detection_positions(detections, self.sensor_model.position_mapping)
+            if positions is None:
+                positions = detection_positions(detections, self.sensor_model.position_mapping)
             ranges = ranges_for_bands(detections, positions, self.pose)
         else:
             positions = np.zeros((len(detections), 2))

@@ -138,10 +138,7 @@ class MeasurementDrivenBirth(Base):
         detections = list(detections)
         if not detections:
             return []
-        positions = detection_positions(detections, self._position)
-        means = np.zeros((len(detections), self.ndim_state))
-        means[:, self._position] = positions
-        means[:, self._velocity] = self._velocity_mean
+        means = self.means(detections)
         return [TaggedWeightedGaussianState(
                     state_vector=mean.reshape(-1, 1),
                     covar=self.birth_covar.copy(),
@@ -149,6 +146,24 @@ class MeasurementDrivenBirth(Base):
                     tag=TaggedWeightedGaussianState.BIRTH,
                     timestamp=timestamp if timestamp is not None else detection.timestamp)
                 for mean, detection in zip(means, detections)]
+
+    def means(self, detections: Sequence, positions=None) -> np.ndarray:
+        """The (N, D) birth means of ``detections`` (see :meth:`components`); ``positions``:
+        their (N, 2) world positions if already computed (:func:`detection_positions` with
+        this birth's ``position_mapping``)."""
+        if positions is None:
+            positions = detection_positions(detections, self._position)
+        means = np.zeros((len(detections), self.ndim_state))
+        means[:, self._position] = positions
+        means[:, self._velocity] = self._velocity_mean
+        return means
+
+    @staticmethod
+    def visible(means: np.ndarray, covars: np.ndarray | None, detector_context) -> np.ndarray:
+        """Whether the context gives P_D > 0 at each birth: ``means`` (N, D), ``covars``
+        (N, D, D) or None (used when the sensor model takes P_D's expectation over a
+        Gaussian); one array call."""
+        return detector_context.prob_detection_array(means, covars) > 0
 
     def due(self, births: Sequence[TaggedWeightedGaussianState], timestamp: datetime.datetime,
             detector_context=None) -> tuple[list, list]:
@@ -162,7 +177,9 @@ class MeasurementDrivenBirth(Base):
                       if b.timestamp is None or timestamp - b.timestamp <= self.max_delay]
         if detector_context is None or not births:
             return births, []
-        visible = detector_context.prob_detection_states(births) > 0
+        means = np.array([np.asarray(b.state_vector, dtype=np.float64).ravel() for b in births])
+        covars = np.array([np.asarray(b.covar, dtype=np.float64) for b in births])
+        visible = self.visible(means, covars, detector_context)
         entering = [b for b, v in zip(births, visible) if v]
         waiting = [b for b, v in zip(births, visible) if not v]
         return entering, waiting

@@ -173,6 +173,24 @@ class ObjectFactory:
             return self._build(kwargs)
         return self.cls(**kwargs)
 
+    def maker(self, *names: str):
+        """A function ``make(*values)`` building instances from positional values of the
+        Properties ``names`` (every required one; the others at their defaults) — one dict
+        per object, for loops that build thousands."""
+        keys = [self._slots[name] for name in names]
+        constants = {k: v for k, v in self._constants.items() if k not in keys}
+        if not self.fast or any(key not in keys for key, _, _ in self._factories):
+            return lambda *values: self(**dict(zip(names, values)))
+        new, cls = object.__new__, self.cls
+
+        def make(*values):
+            obj = new(cls)
+            slots = dict(zip(keys, values))
+            slots.update(constants)
+            obj.__dict__ = slots
+            return obj
+        return make
+
 
 # --- Stone Soup's from_state type selection, resolved once per type ---------------------------
 _TARGET_CACHE: dict = {}

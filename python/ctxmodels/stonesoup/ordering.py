@@ -26,14 +26,16 @@ import numpy as np
 class OrderedDetections(list):
     """One scan's detections as a list in :func:`detection_key` order, carrying the scan's
     ``detector_context`` (``None`` for a plain set) as a
-    :class:`~ctxmodels.DetectionSet` does."""
+    :class:`~ctxmodels.DetectionSet` does, and ``vectors``: the measurement vectors as
+    float rows (M, m) in the same order, when they share a shape (else ``None``)."""
 
-    def __init__(self, detections: Iterable = (), detector_context=None):
+    def __init__(self, detections: Iterable = (), detector_context=None, vectors=None):
         super().__init__(detections)
         self.detector_context = detector_context
+        self.vectors = vectors
 
     def __reduce__(self):
-        return (type(self), (list(self), self.detector_context))
+        return (type(self), (list(self), self.detector_context, self.vectors))
 
 
 def _vector_bytes(state) -> bytes:
@@ -47,29 +49,93 @@ def _metadata_key(metadata) -> str:
     return repr(sorted((repr(k), repr(v)) for k, v in metadata.items()))
 
 
-def detection_key(detection, _model_keys: dict | None = None) -> tuple:
+def _model_key(model) -> str:
+    return "" if model is None else f"{type(model).__qualname__}{model!r}"
+
+
+class _DetectionKey:
+    """Orders detections by time, type and measurement vector, and only on a tie there by
+    metadata and measurement model (a model's ``repr`` prints its arrays: slow, so computed
+    lazily, once per model)."""
+
+    __slots__ = ("detection", "head", "_model_keys")
+
+    def __init__(self, detection, head: tuple, model_keys: dict):
+        self.detection = detection
+        self.head = head
+        self._model_keys = model_keys
+
+    def tail(self) -> tuple:
+        model = getattr(self.detection, "measurement_model", None)
+        model_key = self._model_keys.get(id(model))
+        if model_key is None:
+            model_key = self._model_keys[id(model)] = _model_key(model)
+        return _metadata_key(getattr(self.detection, "metadata", None)), model_key
+
+    def key(self) -> tuple:
+        return self.head + self.tail()
+
+    def __lt__(self, other: "_DetectionKey") -> bool:
+        if self.head != other.head:
+            return self.head < other.head
+        return self.tail() < other.tail()
+
+    def __eq__(self, other) -> bool:
+        return self.head == other.head and self.tail() == other.tail()
+
+
+def _time_key(detection) -> str:
+    timestamp = getattr(detection, "timestamp", None)
+    return "" if timestamp is None else str(timestamp)
+
+
+def detection_key(detection) -> tuple:
     """A sort key from a detection's values: time, type, measurement vector, metadata,
     measurement model (type and Properties). Never its identity or memory address."""
-    model = getattr(detection, "measurement_model", None)
-    if _model_keys is None:
-        model_key = "" if model is None else f"{type(model).__qualname__}{model!r}"
-    else:
-        model_key = _model_keys.get(id(model))
-        if model_key is None:
-            model_key = _model_keys[id(model)] = \
-                "" if model is None else f"{type(model).__qualname__}{model!r}"
-    timestamp = getattr(detection, "timestamp", None)
-    return ("" if timestamp is None else str(timestamp), type(detection).__qualname__,
-            _vector_bytes(detection), _metadata_key(getattr(detection, "metadata", None)),
-            model_key)
+    head = (_time_key(detection), type(detection).__qualname__, _vector_bytes(detection))
+    return _DetectionKey(detection, head, {}).key()
+
+
+def _float_vectors(detections: list):
+    """The detections' measurement vectors as float rows (M, m), or None when they do not
+    share one shape."""
+    try:
+        vectors = np.array([d.state_vector for d in detections], dtype=np.float64)
+    except (TypeError, ValueError):
+        return None
+    if vectors.ndim != 3 or vectors.shape[2] != 1:
+        return None
+    return vectors[..., 0]
 
 
 def in_stable_order(detections) -> OrderedDetections:
     """The detections of one scan in :func:`detection_key` order, keeping the scan's
     ``detector_context`` (if the collection carries one)."""
-    model_keys: dict = {}  # one repr per measurement model, not per detection
-    ordered = sorted(detections, key=lambda d: detection_key(d, model_keys))
-    return OrderedDetections(ordered, getattr(detections, "detector_context", None))
+    context = getattr(detections, "detector_context", None)
+    detections = list(detections)
+    vectors = _float_vectors(detections)
+    times: dict = {}  # str() once per timestamp
+    heads = []
+    for i, detection in enumerate(detections):
+        timestamp = getattr(detection, "timestamp", None)
+        time_key = times.get(timestamp)
+        if time_key is None:
+            time_key = times[timestamp] = _time_key(detection)
+        vector = vectors[i].tobytes() if vectors is not None else _vector_bytes(detection)
+        heads.append((time_key, type(detection).__qualname__, vector))
+    order = sorted(range(len(detections)), key=heads.__getitem__)
+    # equal heads (equal time, type and vector; rare): metadata and model decide
+    model_keys: dict = {}  # (models, whose repr is slow, keyed once per scan)
+    start = 0
+    for end in range(1, len(order) + 1):
+        if end < len(order) and heads[order[end]] == heads[order[start]]:
+            continue
+        if end - start > 1:
+            order[start:end] = sorted(order[start:end], key=lambda i: _DetectionKey(
+                detections[i], heads[i], model_keys))
+        start = end
+    return OrderedDetections([detections[i] for i in order], context,
+                             None if vectors is None else vectors[order])
 
 
 class _TrackKey:

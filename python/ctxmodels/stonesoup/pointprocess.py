@@ -360,18 +360,23 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
                 f"max_position_std: must be a finite number > 0 or None, got {limit!r}")
         self._pending_births: list[TaggedWeightedGaussianState] = []
 
+    def _inside_mask(self, points: np.ndarray) -> np.ndarray:
+        """Whether each (x, y) row of ``points`` lies in the surveillance region."""
+        region = self.surveillance_region
+        mask = region.contains(points) if hasattr(region, "contains") else region(points)
+        mask = np.asarray(mask, dtype=bool).ravel()
+        if mask.shape != (len(points),):
+            raise ValueError(f"surveillance_region: returned {mask.shape[0]} flags for "
+                             f"{len(points)} positions")
+        return mask
+
     def _inside(self, components) -> list:
         if self.surveillance_region is None or not components:
             return list(components)
         mapping = list(self.position_mapping)
         points = np.array([np.asarray(c.state_vector, dtype=np.float64).ravel()[mapping]
                            for c in components])
-        region = self.surveillance_region
-        mask = region.contains(points) if hasattr(region, "contains") else region(points)
-        mask = np.asarray(mask, dtype=bool).ravel()
-        if mask.shape != (len(components),):
-            raise ValueError(f"surveillance_region: returned {mask.shape[0]} flags for "
-                             f"{len(components)} positions")
+        mask = self._inside_mask(points)
         return [c for c, keep in zip(components, mask) if keep]
 
     def _certain_enough(self, components) -> list:
