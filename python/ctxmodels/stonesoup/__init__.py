@@ -30,6 +30,7 @@
   its exact Jacobian instead of a finite difference, so an extended Kalman filter's output
   no longer depends on the last bit of its inputs.
 """
+from .array_tracker import ArrayPointProcessTracker
 from .birth import MeasurementDrivenBirth
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast_association import FastGNNWith2DAssignment
@@ -46,6 +47,7 @@ from .pointprocess import CircularRegion, LCCUpdater, PHDUpdater, PointProcessMu
 from .transition import CachedCombinedLinearGaussianTransitionModel
 
 __all__ = [
+    "ArrayPointProcessTracker",
     "AnalyticCartesianToBearingRange",
     "BernoulliParticleUpdater",
     "CachedCombinedLinearGaussianTransitionModel",
