@@ -124,6 +124,9 @@ from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.detection import Clutter, Detection, TrueDetection
 from stonesoup.types.groundtruth import GroundTruthPath, GroundTruthState
 
+# (a Stone Soup model with its exact Jacobian: no ctxmodels core, no context models)
+from ..stonesoup.measurement import AnalyticCartesianToBearingRange
+
 __all__ = [
     "EPOCH",
     "SCENARIOS",
@@ -212,8 +215,12 @@ class RadarConfig:
         return (ranges > self.min_range) & (ranges < self.max_range) & outside_blind
 
     def measurement_model(self, pose: SensorPose) -> CartesianToBearingRange:
-        """Bearing–range model of one scan taken from ``pose``."""
-        return CartesianToBearingRange(
+        """Bearing–range model of one scan taken from ``pose``: Stone Soup's
+        ``CartesianToBearingRange`` with the closed-form Jacobian
+        (:class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange`). The simulation never
+        linearises; the trackers do, and the exact Jacobian keeps their results from
+        depending on the last bit of a state (the stock finite difference does)."""
+        return AnalyticCartesianToBearingRange(
             ndim_state=4,
             mapping=(0, 2),
             noise_covar=self.noise_covar,
