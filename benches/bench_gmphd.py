@@ -49,6 +49,8 @@ from stonesoup.types.state import TaggedWeightedGaussianState
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 from stonesoup.updater.pointprocess import PHDUpdater
 
+from ctxmodels import _core
+from ctxmodels.stonesoup import ArrayPointProcessTracker
 from ctxmodels.stonesoup.fast import (
     FastGaussianMixtureHypothesiser,
     FastGaussianMixtureReducer,
@@ -135,18 +137,71 @@ def time_chain(chain, scan: Scan) -> dict:
             "components_out": len(reduced)}
 
 
+def time_array(chain, scan: Scan) -> dict:
+    """The same scan in the core, as :class:`ArrayPointProcessTracker` runs it: the mixture
+    as arrays, F/Q per time step, the detections' vectors and model converted, then
+    predict, update and reduce (hypothesise = predict + conversions)."""
+    from ctxmodels.stonesoup.array_tracker import _Plan
+    from ctxmodels.stonesoup.ordering import in_stable_order
+    hypothesiser, updater, reducer = chain
+    holder = type("Tracker", (), {})()
+    holder.hypothesiser, holder.updater, holder.reducer = hypothesiser, updater, reducer
+    components = scan.components()
+    arrays = _core.GaussianMixtureArrays(4)
+    first = arrays.reserve_tags(len(components))
+    arrays.extend(np.array([c.state_vector.ravel() for c in components], dtype=float),
+                  np.array([c.covar for c in components], dtype=float),
+                  np.array([c.weight for c in components], dtype=float),
+                  [0 if c.tag == "birth" else first + i for i, c in enumerate(components)],
+                  [0 if c.tag != "birth" else int(SCAN_DT * 1e6) for c in components])
+    now = int(SCAN_DT * 1e6)
+    t0 = time.perf_counter()
+    plan = _Plan.of(holder)
+    detections = in_stable_order(scan.detections)
+    model = detections[0].measurement_model
+    scan_model = plan.scan_model(model, 4)
+    z = detections.vectors
+    times = arrays.distinct_times()
+    # F(Δt), Q(Δt) from the tracker's per-step cache, as in a run (warm after one scan)
+    matrices = [_TRANSITIONS._transition(plan.predictor, now - t) for t in times]
+    arrays.predict(times, now, np.array([f for f, _ in matrices]),
+                   np.array([q for _, q in matrices]))
+    t1 = time.perf_counter()
+    arrays.update(scan_model, z, np.full(len(arrays), plan.prob_detection),
+                  np.full(len(z), plan.clutter), prob_survival=plan.prob_survival,
+                  missed_distance=plan.missed_distance, squared=plan.squared,
+                  include_all=plan.include_all, normalise=plan.normalise,
+                  skip_undetectable=False, time=now)
+    t2 = time.perf_counter()
+    arrays.reduce(**plan.reduce)
+    t3 = time.perf_counter()
+    return {"hypothesise": t1 - t0, "update": t2 - t1, "reduce": t3 - t2, "total": t3 - t0,
+            "pairs": -1, "components_out": len(arrays)}
+
+
+_TRANSITIONS = ArrayPointProcessTracker(detector=None, hypothesiser=None, updater=None,
+                                        reducer=None)
+
+VARIANTS = {"stock": (False, time_chain), "fast": (True, time_chain),
+            "array": (False, time_array)}
+
+
 def measure(n, m, sensor, repeats_fast, repeats_stock, seed):
     scan = Scan(n, m, sensor, seed)
     result = {"components": n, "detections": m, "sensor": sensor}
-    for label, fast, repeats in (("stock", False, repeats_stock), ("fast", True, repeats_fast)):
+    for label in VARIANTS:
+        fast, timer = VARIANTS[label]
+        repeats = repeats_stock if label == "stock" else repeats_fast
         chain = _chain(fast)
-        time_chain(_chain(fast), Scan(min(n, 20), min(m, 10), sensor, seed + 1))  # warm-up
-        runs = [time_chain(chain, scan) for _ in range(repeats)]
+        timer(_chain(fast), Scan(min(n, 20), min(m, 10), sensor, seed + 1))  # warm-up
+        runs = [timer(chain, scan) for _ in range(repeats)]
         result[label] = {stage: statistics.median(r[stage] for r in runs) for stage in STAGES}
         result[label]["repeats"] = repeats
         result[label]["pairs"] = runs[0]["pairs"]
         result[label]["components_out"] = runs[0]["components_out"]
     result["speedup"] = {stage: result["stock"][stage] / result["fast"][stage] for stage in STAGES}
+    result["array_vs_fast"] = {stage: result["fast"][stage] / result["array"][stage]
+                               for stage in STAGES}
     return result
 
 
@@ -189,6 +244,9 @@ def main(argv=None):
                 f"{r['stock'][s] * 1e3:>12.2f} /{r['fast'][s] * 1e3:>8.2f} ({r['speedup'][s]:>6.1f}×)"
                 for s in STAGES)
             print(f"{sensor:<14}{f'{n}×{m}':>10}{r['fast']['pairs']:>7}  {cells}", flush=True)
+            print(f"{'  array':<14}{'':>10}{r['array']['components_out']:>7}  " + "".join(
+                f"{r['array'][s] * 1e3:>21.3f} ({r['array_vs_fast'][s]:>6.1f}× fast)"
+                for s in STAGES), flush=True)
 
     payload = {
         "benchmark": "GM-PHD per-scan time, stock Stone Soup vs ctxmodels fast drop-ins",
