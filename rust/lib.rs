@@ -10,6 +10,7 @@ pub mod clutter;
 pub mod cubature;
 pub mod detection;
 pub mod error;
+pub mod jpda;
 pub mod land;
 pub mod pose;
 pub mod range_bands;
