@@ -24,6 +24,8 @@ use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
 
+mod jpda;
+
 fn to_py(err: ModelError) -> PyErr {
     PyValueError::new_err(err.to_string())
 }
@@ -456,5 +458,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyClutterModel>()?;
     m.add_function(wrap_pyfunction!(mount, m)?)?;
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;
+    jpda::register(m)?;
     Ok(())
 }
