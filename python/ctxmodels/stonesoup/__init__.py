@@ -19,6 +19,9 @@
   a scan at a time in stacked arrays; :class:`FastGNNWith2DAssignment`, the stock GNN
   association (e.g. inside ``MultiMeasurementInitiator``) with all track × detection
   distances of a scan computed at once.
+* Whole-scan JPDA: :class:`ArrayJPDATracker`, the (J)PDA mixture tracker with each scan
+  computed by one call into the Rust core (association marginals, updates, mixture
+  reduction), falling back to the component path for configurations it does not cover.
 * Reproducibility: :class:`MultiTargetMixtureTracker` and :class:`MultiMeasurementInitiator`
   (the stock JPDA tracker and M-of-N initiator in a stable order); every ctxmodels tracker
   puts a scan's detections in value order (:func:`in_stable_order`) and never lets set
@@ -27,6 +30,7 @@
 * :class:`CachedCombinedLinearGaussianTransitionModel`: F(Δt), Q(Δt) computed once per
   scan interval.
 """
+from .array_jpda import ArrayJPDATracker, register_analytic_bearing_range
 from .birth import MeasurementDrivenBirth
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast_association import FastGNNWith2DAssignment
@@ -42,6 +46,7 @@ from .pointprocess import CircularRegion, LCCUpdater, PHDUpdater, PointProcessMu
 from .transition import CachedCombinedLinearGaussianTransitionModel
 
 __all__ = [
+    "ArrayJPDATracker",
     "BernoulliParticleUpdater",
     "CachedCombinedLinearGaussianTransitionModel",
     "CircularRegion",
@@ -64,4 +69,5 @@ __all__ = [
     "UpdateTimeStepsDeleter",
     "in_stable_order",
     "in_track_order",
+    "register_analytic_bearing_range",
 ]
