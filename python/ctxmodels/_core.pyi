@@ -17,10 +17,14 @@ __all__ = [
     "AngularSector",
     "ClutterModel",
     "DetectionModel",
+    "JPDAMeasurementModel",
     "LandMask",
     "LineOfSight",
     "MetadataThreshold",
     "RangeBands",
+    "jpda_marginals",
+    "jpda_predict",
+    "jpda_scan",
     "mount",
     "rule_points",
 ]
@@ -141,3 +145,56 @@ def mount(pose: _Pose, forward: float, left: float, yaw: float) -> _Pose:
 
 def rule_points(rule: _Rule, order: int = 3) -> tuple[list[tuple[float, float]], list[float]]:
     """Points and weights of an integration rule in standard-normal space."""
+
+# --- whole-scan JPDA (source: rust/python/jpda.rs) ------------------------------------------
+# Used by ctxmodels.stonesoup.ArrayJPDATracker; see rust/jpda.rs for the mathematics.
+
+@final
+class JPDAMeasurementModel:
+    """The measurement model of one scan's detections, for `jpda_scan`."""
+
+    @staticmethod
+    def linear(matrix: _Floats, noise_covar: _Floats) -> JPDAMeasurementModel:
+        """A linear Gaussian model: `matrix` (m, D), `noise_covar` (m, m)."""
+    @staticmethod
+    def bearing_range(
+        mapping: tuple[int, int],
+        translation_offset: tuple[float, float],
+        rotation_matrix: _Floats,
+        noise_covar: _Floats,
+        jacobian: Literal["finite-difference", "analytic"] = "finite-difference",
+    ) -> JPDAMeasurementModel:
+        """A 2-D bearing–range model (Stone Soup's `CartesianToBearingRange`)."""
+    @property
+    def ndim_meas(self) -> int:
+        """Number of measured values per detection."""
+
+def jpda_predict(
+    means: _Floats,
+    covars: _Floats,
+    transition_index: Sequence[int],
+    transition_matrices: _Floats,
+    transition_covars: _Floats,
+) -> tuple[_Floats, _Floats]:
+    """Kalman prediction of `means` (T, D) / `covars` (T, D, D) with transition
+    `transition_index[t]` of `transition_matrices` / `transition_covars` (K, D, D)."""
+
+def jpda_scan(
+    model: JPDAMeasurementModel,
+    means: _Floats,
+    covars: _Floats,
+    detections: _Floats,
+    prob_detect: _Floats,
+    clutter_density: _Floats,
+    prob_gate: float,
+    gate_threshold: float,
+    include_all: bool = False,
+) -> dict[str, _Floats | _Bools]:
+    """One JPDA scan: keys means, covars, is_update, taken, gated, weights, marginals,
+    meas_means, meas_covars, cross_covars."""
+
+def jpda_marginals(weights: _Floats, gated: _Bools) -> _Floats:
+    """Exact joint association marginals of (T, M+1) weights (column 0: missed detection)
+    and the (T, M) gated hypotheses."""
+
+# --- end of whole-scan JPDA -------------------------------------------------------------------
