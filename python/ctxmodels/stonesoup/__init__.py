@@ -21,7 +21,9 @@
   distances of a scan computed at once.
 * Whole-scan JPDA: :class:`ArrayJPDATracker`, the (J)PDA mixture tracker with each scan
   computed by one call into the Rust core (association marginals, updates, mixture
-  reduction), falling back to the component path for configurations it does not cover.
+  reduction), falling back to the component path for configurations it does not cover;
+  :class:`ArrayMultiMeasurementInitiator`, the M-of-N initiator with its holding tracks as
+  arrays.
 * Reproducibility: :class:`MultiTargetMixtureTracker` and :class:`MultiMeasurementInitiator`
   (the stock JPDA tracker and M-of-N initiator in a stable order); every ctxmodels tracker
   puts a scan's detections in value order (:func:`in_stable_order`) and never lets set
@@ -30,6 +32,7 @@
 * :class:`CachedCombinedLinearGaussianTransitionModel`: F(Δt), Q(Δt) computed once per
   scan interval.
 """
+from .array_initiator import ArrayMultiMeasurementInitiator
 from .array_jpda import ArrayJPDATracker, register_analytic_bearing_range
 from .birth import MeasurementDrivenBirth
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
@@ -47,6 +50,7 @@ from .transition import CachedCombinedLinearGaussianTransitionModel
 
 __all__ = [
     "ArrayJPDATracker",
+    "ArrayMultiMeasurementInitiator",
     "BernoulliParticleUpdater",
     "CachedCombinedLinearGaussianTransitionModel",
     "CircularRegion",

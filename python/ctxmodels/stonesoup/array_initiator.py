@@ -1,0 +1,326 @@
+r"""The M-of-N initiator with its holding tracks kept as arrays.
+
+:class:`ArrayMultiMeasurementInitiator` has the Properties of ctxmodels'
+:class:`~ctxmodels.stonesoup.MultiMeasurementInitiator` and releases the same tracks, with
+the same states, scan for scan. In a JPDA run most detections are clutter and each starts a
+holding track that coasts, unassociated, until the deleter drops it 30 scans later: a
+hundred holding tracks, each predicted, hypothesised and given a prediction object every
+scan, most never released. Here the holding tracks' means and covariances are stacked
+arrays; a scan predicts them in one product, screens all track × detection pairs at once
+(as :class:`~ctxmodels.stonesoup.FastGNNWith2DAssignment` does) and takes Stone Soup's own
+distance, assignment and Kalman update for the few pairs that can pass the gate. A holding
+track's coasting predictions are kept as array rows and turned into Stone Soup states only
+when the track is updated or released; the deleter's verdict comes from a count of the
+distinct times since the track's last detection.
+
+So a holding track (in :attr:`holding_tracks`, the live set, as stock) holds its states up
+to its last update; the predictions since are added when it is updated or released, or
+when a scan runs the component path. Released tracks are complete.
+
+Supported (anything else runs ctxmodels' :class:`MultiMeasurementInitiator` code, after
+the pending states are added): a :class:`~stonesoup.dataassociator.neighbour.GNNWith2DAssignment`
+or :class:`~ctxmodels.stonesoup.FastGNNWith2DAssignment` over a plain
+:class:`~stonesoup.hypothesiser.distance.DistanceHypothesiser` (Mahalanobis or squared
+Mahalanobis measure without mapping, no ``predict_with_measurements``), a Kalman / extended
+Kalman predictor with a linear Gaussian transition model, Kalman / extended Kalman updaters,
+a stock or ctxmodels ``UpdateTimeStepsDeleter`` (``delete_last_pred`` off), Gaussian
+float64 states, and detections stamped with the scan time.
+"""
+from __future__ import annotations
+
+import numpy as np
+from stonesoup.dataassociator import neighbour as _stock_neighbour
+from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
+from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
+from stonesoup.hypothesiser.distance import DistanceHypothesiser
+from stonesoup.measures import Mahalanobis, SquaredMahalanobis
+from stonesoup.models.base import LinearModel, ReversibleModel
+from stonesoup.types.array import CovarianceMatrix, StateVector
+from stonesoup.types.hypothesis import SingleDistanceHypothesis
+from stonesoup.types.state import GaussianState
+from stonesoup.types.update import Update
+
+from .deleter import UpdateTimeStepsDeleter
+from .fast import KALMAN_UPDATERS, measurement_batch, supports_predictor
+from .fast_association import (
+    FastGNNWith2DAssignment,
+    _copied_properties,
+    _measurement_prediction,
+    _weaken_prior_chain,
+)
+from .array_jpda import _PRIOR_PREDICTION
+from .mixture_tracker import MultiMeasurementInitiator
+from .ordering import in_stable_order, in_track_order
+
+
+class _Holding:
+    """A holding track: its Track (states up to the last update), its row in the arrays,
+    the coasting predictions not yet turned into states, the points counted towards
+    release and the distinct times since its last detection (the deleter's count)."""
+
+    __slots__ = ("track", "pending", "points", "since", "last_time")
+
+    def __init__(self, track, points, since, last_time):
+        self.track = track
+        self.pending: list = []  # (mean view, covar view, timestamp)
+        self.points = points
+        self.since = since
+        self.last_time = last_time
+
+
+class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
+    """ctxmodels' :class:`MultiMeasurementInitiator` with the holding tracks as arrays (see
+    the module docstring): the same released tracks and states. :attr:`array_calls` and
+    :attr:`component_calls` count the calls each path ran."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._records: list[_Holding] = []
+        self._means = None  # (H, D, 1), aligned with _records
+        self._covars = None  # (H, D, D)
+        self.array_calls = 0
+        self.component_calls = 0
+
+    # --- configuration ----------------------------------------------------------------------
+    def _supported(self) -> bool:
+        associator = self.data_associator
+        if type(associator) not in (GNNWith2DAssignment, FastGNNWith2DAssignment):
+            return False
+        hypothesiser = associator.hypothesiser
+        if type(hypothesiser) is not DistanceHypothesiser or hypothesiser.predict_with_measurements:
+            return False
+        measure = hypothesiser.measure
+        if type(measure) not in (Mahalanobis, SquaredMahalanobis) or measure.mapping is not None:
+            return False
+        if not supports_predictor(hypothesiser.predictor):
+            return False
+        if type(hypothesiser.updater) not in KALMAN_UPDATERS or type(self.updater) not in KALMAN_UPDATERS:
+            return False
+        deleter = self.deleter
+        return (type(deleter) in (UpdateTimeStepsDeleter, _StockUpdateTimeStepsDeleter)
+                and not deleter.delete_last_pred)
+
+    # --- pending states ------------------------------------------------------------------------
+    def _materialise(self, record: _Holding) -> None:
+        """Turn the record's coasting predictions into the states the component path appends:
+        predictions with the transition model and the previous state as prior."""
+        if not record.pending:
+            return
+        track = record.track
+        transition = self.data_associator.hypothesiser.predictor.transition_model
+        for mean, covar, timestamp in record.pending:
+            prior = track.state
+            _weaken_prior_chain(prior)
+            track.append(_PRIOR_PREDICTION(
+                state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
+                timestamp=timestamp, transition_model=transition, prior=prior,
+                **{name: getattr(prior, name) for name in _copied_properties(type(prior))}))
+        record.pending = []
+
+    def _materialise_all(self) -> None:
+        for record in self._records:
+            self._materialise(record)
+        self._records = []
+        self._means = self._covars = None
+        self._points = {}  # the component path recounts from the (now complete) tracks
+
+    def _record_of(self, track, ndim):
+        """A record read from a track (once per track joining the holding set)."""
+        state = track.state if len(track) else None
+        vector, covar = getattr(state, "state_vector", None), getattr(state, "covar", None)
+        if not (isinstance(state, GaussianState) and _copied_properties(type(state)) is not None
+                and isinstance(vector, np.ndarray) and vector.dtype == np.float64
+                and vector.shape == (ndim, 1) and isinstance(covar, np.ndarray)
+                and covar.dtype == np.float64 and covar.shape == (ndim, ndim)
+                and state.timestamp is not None):
+            return None
+        points = sum(1 for s in track.states if self._counts(s))
+        since = set()
+        for s in reversed(track.states):
+            since.add(s.timestamp)
+            if isinstance(s, Update) and s.hypothesis:
+                break
+        return _Holding(track, points, len(since), state.timestamp)
+
+    def _sync(self, ndim) -> bool:
+        """Aligns the records with :attr:`holding_tracks` (tracks removed or added from
+        outside); False if a holding track cannot be held as arrays."""
+        live = self.holding_tracks
+        known = {id(r.track) for r in self._records}
+        if len(known) == len(live) and all(id(t) in known for t in live):
+            return True
+        keep = [k for k, r in enumerate(self._records) if r.track in live]
+        records = [self._records[k] for k in keep]
+        means = self._means[keep] if self._means is not None else np.empty((0, ndim, 1))
+        covars = self._covars[keep] if self._covars is not None else np.empty((0, ndim, ndim))
+        present = {id(r.track) for r in records}
+        added = [t for t in in_track_order(t for t in live if id(t) not in present)]
+        new = [self._record_of(t, ndim) for t in added]
+        if any(r is None for r in new):
+            return False
+        self._records = records + new
+        self._means = np.concatenate([means] + [r.track.state.state_vector[np.newaxis] for r in new])
+        self._covars = np.concatenate([covars] + [r.track.state.covar[np.newaxis] for r in new])
+        return True
+
+    # --- a scan ---------------------------------------------------------------------------------
+    def initiate(self, detections, timestamp, **kwargs):
+        detections = in_stable_order(detections)
+        if self.skip_non_reversible:
+            detections = [d for d in detections
+                          if isinstance(d.measurement_model, (ReversibleModel, LinearModel))]
+        hypothesiser = getattr(self.data_associator, "hypothesiser", None)
+        ndim = getattr(getattr(getattr(hypothesiser, "predictor", None), "transition_model", None),
+                       "ndim_state", None)
+        if kwargs or not self._supported() or any(d.timestamp != timestamp for d in detections) \
+                or not self._sync(ndim):
+            self._materialise_all()
+            self.component_calls += 1
+            return super().initiate(detections, timestamp, **kwargs)
+        self.array_calls += 1
+
+        sure_tracks = set()
+        associated = set()
+        if self._records:
+            assigned = self._associate(detections, timestamp)
+            self._advance(assigned, detections, timestamp, associated, sure_tracks)
+        new = self.initiator.initiate({d for d in detections if id(d) not in associated},
+                                      timestamp)
+        self.holding_tracks |= new
+        if not self._sync(ndim):
+            self._materialise_all()  # a new track the arrays cannot hold: re-read next scan
+        return sure_tracks
+
+    def _associate(self, detections, timestamp):
+        """Per holding row: the assigned (detection index, distance, measurement prediction,
+        predicted mean, predicted covariance), the string 'missed', or None (no state), as
+        the GNN 2-D assignment decides; also predicts every row."""
+        hypothesiser = self.data_associator.hypothesiser
+        predictor, updater, measure = hypothesiser.predictor, hypothesiser.updater, hypothesiser.measure
+        missed_distance = hypothesiser.missed_distance
+        records = self._records
+        n = len(records)
+        pred_means = np.empty_like(self._means)
+        pred_covars = np.empty_like(self._covars)
+        groups: dict = {}
+        for k, record in enumerate(records):
+            groups.setdefault(timestamp - record.last_time, []).append(k)
+        model = predictor.transition_model
+        control = predictor.control_model
+        for interval, members in groups.items():
+            idx = np.asarray(members) if len(members) < n else slice(None)
+            prior = records[members[0]].track.state
+            matrix = np.asarray(model.matrix(time_interval=interval), dtype=np.float64)
+            offset = control.function(None, prior=prior, time_interval=interval)
+            pred_means[idx] = (matrix[np.newaxis] @ self._means[idx]) \
+                + np.asarray(offset, dtype=np.float64)
+            process = np.asarray(model.covar(time_interval=interval), dtype=np.float64)
+            ctrl = control.matrix(control_input=None, prior=prior, time_interval=interval)
+            ctrl_noise = ctrl @ control.control_noise @ ctrl.T
+            pred_covars[idx] = ((matrix[np.newaxis] @ self._covars[idx]) @ matrix.T[np.newaxis]
+                                + process) + ctrl_noise
+
+        hypotheses: list[list] = [[] for _ in range(n)]  # (column, distance, mp, group)
+        if detections:
+            by_model: dict = {}
+            for j, det in enumerate(detections):
+                by_model.setdefault(det.measurement_model, []).append(j)
+            screen = FastGNNWith2DAssignment._screen
+            for raw_model, members in by_model.items():
+                resolved = updater._check_measurement_model(raw_model)
+                batch = measurement_batch(updater, resolved, pred_means, pred_covars)
+                group_dets = [detections[j] for j in members]
+                if hypothesiser.include_all:
+                    candidates = np.ones((n, len(members)), dtype=bool)
+                else:
+                    candidates = screen(self.data_associator, batch, group_dets)
+                cache: dict = {}
+                for row, col in zip(*np.nonzero(candidates)):
+                    row, col = int(row), int(col)
+                    mp = cache.get(row)
+                    if mp is None:
+                        mp = cache[row] = _measurement_prediction(batch, row, timestamp)
+                    det = group_dets[col]
+                    distance = measure(mp, det)
+                    if hypothesiser.include_all or distance < missed_distance:
+                        hypotheses[row].append((members[col], distance, mp))
+        for row in hypotheses:
+            row.sort(key=lambda h: h[0])
+
+        assigned: list = ["missed"] * n
+        detected = [k for k in range(n) if hypotheses[k]]
+        if detected:
+            n_dets = len(detections)
+            costs = np.full((len(detected), n_dets + len(detected)), np.inf)
+            for i, k in enumerate(detected):
+                costs[i, n_dets + i] = missed_distance
+                for column, distance, _ in hypotheses[k]:
+                    costs[i, column] = distance
+            try:
+                _, col4row = _stock_neighbour.linear_sum_assignment(costs, False)
+            except ValueError:
+                raise RuntimeError("Assignment was not feasible") from None
+            for i, k in enumerate(detected):
+                column = int(col4row[i])
+                if column == n_dets + i:
+                    continue
+                chosen = next((h for h in hypotheses[k] if h[0] == column), None)
+                assigned[k] = None if chosen is None else chosen
+        self._pred = (pred_means, pred_covars)
+        return assigned
+
+    def _advance(self, assigned, detections, timestamp, associated, sure_tracks):
+        hypothesiser = self.data_associator.hypothesiser
+        transition = hypothesiser.predictor.transition_model
+        pred_means, pred_covars = self._pred
+        del self._pred
+        limit = self.deleter.time_steps_since_update
+        keep = np.ones(len(self._records), dtype=bool)
+        means, covars = pred_means, pred_covars
+        for k, (record, choice) in enumerate(zip(self._records, assigned)):
+            if choice is None:  # no hypothesis from the assignment: stock appends nothing
+                means[k], covars[k] = self._means[k], self._covars[k]
+                continue
+            new_time = timestamp != record.last_time
+            if choice == "missed":
+                record.pending.append((pred_means[k], pred_covars[k], timestamp))
+                if not self.updates_only:
+                    record.points += 1
+                record.since += new_time
+            else:
+                column, distance, mp = choice
+                self._materialise(record)
+                track = record.track
+                prior = track.state
+                _weaken_prior_chain(prior)
+                prediction = _PRIOR_PREDICTION(
+                    state_vector=pred_means[k].view(StateVector),
+                    covar=pred_covars[k].view(CovarianceMatrix), timestamp=timestamp,
+                    transition_model=transition, prior=prior,
+                    **{name: getattr(prior, name) for name in _copied_properties(type(prior))})
+                hypothesis = SingleDistanceHypothesis(prediction, detections[column], distance, mp)
+                state = self.updater.update(hypothesis)
+                track.append(state)
+                associated.add(id(detections[column]))
+                record.points += self._counts(state)
+                record.since = 1
+                means[k] = np.asarray(state.state_vector, dtype=np.float64)
+                covars[k] = np.asarray(state.covar, dtype=np.float64)
+            record.last_time = timestamp
+            if record.points >= self.min_points:
+                self._materialise(record)
+                sure_tracks.add(record.track)
+                self.holding_tracks.discard(record.track)
+                keep[k] = False
+        # the deleter on the remaining holding tracks: more distinct times than allowed since
+        # the last detection-backed state
+        for k, record in enumerate(self._records):
+            if keep[k] and record.since > limit:
+                self.holding_tracks.discard(record.track)
+                keep[k] = False
+        self._records = [r for r, kept in zip(self._records, keep) if kept]
+        self._means = means[keep]
+        self._covars = covars[keep]
+
+
+__all__ = ["ArrayMultiMeasurementInitiator"]
