@@ -37,20 +37,25 @@ from stonesoup.measures import Mahalanobis, SquaredMahalanobis
 from stonesoup.models.base import LinearModel, ReversibleModel
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.hypothesis import SingleDistanceHypothesis
+from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.state import GaussianState
 from stonesoup.types.update import Update
 
 from .deleter import UpdateTimeStepsDeleter
-from .fast import KALMAN_UPDATERS, measurement_batch, supports_predictor
+from .fast import KALMAN_UPDATERS, ObjectFactory, measurement_batch, supports_predictor
 from .fast_association import (
     FastGNNWith2DAssignment,
     _copied_properties,
     _measurement_prediction,
     _weaken_prior_chain,
 )
-from .array_jpda import _PRIOR_PREDICTION
 from .mixture_tracker import MultiMeasurementInitiator
-from .ordering import in_stable_order, in_track_order
+from .ordering import OrderedDetections, in_stable_order, in_track_order
+
+#: A prediction as ``Prediction.from_state`` builds it (transition model and prior).
+_PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
+    state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
+    transition_model=None, prior=None))
 
 
 class _Holding:
@@ -165,7 +170,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
 
     # --- a scan ---------------------------------------------------------------------------------
     def initiate(self, detections, timestamp, **kwargs):
-        detections = in_stable_order(detections)
+        if type(detections) is not OrderedDetections:  # (already in order: not sorted again)
+            detections = in_stable_order(detections)
         if self.skip_non_reversible:
             detections = [d for d in detections
                           if isinstance(d.measurement_model, (ReversibleModel, LinearModel))]

@@ -76,12 +76,13 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from .. import _core
 from ..context import DetectorContext
+from .array_initiator import _PRIOR_PREDICTION, ArrayMultiMeasurementInitiator
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast import KALMAN_UPDATERS, ObjectFactory, supports_predictor
 from .fast_association import _copied_properties
 from .hypothesiser import PDAHypothesiser, is_detection_backed, scan_context
 from .mixture_tracker import MultiTargetMixtureTracker
-from .ordering import in_track_order
+from .ordering import OrderedDetections, in_track_order
 
 _ASSOCIATORS = (JPDAwithEHM2, JPDAwithEHM, JPDA)
 _HYPOTHESISERS = (_StockPDAHypothesiser, PDAHypothesiser)
@@ -117,9 +118,6 @@ _UPDATE = ObjectFactory(GaussianStateUpdate, dict(
     hypothesis=SingleHypothesis(None, Detection(StateVector([0.0]))), timestamp=None))
 _PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
     state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None))
-_PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
-    state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
-    transition_model=None, prior=None))
 _MEASUREMENT_PREDICTION = ObjectFactory(GaussianMeasurementPrediction, dict(
     state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
     cross_covar=Matrix([[1.0]])))
@@ -360,10 +358,12 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             taken_mask = out["taken"]
         # deletion, then the initiator on the detections no track took (as the stock loop)
         self._tracks -= self._delete(self._tracks)
-        if taken_mask is None:
-            unassociated = set(detections)
+        free = list(detections) if taken_mask is None else \
+            [d for d, taken in zip(detections, taken_mask.tolist()) if not taken]
+        if isinstance(self.initiator, ArrayMultiMeasurementInitiator):
+            unassociated = OrderedDetections(free)  # still in stable order: not sorted again
         else:
-            unassociated = {d for d, taken in zip(detections, taken_mask.tolist()) if not taken}
+            unassociated = set(free)  # what the stock loop hands over
         new = self.initiator.initiate(unassociated, time)
         self._tracks |= new
         self._order.update(dict.fromkeys(in_track_order(new)))
