@@ -36,13 +36,18 @@ from stonesoup.hypothesiser.distance import DistanceHypothesiser
 from stonesoup.measures import Mahalanobis, SquaredMahalanobis
 from stonesoup.models.base import LinearModel, ReversibleModel
 from stonesoup.types.array import CovarianceMatrix, StateVector
-from stonesoup.types.hypothesis import SingleDistanceHypothesis
+from stonesoup.initiator.simple import SimpleMeasurementInitiator
+from stonesoup.models.measurement.linear import LinearGaussian
+from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
+from stonesoup.types.hypothesis import SingleDistanceHypothesis, SingleHypothesis
+from stonesoup.types.track import Track
 from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.state import GaussianState
 from stonesoup.types.update import Update
 
 from .deleter import UpdateTimeStepsDeleter
-from .fast import KALMAN_UPDATERS, ObjectFactory, measurement_batch, supports_predictor
+from .fast import (KALMAN_UPDATERS, ObjectFactory, _bearing_range_batch, measurement_batch,
+                   supports_predictor)
 from .fast_association import (
     FastGNNWith2DAssignment,
     _copied_properties,
@@ -190,12 +195,64 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         if self._records:
             assigned = self._associate(detections, timestamp)
             self._advance(assigned, detections, timestamp, associated, sure_tracks)
-        new = self.initiator.initiate({d for d in detections if id(d) not in associated},
-                                      timestamp)
+        new = self._new_tracks([d for d in detections if id(d) not in associated], timestamp)
         self.holding_tracks |= new
         if not self._sync(ndim):
             self._materialise_all()  # a new track the arrays cannot hold: re-read next scan
         return sure_tracks
+
+    # --- new holding tracks ----------------------------------------------------------------------
+    def _new_tracks(self, detections, timestamp):
+        """What the inner initiator returns for ``detections``. The default
+        :class:`~stonesoup.initiator.simple.SimpleMeasurementInitiator` is computed per
+        measurement model: a linear model's pseudo-inverse and initial covariance once, a
+        bearing–range model's finite-difference Jacobians, pseudo-inverses and covariances as
+        stacked arrays (the stock expressions, matrix by matrix); other initiators and models
+        run their own code."""
+        inner = self.initiator
+        if type(inner) is not SimpleMeasurementInitiator:
+            return inner.initiate(set(detections), timestamp)
+        groups: dict = {}
+        other = []
+        for det in detections:
+            model = det.measurement_model if det.measurement_model is not None \
+                else inner.measurement_model
+            kind = type(model)
+            if kind is LinearGaussian or (kind is CartesianToBearingRange
+                                          and len(model.mapping) == 2):
+                groups.setdefault(id(model), (model, []))[1].append(det)
+            else:
+                other.append(det)
+        tracks = inner.initiate(set(other), timestamp) if other else set()
+        prior = inner.prior_state
+        load = np.diag(np.array([inner.diag_load] * len(prior.state_vector)))
+        for model, dets in groups.values():
+            prior_vector = prior.state_vector.copy()
+            prior_covar = prior.covar.copy()
+            mapped = model.mapping
+            prior_vector[mapped, :] = 0
+            for dim in mapped:
+                prior_covar[dim, :] = prior_covar[:, dim] = 0
+            noise = model.covar()
+            if type(model) is LinearGaussian:
+                inverse = np.linalg.pinv(model.matrix())
+                covar = inverse @ noise @ inverse.T
+                covar = covar + prior_covar + load
+                vectors = [inverse @ det.state_vector for det in dets]
+                covars = [covar] * len(dets)
+            else:
+                vectors = [model.inverse_function(det) for det in dets]
+                means = np.array(vectors, dtype=np.float64)
+                _, _, _, jacobians = _bearing_range_batch(model, means, np.zeros(
+                    (len(dets),) + (means.shape[1],) * 2))
+                inverses = np.linalg.pinv(jacobians)
+                stacked = (inverses @ np.asarray(noise)[np.newaxis]) @ inverses.transpose(0, 2, 1)
+                covars = [c.view(CovarianceMatrix) + prior_covar + load for c in stacked]
+            for det, vector, covar in zip(dets, vectors, covars):
+                tracks.add(Track([Update.from_state(
+                    prior, state_vector=prior_vector + vector, covar=covar,
+                    hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)]))
+        return tracks
 
     def _associate(self, detections, timestamp):
         """Per holding row: the assigned (detection index, distance, measurement prediction,
