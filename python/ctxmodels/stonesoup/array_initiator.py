@@ -64,18 +64,33 @@ _PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
 
 
 class _Holding:
-    """A holding track: its Track (states up to the last update), its row in the arrays,
-    the coasting predictions not yet turned into states, the points counted towards
-    release and the distinct times since its last detection (the deleter's count)."""
+    """A holding track: its Track (states up to the last materialisation) and the first
+    scan block whose states it does not hold yet."""
 
-    __slots__ = ("track", "pending", "points", "since", "last_time")
+    __slots__ = ("track", "pending_from")
 
-    def __init__(self, track, points, since, last_time):
+    def __init__(self, track, pending_from):
         self.track = track
-        self.pending: list = []  # (mean view, covar view, timestamp)
-        self.points = points
-        self.since = since
-        self.last_time = last_time
+        self.pending_from = pending_from
+
+
+class _Block:
+    """One scan of the holding tracks: their predictions (rows in ``records`` order), the
+    scan time, the updates of the rows that were updated, the rows given no state."""
+
+    __slots__ = ("means", "covars", "timestamp", "records", "updates", "skipped", "_rows")
+
+    def __init__(self, means, covars, timestamp, records):
+        self.means, self.covars, self.timestamp = means, covars, timestamp
+        self.records = records
+        self.updates: dict = {}  # id(record) -> update state (its prediction's prior unset)
+        self.skipped: set = set()
+        self._rows = None
+
+    def row(self, record) -> int:
+        if self._rows is None:
+            self._rows = {id(r): k for k, r in enumerate(self.records)}
+        return self._rows[id(record)]
 
 
 class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
@@ -86,8 +101,14 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self._records: list[_Holding] = []
-        self._means = None  # (H, D, 1), aligned with _records
+        self._means = None  # (H, D, 1): each holding track's last state, aligned with _records
         self._covars = None  # (H, D, D)
+        self._since = np.empty(0, dtype=np.int64)  # distinct times since the last detection
+        self._counted = np.empty(0, dtype=np.int64)  # points towards release
+        self._last_times: list = []
+        self._blocks: dict[int, _Block] = {}
+        self._next_block = 0
+        self._linear_cache: dict = {}
         self.array_calls = 0
         self.component_calls = 0
 
@@ -112,30 +133,52 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
 
     # --- pending states ------------------------------------------------------------------------
     def _materialise(self, record: _Holding) -> None:
-        """Turn the record's coasting predictions into the states the component path appends:
-        predictions with the transition model and the previous state as prior."""
-        if not record.pending:
+        """Append the states the component path would have appended since the record's last
+        materialisation: predictions (transition model, previous state as prior) and updates
+        (their prediction's prior set to the previous state), in scan order."""
+        if record.pending_from >= self._next_block:
             return
         track = record.track
         transition = self.data_associator.hypothesiser.predictor.transition_model
-        for mean, covar, timestamp in record.pending:
+        key = id(record)
+        for b in range(record.pending_from, self._next_block):
+            block = self._blocks[b]
+            if key in block.skipped:
+                continue
             prior = track.state
             _weaken_prior_chain(prior)
+            update = block.updates.get(key)
+            if update is not None:
+                update.hypothesis.prediction.prior = prior
+                track.append(update)
+                continue
+            row = block.row(record)
             track.append(_PRIOR_PREDICTION(
-                state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
-                timestamp=timestamp, transition_model=transition, prior=prior,
+                state_vector=block.means[row].view(StateVector),
+                covar=block.covars[row].view(CovarianceMatrix), timestamp=block.timestamp,
+                transition_model=transition, prior=prior,
                 **{name: getattr(prior, name) for name in _copied_properties(type(prior))}))
-        record.pending = []
+        record.pending_from = self._next_block
 
     def _materialise_all(self) -> None:
         for record in self._records:
             self._materialise(record)
         self._records = []
         self._means = self._covars = None
+        self._since = np.empty(0, dtype=np.int64)
+        self._counted = np.empty(0, dtype=np.int64)
+        self._last_times = []
+        self._blocks = {}
         self._points = {}  # the component path recounts from the (now complete) tracks
 
-    def _record_of(self, track, ndim):
-        """A record read from a track (once per track joining the holding set)."""
+    def _prune_blocks(self) -> None:
+        oldest = min((r.pending_from for r in self._records), default=self._next_block)
+        for b in [b for b in self._blocks if b < oldest]:
+            del self._blocks[b]
+
+    def _read_track(self, track, ndim):
+        """(points, distinct times since the last detection) of a track joining the holding
+        set, or None if its last state cannot be held as arrays."""
         state = track.state if len(track) else None
         vector, covar = getattr(state, "state_vector", None), getattr(state, "covar", None)
         if not (isinstance(state, GaussianState) and _copied_properties(type(state)) is not None
@@ -150,27 +193,33 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             since.add(s.timestamp)
             if isinstance(s, Update) and s.hypothesis:
                 break
-        return _Holding(track, points, len(since), state.timestamp)
+        return points, len(since)
 
     def _sync(self, ndim) -> bool:
         """Aligns the records with :attr:`holding_tracks` (tracks removed or added from
-        outside); False if a holding track cannot be held as arrays."""
+        outside, new tracks in :func:`track_key` order, as the drop-in orders them); False
+        if a holding track cannot be held as arrays."""
         live = self.holding_tracks
-        known = {id(r.track) for r in self._records}
-        if len(known) == len(live) and all(id(t) in known for t in live):
+        records = self._records
+        if len(records) == len(live) and all(r.track in live for r in records):
             return True
-        keep = [k for k, r in enumerate(self._records) if r.track in live]
-        records = [self._records[k] for k in keep]
-        means = self._means[keep] if self._means is not None else np.empty((0, ndim, 1))
-        covars = self._covars[keep] if self._covars is not None else np.empty((0, ndim, ndim))
-        present = {id(r.track) for r in records}
-        added = [t for t in in_track_order(t for t in live if id(t) not in present)]
-        new = [self._record_of(t, ndim) for t in added]
-        if any(r is None for r in new):
+        keep = [k for k, r in enumerate(records) if r.track in live]
+        present = {id(records[k].track) for k in keep}
+        added = in_track_order(t for t in live if id(t) not in present)
+        read = [self._read_track(t, ndim) for t in added]
+        if any(r is None for r in read):
             return False
-        self._records = records + new
-        self._means = np.concatenate([means] + [r.track.state.state_vector[np.newaxis] for r in new])
-        self._covars = np.concatenate([covars] + [r.track.state.covar[np.newaxis] for r in new])
+        empty = self._means is None
+        self._records = [records[k] for k in keep] + [_Holding(t, self._next_block) for t in added]
+        self._means = np.concatenate(
+            [np.empty((0, ndim, 1)) if empty else self._means[keep]]
+            + [t.state.state_vector[np.newaxis] for t in added])
+        self._covars = np.concatenate(
+            [np.empty((0, ndim, ndim)) if empty else self._covars[keep]]
+            + [t.state.covar[np.newaxis] for t in added])
+        self._counted = np.concatenate([self._counted[keep], [p for p, _ in read]]).astype(np.int64)
+        self._since = np.concatenate([self._since[keep], [n for _, n in read]]).astype(np.int64)
+        self._last_times = [self._last_times[k] for k in keep] + [t.state.timestamp for t in added]
         return True
 
     # --- a scan ---------------------------------------------------------------------------------
@@ -235,11 +284,21 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 prior_covar[dim, :] = prior_covar[:, dim] = 0
             noise = model.covar()
             if type(model) is LinearGaussian:
-                inverse = np.linalg.pinv(model.matrix())
-                covar = inverse @ noise @ inverse.T
-                covar = covar + prior_covar + load
+                matrix = model.matrix()
+                # the pseudo-inverse and covariance of a model, while its numbers are the same
+                key = (matrix.tobytes(), np.asarray(noise).tobytes(), prior_covar.tobytes(),
+                       load.tobytes())
+                cached = self._linear_cache.get(id(model))
+                if cached is None or cached[0] is not model or cached[1] != key:
+                    inverse = np.linalg.pinv(matrix)
+                    covar = inverse @ noise @ inverse.T
+                    covar = covar + prior_covar + load
+                    cached = self._linear_cache[id(model)] = (model, key, inverse, covar)
+                    if len(self._linear_cache) > 16:
+                        self._linear_cache = {id(model): cached}
+                _, _, inverse, covar = cached
                 vectors = [inverse @ det.state_vector for det in dets]
-                covars = [covar] * len(dets)
+                covars = [covar.copy() for _ in dets]  # one array per state, as stock
             else:
                 vectors = [model.inverse_function(det) for det in dets]
                 means = np.array(vectors, dtype=np.float64)
@@ -266,8 +325,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         pred_means = np.empty_like(self._means)
         pred_covars = np.empty_like(self._covars)
         groups: dict = {}
-        for k, record in enumerate(records):
-            groups.setdefault(timestamp - record.last_time, []).append(k)
+        for k, last in enumerate(self._last_times):
+            groups.setdefault(timestamp - last, []).append(k)
         model = predictor.transition_model
         control = predictor.control_model
         for interval, members in groups.items():
@@ -333,57 +392,68 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         return assigned
 
     def _advance(self, assigned, detections, timestamp, associated, sure_tracks):
+        """Appends this scan's state to every holding row (a pending prediction, or the stock
+        update of its assigned detection), releases the rows with enough points and deletes
+        those past the deleter's limit, as the drop-in does track by track."""
         hypothesiser = self.data_associator.hypothesiser
-        transition = hypothesiser.predictor.transition_model
         pred_means, pred_covars = self._pred
         del self._pred
-        limit = self.deleter.time_steps_since_update
-        keep = np.ones(len(self._records), dtype=bool)
-        means, covars = pred_means, pred_covars
-        for k, (record, choice) in enumerate(zip(self._records, assigned)):
+        records = self._records
+        block = _Block(pred_means, pred_covars, timestamp, records)
+        index = self._next_block
+        self._blocks[index] = block
+        self._next_block += 1
+        means, covars = pred_means.copy(), pred_covars.copy()
+        new_time = np.fromiter((t != timestamp for t in self._last_times), dtype=bool,
+                               count=len(records))
+        appended = np.ones(len(records), dtype=bool)
+        updated = np.zeros(len(records), dtype=bool)
+        for k, choice in enumerate(assigned):
             if choice is None:  # no hypothesis from the assignment: stock appends nothing
+                block.skipped.add(id(records[k]))
                 means[k], covars[k] = self._means[k], self._covars[k]
-                continue
-            new_time = timestamp != record.last_time
-            if choice == "missed":
-                record.pending.append((pred_means[k], pred_covars[k], timestamp))
-                if not self.updates_only:
-                    record.points += 1
-                record.since += new_time
-            else:
+                appended[k] = False
+            elif choice != "missed":
                 column, distance, mp = choice
-                self._materialise(record)
-                track = record.track
-                prior = track.state
-                _weaken_prior_chain(prior)
+                record = records[k]
                 prediction = _PRIOR_PREDICTION(
                     state_vector=pred_means[k].view(StateVector),
                     covar=pred_covars[k].view(CovarianceMatrix), timestamp=timestamp,
-                    transition_model=transition, prior=prior,
-                    **{name: getattr(prior, name) for name in _copied_properties(type(prior))})
-                hypothesis = SingleDistanceHypothesis(prediction, detections[column], distance, mp)
-                state = self.updater.update(hypothesis)
-                track.append(state)
+                    transition_model=hypothesiser.predictor.transition_model, prior=None,
+                    **{name: getattr(record.track.state, name)
+                       for name in _copied_properties(type(record.track.state))})
+                state = self.updater.update(SingleDistanceHypothesis(
+                    prediction, detections[column], distance, mp))
+                block.updates[id(record)] = state
                 associated.add(id(detections[column]))
-                record.points += self._counts(state)
-                record.since = 1
+                updated[k] = True
                 means[k] = np.asarray(state.state_vector, dtype=np.float64)
                 covars[k] = np.asarray(state.covar, dtype=np.float64)
-            record.last_time = timestamp
-            if record.points >= self.min_points:
-                self._materialise(record)
-                sure_tracks.add(record.track)
-                self.holding_tracks.discard(record.track)
-                keep[k] = False
-        # the deleter on the remaining holding tracks: more distinct times than allowed since
-        # the last detection-backed state
-        for k, record in enumerate(self._records):
-            if keep[k] and record.since > limit:
-                self.holding_tracks.discard(record.track)
-                keep[k] = False
-        self._records = [r for r, kept in zip(self._records, keep) if kept]
-        self._means = means[keep]
-        self._covars = covars[keep]
+        # points: updates (and predictions unless updates_only); the deleter's count of
+        # distinct times: reset by a detection, one more for each new time
+        self._counted += updated if self.updates_only else appended
+        self._since = np.where(updated, 1, self._since + (appended & new_time))
+        self._last_times = [timestamp if a else t for a, t in zip(appended.tolist(),
+                                                                  self._last_times)]
+        keep = np.ones(len(records), dtype=bool)
+        for k in np.flatnonzero(appended & (self._counted >= self.min_points)).tolist():
+            record = records[k]
+            self._materialise(record)
+            sure_tracks.add(record.track)
+            self.holding_tracks.discard(record.track)
+            keep[k] = False
+        limit = self.deleter.time_steps_since_update
+        for k in np.flatnonzero(keep & (self._since > limit)).tolist():
+            self.holding_tracks.discard(records[k].track)
+            keep[k] = False
+        if not keep.all():
+            self._records = [r for r, kept in zip(records, keep.tolist()) if kept]
+            self._last_times = [t for t, kept in zip(self._last_times, keep.tolist()) if kept]
+            means, covars = means[keep], covars[keep]
+            self._counted, self._since = self._counted[keep], self._since[keep]
+        self._means, self._covars = means, covars
+        if index % 32 == 0:
+            self._prune_blocks()
 
 
 __all__ = ["ArrayMultiMeasurementInitiator"]
