@@ -240,7 +240,8 @@ def test_scenario_run_with_finite_difference_jacobian_agrees_to_the_measured_bou
 # --- the array initiator -------------------------------------------------------------------------
 def _states(track):
     return [(type(s).__name__, s.timestamp, s.state_vector.tobytes(), s.covar.tobytes(),
-             getattr(getattr(s, "hypothesis", None), "measurement", None)) for s in track.states]
+             getattr(getattr(s, "hypothesis", None), "measurement", None),
+             getattr(getattr(s, "hypothesis", None), "distance", None)) for s in track.states]
 
 
 @pytest.mark.parametrize("updates_only", [True, False])

@@ -342,12 +342,13 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             pred_covars[idx] = ((matrix[np.newaxis] @ self._covars[idx]) @ matrix.T[np.newaxis]
                                 + process) + ctrl_noise
 
-        hypotheses: list[list] = [[] for _ in range(n)]  # (column, distance, mp, group)
+        hypotheses: dict[int, list] = {}  # row -> [(column, distance, batch)]
         if detections:
             by_model: dict = {}
             for j, det in enumerate(detections):
                 by_model.setdefault(det.measurement_model, []).append(j)
             screen = FastGNNWith2DAssignment._screen
+            squared = type(measure) is SquaredMahalanobis
             for raw_model, members in by_model.items():
                 resolved = updater._check_measurement_model(raw_model)
                 batch = measurement_batch(updater, resolved, pred_means, pred_covars)
@@ -356,21 +357,35 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                     candidates = np.ones((n, len(members)), dtype=bool)
                 else:
                     candidates = screen(self.data_associator, batch, group_dets)
+                rows, cols = np.nonzero(candidates)
+                if not rows.size:
+                    continue
+                plain = not batch.angle_rows and all(
+                    group_dets[c].state_vector.dtype == np.float64 for c in set(cols.tolist()))
+                if plain:
+                    # the stock measure's arithmetic on float vectors: pinv of each S (one
+                    # stacked call, matrix by matrix), then its einsum per pair
+                    unique = sorted(set(rows.tolist()))
+                    inverses = dict(zip(unique, np.linalg.pinv(batch.covars[unique])))
                 cache: dict = {}
-                for row, col in zip(*np.nonzero(candidates)):
-                    row, col = int(row), int(col)
-                    mp = cache.get(row)
-                    if mp is None:
-                        mp = cache[row] = _measurement_prediction(batch, row, timestamp)
+                for row, col in zip(rows.tolist(), cols.tolist()):
                     det = group_dets[col]
-                    distance = measure(mp, det)
+                    if plain:
+                        delta = -(det.state_vector.T - batch.means[row])
+                        distance = np.einsum('ij,jk,ik->i', delta, inverses[row],
+                                             delta).squeeze()[()]
+                        if not squared:
+                            distance = np.sqrt(distance)
+                    else:
+                        mp = cache.get(row)
+                        if mp is None:
+                            mp = cache[row] = _measurement_prediction(batch, row, timestamp)
+                        distance = measure(mp, det)
                     if hypothesiser.include_all or distance < missed_distance:
-                        hypotheses[row].append((members[col], distance, mp))
-        for row in hypotheses:
-            row.sort(key=lambda h: h[0])
+                        hypotheses.setdefault(row, []).append((members[col], distance, batch))
 
         assigned: list = ["missed"] * n
-        detected = [k for k in range(n) if hypotheses[k]]
+        detected = sorted(hypotheses)
         if detected:
             n_dets = len(detections)
             costs = np.full((len(detected), n_dets + len(detected)), np.inf)
@@ -387,7 +402,10 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 if column == n_dets + i:
                     continue
                 chosen = next((h for h in hypotheses[k] if h[0] == column), None)
-                assigned[k] = None if chosen is None else chosen
+                if chosen is not None:
+                    column, distance, batch = chosen
+                    chosen = (column, distance, _measurement_prediction(batch, k, timestamp))
+                assigned[k] = chosen
         self._pred = (pred_means, pred_covars)
         return assigned
 
