@@ -38,6 +38,7 @@ from stonesoup.models.base import LinearModel, ReversibleModel
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.initiator.simple import SimpleMeasurementInitiator
 from stonesoup.models.measurement.linear import LinearGaussian
+from stonesoup.models.measurement import nonlinear as _nonlinear
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.hypothesis import SingleDistanceHypothesis, SingleHypothesis
 from stonesoup.types.track import Track
@@ -48,7 +49,9 @@ from stonesoup.types.update import Update
 from .deleter import UpdateTimeStepsDeleter
 from .fast import (KALMAN_UPDATERS, ObjectFactory, _bearing_range_batch, measurement_batch,
                    supports_predictor)
+from .fast import apply_wrap, detection_vectors, wrap_plan
 from .fast_association import (
+    SCREEN_MARGIN,
     FastGNNWith2DAssignment,
     _copied_properties,
     _measurement_prediction,
@@ -61,6 +64,53 @@ from .ordering import OrderedDetections, in_stable_order, in_track_order
 _PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
     state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
     transition_model=None, prior=None))
+
+
+def _inverse_bearing_range(model, detections) -> list:
+    """``model.inverse_function(det)`` for each detection, with the same operations (the
+    inverse rotation, a deterministic function of the model, computed once)."""
+    if not (model.rotation_offset[0] == 0 and model.rotation_offset[1] == 0):
+        return [model.inverse_function(det) for det in detections]  # the stock error
+    inverse_rotation = _nonlinear.inv(model.rotation_matrix)
+    offset = model.translation_offset[:2, :]
+    mapping = model.mapping[:2]
+    vectors = []
+    for det in detections:
+        vector = det.state_vector
+        x, y = _nonlinear.pol2cart(vector[1, :], vector[0, :])
+        xyz = inverse_rotation @ np.array([x, y, np.zeros(vector.shape[1])])
+        res = np.zeros((model.ndim_state, vector.shape[1])).view(StateVector)
+        res[mapping, :] = xyz[0:2] + offset
+        vectors.append(res)
+    return vectors
+
+
+def _screen(batch, dets, missed_distance: float, squared: bool) -> np.ndarray:
+    """``(N, K)`` mask of the pairs that may pass the gate, as
+    :meth:`FastGNNWith2DAssignment._screen` decides it but with LU inverses of the
+    innovation covariances (cheaper than pseudo-inverses; the 1e-6 relative margin covers
+    the difference many times over). Every pair when the arrays cannot be formed."""
+    everything = np.ones((len(batch.means), len(dets)), dtype=bool)
+    try:
+        z, kinds = detection_vectors(dets)
+        if z.ndim != 2 or z.shape[1] != batch.means.shape[1]:
+            return everything
+        plan = wrap_plan(batch.angle_rows, kinds, z.shape[1])
+        delta = apply_wrap(-apply_wrap(z[np.newaxis] - batch.means[:, np.newaxis], plan), plan)
+        inverse = np.linalg.inv(batch.covars)
+    except (ValueError, TypeError, np.linalg.LinAlgError):
+        return everything
+    terms = delta[:, :, :, np.newaxis] * inverse[:, np.newaxis] * delta[:, :, np.newaxis, :]
+    d2 = terms.sum(axis=(2, 3))
+    slack = SCREEN_MARGIN * np.abs(terms).sum(axis=(2, 3))
+    if squared:
+        threshold = missed_distance
+    elif missed_distance > 0:
+        threshold = missed_distance * missed_distance
+    else:
+        return np.zeros_like(everything)
+    with np.errstate(invalid="ignore", over="ignore"):
+        return ~(d2 - slack > threshold)
 
 
 class _Holding:
@@ -206,20 +256,32 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         keep = [k for k, r in enumerate(records) if r.track in live]
         present = {id(records[k].track) for k in keep}
         added = in_track_order(t for t in live if id(t) not in present)
+        if len(keep) < len(records):
+            self._records = [records[k] for k in keep]
+            if self._means is not None:
+                self._means, self._covars = self._means[keep], self._covars[keep]
+            self._counted, self._since = self._counted[keep], self._since[keep]
+            self._last_times = [self._last_times[k] for k in keep]
+        return self._add(added, ndim)
+
+    def _add(self, added, ndim) -> bool:
+        """Appends records for the tracks ``added`` (in that order) to the holding rows."""
+        if not added:
+            return True
         read = [self._read_track(t, ndim) for t in added]
         if any(r is None for r in read):
             return False
         empty = self._means is None
-        self._records = [records[k] for k in keep] + [_Holding(t, self._next_block) for t in added]
+        self._records = self._records + [_Holding(t, self._next_block) for t in added]
         self._means = np.concatenate(
-            [np.empty((0, ndim, 1)) if empty else self._means[keep]]
+            [np.empty((0, ndim, 1)) if empty else self._means]
             + [t.state.state_vector[np.newaxis] for t in added])
         self._covars = np.concatenate(
-            [np.empty((0, ndim, ndim)) if empty else self._covars[keep]]
+            [np.empty((0, ndim, ndim)) if empty else self._covars]
             + [t.state.covar[np.newaxis] for t in added])
-        self._counted = np.concatenate([self._counted[keep], [p for p, _ in read]]).astype(np.int64)
-        self._since = np.concatenate([self._since[keep], [n for _, n in read]]).astype(np.int64)
-        self._last_times = [self._last_times[k] for k in keep] + [t.state.timestamp for t in added]
+        self._counted = np.concatenate([self._counted, [p for p, _ in read]]).astype(np.int64)
+        self._since = np.concatenate([self._since, [n for _, n in read]]).astype(np.int64)
+        self._last_times = self._last_times + [t.state.timestamp for t in added]
         return True
 
     # --- a scan ---------------------------------------------------------------------------------
@@ -246,7 +308,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             self._advance(assigned, detections, timestamp, associated, sure_tracks)
         new = self._new_tracks([d for d in detections if id(d) not in associated], timestamp)
         self.holding_tracks |= new
-        if not self._sync(ndim):
+        if not self._add(in_track_order(new), ndim):
             self._materialise_all()  # a new track the arrays cannot hold: re-read next scan
         return sure_tracks
 
@@ -300,7 +362,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 vectors = [inverse @ det.state_vector for det in dets]
                 covars = [covar.copy() for _ in dets]  # one array per state, as stock
             else:
-                vectors = [model.inverse_function(det) for det in dets]
+                vectors = _inverse_bearing_range(model, dets)
                 means = np.array(vectors, dtype=np.float64)
                 _, _, _, jacobians = _bearing_range_batch(model, means, np.zeros(
                     (len(dets),) + (means.shape[1],) * 2))
@@ -347,7 +409,6 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             by_model: dict = {}
             for j, det in enumerate(detections):
                 by_model.setdefault(det.measurement_model, []).append(j)
-            screen = FastGNNWith2DAssignment._screen
             squared = type(measure) is SquaredMahalanobis
             for raw_model, members in by_model.items():
                 resolved = updater._check_measurement_model(raw_model)
@@ -356,7 +417,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 if hypothesiser.include_all:
                     candidates = np.ones((n, len(members)), dtype=bool)
                 else:
-                    candidates = screen(self.data_associator, batch, group_dets)
+                    candidates = _screen(batch, group_dets, float(missed_distance), squared)
                 rows, cols = np.nonzero(candidates)
                 if not rows.size:
                     continue

@@ -82,7 +82,7 @@ from .fast import KALMAN_UPDATERS, ObjectFactory, supports_predictor
 from .fast_association import _copied_properties
 from .hypothesiser import PDAHypothesiser, is_detection_backed, scan_context
 from .mixture_tracker import MultiTargetMixtureTracker
-from .ordering import OrderedDetections, in_track_order
+from .ordering import OrderedDetections, detection_key, in_track_order
 
 _ASSOCIATORS = (JPDAwithEHM2, JPDAwithEHM, JPDA)
 _HYPOTHESISERS = (_StockPDAHypothesiser, PDAHypothesiser)
@@ -260,6 +260,8 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         super().__init__(*args, **kwargs)
         self._counters: dict[Track, _MissCounter] = {}
         self._models: dict = {}
+        self._model_keys: dict = {}
+        self._model_refs: dict = {}
         self.array_scans = 0
         self.component_scans = 0
 
@@ -301,6 +303,27 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         return cached
 
     # --- the scan -------------------------------------------------------------------------
+    def __next__(self):
+        time, detections = next(self.detector_iter)
+        return self._scan(time, self._in_stable_order(detections))
+
+    def _in_stable_order(self, detections) -> OrderedDetections:
+        """:func:`~ctxmodels.stonesoup.in_stable_order`, with each measurement model's key
+        (its type and repr) computed once per model object rather than once per scan. The
+        models stay referenced while their keys are kept (so no id is reused meanwhile);
+        a model whose Properties are changed in place keeps its first key."""
+        keys, models = self._model_keys, self._model_refs
+        if len(models) > 64:
+            keys.clear()
+            models.clear()
+        for det in detections:
+            model = getattr(det, "measurement_model", None)
+            if id(model) not in models:
+                models[id(model)] = model
+                keys[id(model)] = "" if model is None else f"{type(model).__qualname__}{model!r}"
+        ordered = sorted(detections, key=lambda d: detection_key(d, keys))
+        return OrderedDetections(ordered, getattr(detections, "detector_context", None))
+
     def _scan(self, time, detections):
         result = self._array_scan(time, detections)
         if result is None:
