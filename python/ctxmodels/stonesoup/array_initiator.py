@@ -44,7 +44,7 @@ from stonesoup.types.hypothesis import SingleDistanceHypothesis, SingleHypothesi
 from stonesoup.types.track import Track
 from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.state import GaussianState
-from stonesoup.types.update import Update
+from stonesoup.types.update import GaussianStateUpdate, Update
 
 from .deleter import UpdateTimeStepsDeleter
 from .fast import (KALMAN_UPDATERS, ObjectFactory, _bearing_range_batch, measurement_batch,
@@ -111,6 +111,11 @@ def _screen(batch, dets, missed_distance: float, squared: bool) -> np.ndarray:
         return np.zeros_like(everything)
     with np.errstate(invalid="ignore", over="ignore"):
         return ~(d2 - slack > threshold)
+
+#: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
+_UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(
+    state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]),
+    hypothesis=SingleHypothesis(None, None), timestamp=None))
 
 
 class _Holding:
@@ -369,11 +374,38 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 inverses = np.linalg.pinv(jacobians)
                 stacked = (inverses @ np.asarray(noise)[np.newaxis]) @ inverses.transpose(0, 2, 1)
                 covars = [c.view(CovarianceMatrix) + prior_covar + load for c in stacked]
+            plain = type(prior) is GaussianState
             for det, vector, covar in zip(dets, vectors, covars):
-                tracks.add(Track([Update.from_state(
-                    prior, state_vector=prior_vector + vector, covar=covar,
-                    hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)]))
+                if plain:  # what Update.from_state builds from a plain GaussianState
+                    state = _UPDATE_STATE(
+                        state_vector=(prior_vector + vector).view(StateVector),
+                        covar=covar.view(CovarianceMatrix),
+                        hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)
+                else:
+                    state = Update.from_state(
+                        prior, state_vector=prior_vector + vector, covar=covar,
+                        hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)
+                tracks.add(Track([state]))
         return tracks
+
+    def _update(self, hypothesis):
+        """``self.updater.update(hypothesis)``: for float vectors under a Kalman updater
+        without covariance options, the same NumPy expressions without the updater's
+        per-call machinery (the same numbers, bit for bit)."""
+        updater = self.updater
+        mp, measurement = hypothesis.measurement_prediction, hypothesis.measurement
+        if (type(updater) not in KALMAN_UPDATERS or updater.use_joseph_cov
+                or updater.force_symmetric_covariance
+                or updater.force_positive_definite_covariance
+                or mp.state_vector.dtype != np.float64
+                or measurement.state_vector.dtype != np.float64):
+            return updater.update(hypothesis)
+        prediction = hypothesis.prediction
+        gain = mp.cross_covar @ np.linalg.inv(mp.covar)
+        covar = prediction.covar - gain @ mp.covar @ gain.T
+        mean = prediction.state_vector + gain @ (measurement.state_vector - mp.state_vector)
+        return _UPDATE_STATE(state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
+                             hypothesis=hypothesis, timestamp=measurement.timestamp)
 
     def _associate(self, detections, timestamp):
         """Per holding row: the assigned (detection index, distance, measurement prediction,
@@ -501,7 +533,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                     transition_model=hypothesiser.predictor.transition_model, prior=None,
                     **{name: getattr(record.track.state, name)
                        for name in _copied_properties(type(record.track.state))})
-                state = self.updater.update(SingleDistanceHypothesis(
+                state = self._update(SingleDistanceHypothesis(
                     prediction, detections[column], distance, mp))
                 block.updates[id(record)] = state
                 associated.add(id(detections[column]))
