@@ -210,7 +210,7 @@ pub fn predict(dim: usize, means: &[f64], covars: &[f64], index: &[usize], matri
     let tracks = index.len();
     check_states(dim, tracks, means, covars)?;
     let dd = dim * dim;
-    if matrices.len() % dd.max(1) != 0 || matrices.len() != noises.len() {
+    if !matrices.len().is_multiple_of(dd.max(1)) || matrices.len() != noises.len() {
         return Err(ModelError::shape("transition_matrices", format!("must be (K, {dim}, {dim}) like transition_covars")));
     }
     let kinds = matrices.len() / dd.max(1);
@@ -796,7 +796,7 @@ pub fn brute_force_marginals(weights: &[f64], valid: &[bool], tracks: usize, det
         }
         break;
     }
-    if !(total > 0.0) {
+    if total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(no_event(&(0..tracks).collect::<Vec<_>>()));
     }
     Ok(sums.iter().map(|s| s / total).collect())
@@ -937,8 +937,8 @@ mod tests {
         let lik = |dx: f64, dy: f64| (-(dx * dx + dy * dy) / (2.0 * s)).exp() / (2.0 * PI * s);
         let w = [1.0 - 0.9 * 0.95, 0.9 * lik(0.5, -0.3) / 0.125, 0.9 * lik(1.2, 0.4) / 0.125];
         let total: f64 = w.iter().sum();
-        for k in 0..3 {
-            assert!((out.weights[k] - w[k] / total).abs() < 1e-14);
+        for (k, wk) in w.iter().enumerate() {
+            assert!((out.weights[k] - wk / total).abs() < 1e-14);
         }
         let gain = 1.5 / s;
         let x0 = w[1] / total * gain * 0.5 + w[2] / total * gain * 1.2;

@@ -484,3 +484,22 @@ def test_same_numbers_across_processes_hash_seeds_and_thread_counts():
                              capture_output=True, text=True)
         results.append(json.loads(out.stdout))
     assert results[0] == results[1] and results[0][1] == 20
+
+
+# --- the benchmark script ------------------------------------------------------------------------
+def test_benchmark_script_runs_and_reports_both_paths(tmp_path):
+    """benches/bench_jpda.py on a short run: both paths track every scan and the JSON has
+    the promised shape (no timing is asserted)."""
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[1] / "benches" / "bench_jpda.py"
+    spec = importlib.util.spec_from_file_location("bench_jpda", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    out = tmp_path / "jpda.json"
+    assert module.main(["--duration", "4", "--json", str(out)]) == 0
+    results = json.loads(out.read_text())
+    assert results["array"]["scans"] == results["component"]["scans"] > 30
+    assert results["array"]["component_scans"] == 0
+    assert results["array"]["tracks"] == results["component"]["tracks"]
+    assert results["speed_up"] > 0

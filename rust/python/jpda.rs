@@ -86,6 +86,9 @@ fn check_covars(means: &Bound<'_, PyArray2<f64>>, covars: &Bound<'_, PyArray3<f6
     Ok((n, dim))
 }
 
+/// Predicted means (T, D) and covariances (T, D, D).
+type Predicted<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray3<f64>>);
+
 /// Kalman prediction of `means` (T, D) / `covars` (T, D, D): track t with the transition
 /// `transition_index[t]` of `transition_matrices` / `transition_covars` (K, D, D).
 #[pyfunction]
@@ -96,7 +99,7 @@ fn jpda_predict<'py>(
     transition_index: Vec<i64>,
     transition_matrices: Bound<'py, PyArray3<f64>>,
     transition_covars: Bound<'py, PyArray3<f64>>,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray3<f64>>)> {
+) -> PyResult<Predicted<'py>> {
     let (n, dim) = check_covars(&means, &covars)?;
     if transition_index.len() != n {
         return Err(value_error("transition_index", format_args!("must have {n} entries (one per track), got {}", transition_index.len())));
