@@ -11,6 +11,7 @@ pub mod cubature;
 pub mod detection;
 pub mod error;
 pub mod gmphd;
+pub mod jpda;
 pub mod land;
 pub mod pose;
 pub mod range_bands;

@@ -25,6 +25,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
 
 mod mixture;
+mod jpda;
 
 fn to_py(err: ModelError) -> PyErr {
     PyValueError::new_err(err.to_string())
@@ -459,5 +460,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mount, m)?)?;
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;
     mixture::register(m)?;
+    jpda::register(m)?;
     Ok(())
 }

@@ -18,11 +18,15 @@ __all__ = [
     "ClutterModel",
     "DetectionModel",
     "GaussianMixtureArrays",
+    "JPDAMeasurementModel",
     "LandMask",
     "LineOfSight",
     "MetadataThreshold",
     "RangeBands",
     "ScanMeasurementModel",
+    "jpda_marginals",
+    "jpda_predict",
+    "jpda_scan",
     "mount",
     "rule_points",
 ]
@@ -245,3 +249,57 @@ class GaussianMixtureArrays:
     def times(self) -> NDArray[np.int64]: ...
     def __reduce__(self) -> tuple[Any, ...]: ...
     def __setstate__(self, state: tuple[Any, ...]) -> None: ...
+# --- whole-scan JPDA (source: rust/python/jpda.rs) ------------------------------------------
+# Used by ctxmodels.stonesoup.ArrayJPDATracker; see rust/jpda.rs for the mathematics.
+
+@final
+class JPDAMeasurementModel:
+    """The measurement model of one scan's detections, for `jpda_scan`."""
+
+    @staticmethod
+    def linear(matrix: _Floats, noise_covar: _Floats) -> JPDAMeasurementModel:
+        """A linear Gaussian model: `matrix` (m, D), `noise_covar` (m, m)."""
+    @staticmethod
+    def bearing_range(
+        mapping: tuple[int, int],
+        translation_offset: tuple[float, float],
+        rotation_matrix: _Floats,
+        noise_covar: _Floats,
+        jacobian: Literal["finite-difference", "analytic"] = "finite-difference",
+    ) -> JPDAMeasurementModel:
+        """A 2-D bearing–range model (Stone Soup's `CartesianToBearingRange`)."""
+    @property
+    def ndim_meas(self) -> int:
+        """Number of measured values per detection."""
+
+def jpda_predict(
+    means: _Floats,
+    covars: _Floats,
+    transition_index: Sequence[int],
+    transition_matrices: _Floats,
+    transition_covars: _Floats,
+) -> tuple[_Floats, _Floats]:
+    """Kalman prediction of `means` (T, D) / `covars` (T, D, D) with transition
+    `transition_index[t]` of `transition_matrices` / `transition_covars` (K, D, D)."""
+
+def jpda_scan(
+    model: JPDAMeasurementModel,
+    means: _Floats,
+    covars: _Floats,
+    detections: _Floats,
+    prob_detect: _Floats,
+    clutter_density: _Floats,
+    prob_gate: float,
+    gate_threshold: float,
+    include_all: bool = False,
+    *,
+    force_symmetric: bool = False,
+) -> dict[str, _Floats | _Bools]:
+    """One JPDA scan: keys means, covars, is_update, taken, gated, weights, marginals,
+    meas_means, meas_covars, cross_covars."""
+
+def jpda_marginals(weights: _Floats, gated: _Bools) -> _Floats:
+    """Exact joint association marginals of (T, M+1) weights (column 0: missed detection)
+    and the (T, M) gated hypotheses."""
+
+# --- end of whole-scan JPDA -------------------------------------------------------------------

@@ -19,6 +19,11 @@
   a scan at a time in stacked arrays; :class:`FastGNNWith2DAssignment`, the stock GNN
   association (e.g. inside ``MultiMeasurementInitiator``) with all track × detection
   distances of a scan computed at once.
+* Whole-scan JPDA: :class:`ArrayJPDATracker`, the (J)PDA mixture tracker with each scan
+  computed by one call into the Rust core (association marginals, updates, mixture
+  reduction), falling back to the component path for configurations it does not cover;
+  :class:`ArrayMultiMeasurementInitiator`, the M-of-N initiator with its holding tracks as
+  arrays.
 * Reproducibility: :class:`MultiTargetMixtureTracker` and :class:`MultiMeasurementInitiator`
   (the stock JPDA tracker and M-of-N initiator in a stable order); every ctxmodels tracker
   puts a scan's detections in value order (:func:`in_stable_order`) and never lets set
@@ -31,6 +36,8 @@
   no longer depends on the last bit of its inputs.
 """
 from .array_tracker import ArrayPointProcessTracker
+from .array_initiator import ArrayMultiMeasurementInitiator
+from .array_jpda import ArrayJPDATracker
 from .birth import MeasurementDrivenBirth
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast_association import FastGNNWith2DAssignment
@@ -49,6 +56,8 @@ from .transition import CachedCombinedLinearGaussianTransitionModel
 __all__ = [
     "ArrayPointProcessTracker",
     "AnalyticCartesianToBearingRange",
+    "ArrayJPDATracker",
+    "ArrayMultiMeasurementInitiator",
     "BernoulliParticleUpdater",
     "CachedCombinedLinearGaussianTransitionModel",
     "CircularRegion",

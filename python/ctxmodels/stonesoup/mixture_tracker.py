@@ -56,7 +56,10 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
 
     def __next__(self) -> tuple[datetime.datetime, set[Track]]:
         time, detections = next(self.detector_iter)
-        detections = in_stable_order(detections)
+        return self._scan(time, in_stable_order(detections))
+
+    def _scan(self, time, detections) -> tuple[datetime.datetime, set[Track]]:
+        """One scan of the stock loop on ``detections`` already in stable order."""
         tracks = self.tracks_in_order
         associations = self.data_associator.associate(tracks, detections, time)
         taken = set()

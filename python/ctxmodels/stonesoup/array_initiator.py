@@ -1,0 +1,571 @@
+r"""The M-of-N initiator with its holding tracks kept as arrays.
+
+:class:`ArrayMultiMeasurementInitiator` has the Properties of ctxmodels'
+:class:`~ctxmodels.stonesoup.MultiMeasurementInitiator` and releases the same tracks, with
+the same states, scan for scan. In a JPDA run most detections are clutter and each starts a
+holding track that coasts, unassociated, until the deleter drops it 30 scans later: a
+hundred holding tracks, each predicted, hypothesised and given a prediction object every
+scan, most never released. Here the holding tracks' means and covariances are stacked
+arrays; a scan predicts them in one product, screens all track × detection pairs at once
+(as :class:`~ctxmodels.stonesoup.FastGNNWith2DAssignment` does) and takes Stone Soup's own
+distance, assignment and Kalman update for the few pairs that can pass the gate. A holding
+track's coasting predictions are kept as array rows and turned into Stone Soup states only
+when the track is updated or released; the deleter's verdict comes from a count of the
+distinct times since the track's last detection.
+
+So a holding track (in :attr:`holding_tracks`, the live set, as stock) holds its states up
+to its last update; the predictions since are added when it is updated or released, or
+when a scan runs the component path. Released tracks are complete.
+
+Supported (anything else runs ctxmodels' :class:`MultiMeasurementInitiator` code, after
+the pending states are added): a :class:`~stonesoup.dataassociator.neighbour.GNNWith2DAssignment`
+or :class:`~ctxmodels.stonesoup.FastGNNWith2DAssignment` over a plain
+:class:`~stonesoup.hypothesiser.distance.DistanceHypothesiser` (Mahalanobis or squared
+Mahalanobis measure without mapping, no ``predict_with_measurements``), a Kalman / extended
+Kalman predictor with a linear Gaussian transition model, Kalman / extended Kalman updaters,
+a stock or ctxmodels ``UpdateTimeStepsDeleter`` (``delete_last_pred`` off), Gaussian
+float64 states, and detections stamped with the scan time.
+"""
+from __future__ import annotations
+
+import numpy as np
+from stonesoup.dataassociator import neighbour as _stock_neighbour
+from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
+from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
+from stonesoup.hypothesiser.distance import DistanceHypothesiser
+from stonesoup.measures import Mahalanobis, SquaredMahalanobis
+from stonesoup.models.base import LinearModel, ReversibleModel
+from stonesoup.types.array import CovarianceMatrix, StateVector
+from stonesoup.initiator.simple import SimpleMeasurementInitiator
+from stonesoup.models.measurement.linear import LinearGaussian
+from stonesoup.models.measurement import nonlinear as _nonlinear
+from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
+from stonesoup.types.hypothesis import SingleDistanceHypothesis, SingleHypothesis
+from stonesoup.types.track import Track
+from stonesoup.types.prediction import GaussianStatePrediction
+from stonesoup.types.state import GaussianState
+from stonesoup.types.update import GaussianStateUpdate, Update
+
+from .deleter import UpdateTimeStepsDeleter
+from .fast import (KALMAN_UPDATERS, ObjectFactory, _bearing_range_batch, measurement_batch,
+                   supports_predictor)
+from .fast import apply_wrap, detection_vectors, wrap_plan
+from .fast_association import (
+    SCREEN_MARGIN,
+    FastGNNWith2DAssignment,
+    _copied_properties,
+    _measurement_prediction,
+    _weaken_prior_chain,
+)
+from .mixture_tracker import MultiMeasurementInitiator
+from .ordering import OrderedDetections, in_stable_order, in_track_order
+
+#: A prediction as ``Prediction.from_state`` builds it (transition model and prior).
+_PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
+    state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
+    transition_model=None, prior=None))
+
+
+def _inverse_bearing_range(model, detections) -> list:
+    """``model.inverse_function(det)`` for each detection, with the same operations (the
+    inverse rotation, a deterministic function of the model, computed once)."""
+    if not (model.rotation_offset[0] == 0 and model.rotation_offset[1] == 0):
+        return [model.inverse_function(det) for det in detections]  # the stock error
+    inverse_rotation = _nonlinear.inv(model.rotation_matrix)
+    offset = model.translation_offset[:2, :]
+    mapping = model.mapping[:2]
+    vectors = []
+    for det in detections:
+        vector = det.state_vector
+        x, y = _nonlinear.pol2cart(vector[1, :], vector[0, :])
+        xyz = inverse_rotation @ np.array([x, y, np.zeros(vector.shape[1])])
+        res = np.zeros((model.ndim_state, vector.shape[1])).view(StateVector)
+        res[mapping, :] = xyz[0:2] + offset
+        vectors.append(res)
+    return vectors
+
+
+def _screen(batch, dets, missed_distance: float, squared: bool) -> np.ndarray:
+    """``(N, K)`` mask of the pairs that may pass the gate, as
+    :meth:`FastGNNWith2DAssignment._screen` decides it but with LU inverses of the
+    innovation covariances (cheaper than pseudo-inverses; the 1e-6 relative margin covers
+    the difference many times over). Every pair when the arrays cannot be formed."""
+    everything = np.ones((len(batch.means), len(dets)), dtype=bool)
+    try:
+        z, kinds = detection_vectors(dets)
+        if z.ndim != 2 or z.shape[1] != batch.means.shape[1]:
+            return everything
+        plan = wrap_plan(batch.angle_rows, kinds, z.shape[1])
+        delta = apply_wrap(-apply_wrap(z[np.newaxis] - batch.means[:, np.newaxis], plan), plan)
+        inverse = np.linalg.inv(batch.covars)
+    except (ValueError, TypeError, np.linalg.LinAlgError):
+        return everything
+    terms = delta[:, :, :, np.newaxis] * inverse[:, np.newaxis] * delta[:, :, np.newaxis, :]
+    d2 = terms.sum(axis=(2, 3))
+    slack = SCREEN_MARGIN * np.abs(terms).sum(axis=(2, 3))
+    if squared:
+        threshold = missed_distance
+    elif missed_distance > 0:
+        threshold = missed_distance * missed_distance
+    else:
+        return np.zeros_like(everything)
+    with np.errstate(invalid="ignore", over="ignore"):
+        return ~(d2 - slack > threshold)
+
+#: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
+_UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(
+    state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]),
+    hypothesis=SingleHypothesis(None, None), timestamp=None))
+
+
+class _Holding:
+    """A holding track: its Track (states up to the last materialisation) and the first
+    scan block whose states it does not hold yet."""
+
+    __slots__ = ("track", "pending_from")
+
+    def __init__(self, track, pending_from):
+        self.track = track
+        self.pending_from = pending_from
+
+
+class _Block:
+    """One scan of the holding tracks: their predictions (rows in ``records`` order), the
+    scan time, the updates of the rows that were updated, the rows given no state."""
+
+    __slots__ = ("means", "covars", "timestamp", "records", "updates", "skipped", "_rows")
+
+    def __init__(self, means, covars, timestamp, records):
+        self.means, self.covars, self.timestamp = means, covars, timestamp
+        self.records = records
+        self.updates: dict = {}  # id(record) -> update state (its prediction's prior unset)
+        self.skipped: set = set()
+        self._rows = None
+
+    def row(self, record) -> int:
+        if self._rows is None:
+            self._rows = {id(r): k for k, r in enumerate(self.records)}
+        return self._rows[id(record)]
+
+
+class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
+    """ctxmodels' :class:`MultiMeasurementInitiator` with the holding tracks as arrays (see
+    the module docstring): the same released tracks and states. :attr:`array_calls` and
+    :attr:`component_calls` count the calls each path ran."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._records: list[_Holding] = []
+        self._means = None  # (H, D, 1): each holding track's last state, aligned with _records
+        self._covars = None  # (H, D, D)
+        self._since = np.empty(0, dtype=np.int64)  # distinct times since the last detection
+        self._counted = np.empty(0, dtype=np.int64)  # points towards release
+        self._last_times: list = []
+        self._blocks: dict[int, _Block] = {}
+        self._next_block = 0
+        self._linear_cache: dict = {}
+        self.array_calls = 0
+        self.component_calls = 0
+
+    # --- configuration ----------------------------------------------------------------------
+    def _supported(self) -> bool:
+        associator = self.data_associator
+        if type(associator) not in (GNNWith2DAssignment, FastGNNWith2DAssignment):
+            return False
+        hypothesiser = associator.hypothesiser
+        if type(hypothesiser) is not DistanceHypothesiser or hypothesiser.predict_with_measurements:
+            return False
+        measure = hypothesiser.measure
+        if type(measure) not in (Mahalanobis, SquaredMahalanobis) or measure.mapping is not None:
+            return False
+        if not supports_predictor(hypothesiser.predictor):
+            return False
+        if type(hypothesiser.updater) not in KALMAN_UPDATERS or type(self.updater) not in KALMAN_UPDATERS:
+            return False
+        deleter = self.deleter
+        return (type(deleter) in (UpdateTimeStepsDeleter, _StockUpdateTimeStepsDeleter)
+                and not deleter.delete_last_pred)
+
+    # --- pending states ------------------------------------------------------------------------
+    def _materialise(self, record: _Holding) -> None:
+        """Append the states the component path would have appended since the record's last
+        materialisation: predictions (transition model, previous state as prior) and updates
+        (their prediction's prior set to the previous state), in scan order."""
+        if record.pending_from >= self._next_block:
+            return
+        track = record.track
+        transition = self.data_associator.hypothesiser.predictor.transition_model
+        key = id(record)
+        for b in range(record.pending_from, self._next_block):
+            block = self._blocks[b]
+            if key in block.skipped:
+                continue
+            prior = track.state
+            _weaken_prior_chain(prior)
+            update = block.updates.get(key)
+            if update is not None:
+                update.hypothesis.prediction.prior = prior
+                track.append(update)
+                continue
+            row = block.row(record)
+            track.append(_PRIOR_PREDICTION(
+                state_vector=block.means[row].view(StateVector),
+                covar=block.covars[row].view(CovarianceMatrix), timestamp=block.timestamp,
+                transition_model=transition, prior=prior,
+                **{name: getattr(prior, name) for name in _copied_properties(type(prior))}))
+        record.pending_from = self._next_block
+
+    def _materialise_all(self) -> None:
+        for record in self._records:
+            self._materialise(record)
+        self._records = []
+        self._means = self._covars = None
+        self._since = np.empty(0, dtype=np.int64)
+        self._counted = np.empty(0, dtype=np.int64)
+        self._last_times = []
+        self._blocks = {}
+        self._points = {}  # the component path recounts from the (now complete) tracks
+
+    def _prune_blocks(self) -> None:
+        oldest = min((r.pending_from for r in self._records), default=self._next_block)
+        for b in [b for b in self._blocks if b < oldest]:
+            del self._blocks[b]
+
+    def _read_track(self, track, ndim):
+        """(points, distinct times since the last detection) of a track joining the holding
+        set, or None if its last state cannot be held as arrays."""
+        state = track.state if len(track) else None
+        vector, covar = getattr(state, "state_vector", None), getattr(state, "covar", None)
+        if not (isinstance(state, GaussianState) and _copied_properties(type(state)) is not None
+                and isinstance(vector, np.ndarray) and vector.dtype == np.float64
+                and vector.shape == (ndim, 1) and isinstance(covar, np.ndarray)
+                and covar.dtype == np.float64 and covar.shape == (ndim, ndim)
+                and state.timestamp is not None):
+            return None
+        points = sum(1 for s in track.states if self._counts(s))
+        since = set()
+        for s in reversed(track.states):
+            since.add(s.timestamp)
+            if isinstance(s, Update) and s.hypothesis:
+                break
+        return points, len(since)
+
+    def _sync(self, ndim) -> bool:
+        """Aligns the records with :attr:`holding_tracks` (tracks removed or added from
+        outside, new tracks in :func:`track_key` order, as the drop-in orders them); False
+        if a holding track cannot be held as arrays."""
+        live = self.holding_tracks
+        records = self._records
+        if len(records) == len(live) and all(r.track in live for r in records):
+            return True
+        keep = [k for k, r in enumerate(records) if r.track in live]
+        present = {id(records[k].track) for k in keep}
+        added = in_track_order(t for t in live if id(t) not in present)
+        if len(keep) < len(records):
+            self._records = [records[k] for k in keep]
+            if self._means is not None:
+                self._means, self._covars = self._means[keep], self._covars[keep]
+            self._counted, self._since = self._counted[keep], self._since[keep]
+            self._last_times = [self._last_times[k] for k in keep]
+        return self._add(added, ndim)
+
+    def _add(self, added, ndim) -> bool:
+        """Appends records for the tracks ``added`` (in that order) to the holding rows."""
+        if not added:
+            return True
+        read = [self._read_track(t, ndim) for t in added]
+        if any(r is None for r in read):
+            return False
+        empty = self._means is None
+        self._records = self._records + [_Holding(t, self._next_block) for t in added]
+        self._means = np.concatenate(
+            [np.empty((0, ndim, 1)) if empty else self._means]
+            + [t.state.state_vector[np.newaxis] for t in added])
+        self._covars = np.concatenate(
+            [np.empty((0, ndim, ndim)) if empty else self._covars]
+            + [t.state.covar[np.newaxis] for t in added])
+        self._counted = np.concatenate([self._counted, [p for p, _ in read]]).astype(np.int64)
+        self._since = np.concatenate([self._since, [n for _, n in read]]).astype(np.int64)
+        self._last_times = self._last_times + [t.state.timestamp for t in added]
+        return True
+
+    # --- a scan ---------------------------------------------------------------------------------
+    def initiate(self, detections, timestamp, **kwargs):
+        if type(detections) is not OrderedDetections:  # (already in order: not sorted again)
+            detections = in_stable_order(detections)
+        if self.skip_non_reversible:
+            detections = [d for d in detections
+                          if isinstance(d.measurement_model, (ReversibleModel, LinearModel))]
+        hypothesiser = getattr(self.data_associator, "hypothesiser", None)
+        ndim = getattr(getattr(getattr(hypothesiser, "predictor", None), "transition_model", None),
+                       "ndim_state", None)
+        if kwargs or not self._supported() or any(d.timestamp != timestamp for d in detections) \
+                or not self._sync(ndim):
+            self._materialise_all()
+            self.component_calls += 1
+            return super().initiate(detections, timestamp, **kwargs)
+        self.array_calls += 1
+
+        sure_tracks = set()
+        associated = set()
+        if self._records:
+            assigned = self._associate(detections, timestamp)
+            self._advance(assigned, detections, timestamp, associated, sure_tracks)
+        new = self._new_tracks([d for d in detections if id(d) not in associated], timestamp)
+        self.holding_tracks |= new
+        if not self._add(in_track_order(new), ndim):
+            self._materialise_all()  # a new track the arrays cannot hold: re-read next scan
+        return sure_tracks
+
+    # --- new holding tracks ----------------------------------------------------------------------
+    def _new_tracks(self, detections, timestamp):
+        """What the inner initiator returns for ``detections``. The default
+        :class:`~stonesoup.initiator.simple.SimpleMeasurementInitiator` is computed per
+        measurement model: a linear model's pseudo-inverse and initial covariance once, a
+        bearing–range model's finite-difference Jacobians, pseudo-inverses and covariances as
+        stacked arrays (the stock expressions, matrix by matrix); other initiators and models
+        run their own code."""
+        inner = self.initiator
+        if type(inner) is not SimpleMeasurementInitiator:
+            return inner.initiate(set(detections), timestamp)
+        groups: dict = {}
+        other = []
+        for det in detections:
+            model = det.measurement_model if det.measurement_model is not None \
+                else inner.measurement_model
+            kind = type(model)
+            if kind is LinearGaussian or (kind is CartesianToBearingRange
+                                          and len(model.mapping) == 2):
+                groups.setdefault(id(model), (model, []))[1].append(det)
+            else:
+                other.append(det)
+        tracks = inner.initiate(set(other), timestamp) if other else set()
+        prior = inner.prior_state
+        load = np.diag(np.array([inner.diag_load] * len(prior.state_vector)))
+        for model, dets in groups.values():
+            prior_vector = prior.state_vector.copy()
+            prior_covar = prior.covar.copy()
+            mapped = model.mapping
+            prior_vector[mapped, :] = 0
+            for dim in mapped:
+                prior_covar[dim, :] = prior_covar[:, dim] = 0
+            noise = model.covar()
+            if type(model) is LinearGaussian:
+                matrix = model.matrix()
+                # the pseudo-inverse and covariance of a model, while its numbers are the same
+                key = (matrix.tobytes(), np.asarray(noise).tobytes(), prior_covar.tobytes(),
+                       load.tobytes())
+                cached = self._linear_cache.get(id(model))
+                if cached is None or cached[0] is not model or cached[1] != key:
+                    inverse = np.linalg.pinv(matrix)
+                    covar = inverse @ noise @ inverse.T
+                    covar = covar + prior_covar + load
+                    cached = self._linear_cache[id(model)] = (model, key, inverse, covar)
+                    if len(self._linear_cache) > 16:
+                        self._linear_cache = {id(model): cached}
+                _, _, inverse, covar = cached
+                vectors = [inverse @ det.state_vector for det in dets]
+                covars = [covar.copy() for _ in dets]  # one array per state, as stock
+            else:
+                vectors = _inverse_bearing_range(model, dets)
+                means = np.array(vectors, dtype=np.float64)
+                _, _, _, jacobians = _bearing_range_batch(model, means, np.zeros(
+                    (len(dets),) + (means.shape[1],) * 2))
+                inverses = np.linalg.pinv(jacobians)
+                stacked = (inverses @ np.asarray(noise)[np.newaxis]) @ inverses.transpose(0, 2, 1)
+                covars = [c.view(CovarianceMatrix) + prior_covar + load for c in stacked]
+            plain = type(prior) is GaussianState
+            for det, vector, covar in zip(dets, vectors, covars):
+                if plain:  # what Update.from_state builds from a plain GaussianState
+                    state = _UPDATE_STATE(
+                        state_vector=(prior_vector + vector).view(StateVector),
+                        covar=covar.view(CovarianceMatrix),
+                        hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)
+                else:
+                    state = Update.from_state(
+                        prior, state_vector=prior_vector + vector, covar=covar,
+                        hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)
+                tracks.add(Track([state]))
+        return tracks
+
+    def _update(self, hypothesis):
+        """``self.updater.update(hypothesis)``: for float vectors under a Kalman updater
+        without covariance options, the same NumPy expressions without the updater's
+        per-call machinery (the same numbers, bit for bit)."""
+        updater = self.updater
+        mp, measurement = hypothesis.measurement_prediction, hypothesis.measurement
+        if (type(updater) not in KALMAN_UPDATERS or updater.use_joseph_cov
+                or updater.force_positive_definite_covariance
+                or mp.state_vector.dtype != np.float64
+                or measurement.state_vector.dtype != np.float64):
+            return updater.update(hypothesis)
+        prediction = hypothesis.prediction
+        gain = mp.cross_covar @ np.linalg.inv(mp.covar)
+        covar = prediction.covar - gain @ mp.covar @ gain.T
+        if updater.force_symmetric_covariance:
+            covar = (covar + covar.T) / 2
+        mean = prediction.state_vector + gain @ (measurement.state_vector - mp.state_vector)
+        return _UPDATE_STATE(state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
+                             hypothesis=hypothesis, timestamp=measurement.timestamp)
+
+    def _associate(self, detections, timestamp):
+        """Per holding row: the assigned (detection index, distance, measurement prediction,
+        predicted mean, predicted covariance), the string 'missed', or None (no state), as
+        the GNN 2-D assignment decides; also predicts every row."""
+        hypothesiser = self.data_associator.hypothesiser
+        predictor, updater, measure = hypothesiser.predictor, hypothesiser.updater, hypothesiser.measure
+        missed_distance = hypothesiser.missed_distance
+        records = self._records
+        n = len(records)
+        pred_means = np.empty_like(self._means)
+        pred_covars = np.empty_like(self._covars)
+        groups: dict = {}
+        for k, last in enumerate(self._last_times):
+            groups.setdefault(timestamp - last, []).append(k)
+        model = predictor.transition_model
+        control = predictor.control_model
+        for interval, members in groups.items():
+            idx = np.asarray(members) if len(members) < n else slice(None)
+            prior = records[members[0]].track.state
+            matrix = np.asarray(model.matrix(time_interval=interval), dtype=np.float64)
+            offset = control.function(None, prior=prior, time_interval=interval)
+            pred_means[idx] = (matrix[np.newaxis] @ self._means[idx]) \
+                + np.asarray(offset, dtype=np.float64)
+            process = np.asarray(model.covar(time_interval=interval), dtype=np.float64)
+            ctrl = control.matrix(control_input=None, prior=prior, time_interval=interval)
+            ctrl_noise = ctrl @ control.control_noise @ ctrl.T
+            pred_covars[idx] = ((matrix[np.newaxis] @ self._covars[idx]) @ matrix.T[np.newaxis]
+                                + process) + ctrl_noise
+
+        hypotheses: dict[int, list] = {}  # row -> [(column, distance, batch)]
+        if detections:
+            by_model: dict = {}
+            for j, det in enumerate(detections):
+                by_model.setdefault(det.measurement_model, []).append(j)
+            squared = type(measure) is SquaredMahalanobis
+            for raw_model, members in by_model.items():
+                resolved = updater._check_measurement_model(raw_model)
+                batch = measurement_batch(updater, resolved, pred_means, pred_covars)
+                group_dets = [detections[j] for j in members]
+                if hypothesiser.include_all:
+                    candidates = np.ones((n, len(members)), dtype=bool)
+                else:
+                    candidates = _screen(batch, group_dets, float(missed_distance), squared)
+                rows, cols = np.nonzero(candidates)
+                if not rows.size:
+                    continue
+                plain = not batch.angle_rows and all(
+                    group_dets[c].state_vector.dtype == np.float64 for c in set(cols.tolist()))
+                if plain:
+                    # the stock measure's arithmetic on float vectors: pinv of each S (one
+                    # stacked call, matrix by matrix), then its einsum per pair
+                    unique = sorted(set(rows.tolist()))
+                    inverses = dict(zip(unique, np.linalg.pinv(batch.covars[unique])))
+                cache: dict = {}
+                for row, col in zip(rows.tolist(), cols.tolist()):
+                    det = group_dets[col]
+                    if plain:
+                        delta = -(det.state_vector.T - batch.means[row])
+                        distance = np.einsum('ij,jk,ik->i', delta, inverses[row],
+                                             delta).squeeze()[()]
+                        if not squared:
+                            distance = np.sqrt(distance)
+                    else:
+                        mp = cache.get(row)
+                        if mp is None:
+                            mp = cache[row] = _measurement_prediction(batch, row, timestamp)
+                        distance = measure(mp, det)
+                    if hypothesiser.include_all or distance < missed_distance:
+                        hypotheses.setdefault(row, []).append((members[col], distance, batch))
+
+        assigned: list = ["missed"] * n
+        detected = sorted(hypotheses)
+        if detected:
+            n_dets = len(detections)
+            costs = np.full((len(detected), n_dets + len(detected)), np.inf)
+            for i, k in enumerate(detected):
+                costs[i, n_dets + i] = missed_distance
+                for column, distance, _ in hypotheses[k]:
+                    costs[i, column] = distance
+            try:
+                _, col4row = _stock_neighbour.linear_sum_assignment(costs, False)
+            except ValueError:
+                raise RuntimeError("Assignment was not feasible") from None
+            for i, k in enumerate(detected):
+                column = int(col4row[i])
+                if column == n_dets + i:
+                    continue
+                chosen = next((h for h in hypotheses[k] if h[0] == column), None)
+                if chosen is not None:
+                    column, distance, batch = chosen
+                    chosen = (column, distance, _measurement_prediction(batch, k, timestamp))
+                assigned[k] = chosen
+        self._pred = (pred_means, pred_covars)
+        return assigned
+
+    def _advance(self, assigned, detections, timestamp, associated, sure_tracks):
+        """Appends this scan's state to every holding row (a pending prediction, or the stock
+        update of its assigned detection), releases the rows with enough points and deletes
+        those past the deleter's limit, as the drop-in does track by track."""
+        hypothesiser = self.data_associator.hypothesiser
+        pred_means, pred_covars = self._pred
+        del self._pred
+        records = self._records
+        block = _Block(pred_means, pred_covars, timestamp, records)
+        index = self._next_block
+        self._blocks[index] = block
+        self._next_block += 1
+        means, covars = pred_means.copy(), pred_covars.copy()
+        new_time = np.fromiter((t != timestamp for t in self._last_times), dtype=bool,
+                               count=len(records))
+        appended = np.ones(len(records), dtype=bool)
+        updated = np.zeros(len(records), dtype=bool)
+        for k, choice in enumerate(assigned):
+            if choice is None:  # no hypothesis from the assignment: stock appends nothing
+                block.skipped.add(id(records[k]))
+                means[k], covars[k] = self._means[k], self._covars[k]
+                appended[k] = False
+            elif choice != "missed":
+                column, distance, mp = choice
+                record = records[k]
+                prediction = _PRIOR_PREDICTION(
+                    state_vector=pred_means[k].view(StateVector),
+                    covar=pred_covars[k].view(CovarianceMatrix), timestamp=timestamp,
+                    transition_model=hypothesiser.predictor.transition_model, prior=None,
+                    **{name: getattr(record.track.state, name)
+                       for name in _copied_properties(type(record.track.state))})
+                state = self._update(SingleDistanceHypothesis(
+                    prediction, detections[column], distance, mp))
+                block.updates[id(record)] = state
+                associated.add(id(detections[column]))
+                updated[k] = True
+                means[k] = np.asarray(state.state_vector, dtype=np.float64)
+                covars[k] = np.asarray(state.covar, dtype=np.float64)
+        # points: updates (and predictions unless updates_only); the deleter's count of
+        # distinct times: reset by a detection, one more for each new time
+        self._counted += updated if self.updates_only else appended
+        self._since = np.where(updated, 1, self._since + (appended & new_time))
+        self._last_times = [timestamp if a else t for a, t in zip(appended.tolist(),
+                                                                  self._last_times)]
+        keep = np.ones(len(records), dtype=bool)
+        for k in np.flatnonzero(appended & (self._counted >= self.min_points)).tolist():
+            record = records[k]
+            self._materialise(record)
+            sure_tracks.add(record.track)
+            self.holding_tracks.discard(record.track)
+            keep[k] = False
+        limit = self.deleter.time_steps_since_update
+        for k in np.flatnonzero(keep & (self._since > limit)).tolist():
+            self.holding_tracks.discard(records[k].track)
+            keep[k] = False
+        if not keep.all():
+            self._records = [r for r, kept in zip(records, keep.tolist()) if kept]
+            self._last_times = [t for t, kept in zip(self._last_times, keep.tolist()) if kept]
+            means, covars = means[keep], covars[keep]
+            self._counted, self._since = self._counted[keep], self._since[keep]
+        self._means, self._covars = means, covars
+        if index % 32 == 0:
+            self._prune_blocks()
+
+
+__all__ = ["ArrayMultiMeasurementInitiator"]
