@@ -1,10 +1,10 @@
 """Tracking time of the experiment's JPDA on scenario 1: component path vs whole-scan arrays.
 
-Component path: the tracker ``ctxmodels.experiment`` builds (ctxmodels'
-``MultiTargetMixtureTracker`` and ``MultiMeasurementInitiator`` with
-``FastGNNWith2DAssignment``, stock ``JPDAwithEHM2`` over the ``PDAHypothesiser``, the
-miss-counting deleters). Array path: the same components in ``ArrayJPDATracker`` and
-``ArrayMultiMeasurementInitiator`` (one Rust call per JPDA scan, holding tracks as arrays).
+Array path: the tracker ``ctxmodels.experiment`` builds (``ArrayJPDATracker`` and
+``ArrayMultiMeasurementInitiator``: one Rust call per JPDA scan, holding tracks as arrays).
+Component path: the same components in ctxmodels' ``MultiTargetMixtureTracker`` and
+``MultiMeasurementInitiator`` (with ``FastGNNWith2DAssignment``, stock ``JPDAwithEHM2``
+over the ``PDAHypothesiser``, the miss-counting deleters) — the experiment's path before.
 
 Time is tracking only, measured as ``ctxmodels.experiment.runner.run_job`` measures it (the
 loop over the tracker; the simulation is made before). Both runs are made in this process,
@@ -24,19 +24,23 @@ import time
 
 
 def build(tracker: str, run, array: bool):
+    """The experiment's tracker (the array path), or the same components in the
+    component path that was the default before it (ctxmodels' stock-derived JPDA tracker
+    and initiator, fast GNN association)."""
     from ctxmodels.experiment import trackers
-    from ctxmodels.stonesoup import ArrayJPDATracker, ArrayMultiMeasurementInitiator
+    from ctxmodels.stonesoup import MultiMeasurementInitiator, MultiTargetMixtureTracker
     built = trackers.build_tracker(trackers.TRACKERS[tracker], run)
-    if not array:
+    if array:
         return built
     held = built.initiator
-    initiator = ArrayMultiMeasurementInitiator(
+    initiator = MultiMeasurementInitiator(
         prior_state=held.prior_state, deleter=held.deleter,
         data_associator=held.data_associator, updater=held.updater,
         measurement_model=held.measurement_model, min_points=held.min_points,
         updates_only=held.updates_only)
-    return ArrayJPDATracker(initiator=initiator, deleter=built.deleter, detector=built.detector,
-                            data_associator=built.data_associator, updater=built.updater)
+    return MultiTargetMixtureTracker(initiator=initiator, deleter=built.deleter,
+                                     detector=built.detector,
+                                     data_associator=built.data_associator, updater=built.updater)
 
 
 def track(tracker) -> dict:

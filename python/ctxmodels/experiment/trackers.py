@@ -179,7 +179,8 @@ def build_tracker(spec: TrackerSpec, run, fast: bool = True):
 
 
 def _jpda(spec, predictor, updater, detector, fast):
-    from ..stonesoup import (ExpectedMissesDeleter, FastGNNWith2DAssignment,
+    from ..stonesoup import (ArrayJPDATracker, ArrayMultiMeasurementInitiator,
+                             ExpectedMissesDeleter, FastGNNWith2DAssignment,
                              MultiMeasurementInitiator, MultiTargetMixtureTracker,
                              PDAHypothesiser, UpdateTimeStepsDeleter)
     hypothesiser_class = PDAHypothesiser if spec.uses_context else StockPDAHypothesiser
@@ -191,13 +192,16 @@ def _jpda(spec, predictor, updater, detector, fast):
     else:
         deleter = UpdateTimeStepsDeleter(time_steps_since_update=JPDA_DELETE_AFTER)
     prior = GaussianState(np.zeros((4, 1)), np.diag(INIT_STD ** 2))
-    initiator = MultiMeasurementInitiator(
+    # The array tracker and initiator compute each scan in the Rust core; the component
+    # path is the readable reference with the same results.
+    initiator = (ArrayMultiMeasurementInitiator if fast else MultiMeasurementInitiator)(
         prior_state=prior, deleter=UpdateTimeStepsDeleter(time_steps_since_update=JPDA_DELETE_AFTER),
         data_associator=(FastGNNWith2DAssignment if fast else GNNWith2DAssignment)(DistanceHypothesiser(
             predictor, updater, Mahalanobis(), missed_distance=GATE_MAHALANOBIS)),
         updater=updater, min_points=JPDA_MIN_POINTS)
-    return MultiTargetMixtureTracker(initiator=initiator, deleter=deleter, detector=detector,
-                                     data_associator=JPDAwithEHM2(hypothesiser), updater=updater)
+    return (ArrayJPDATracker if fast else MultiTargetMixtureTracker)(
+        initiator=initiator, deleter=deleter, detector=detector,
+        data_associator=JPDAwithEHM2(hypothesiser), updater=updater)
 
 
 def _gmphd(spec, run, predictor, updater, detector, fast):
