@@ -294,7 +294,7 @@ def test_a_scan_the_core_cannot_take_runs_the_component_path():
     timestamp) runs through the components; the scans around it in the core."""
     scenario = radar_lidar_scenario(n_scans=30)
     scans = list(scenario["scans"])
-    (t1, first), (t2, second) = scans[8], scans[9]
+    (_, first), (t2, second) = scans[8], scans[9]
     merged = {Detection(d.state_vector, timestamp=t2, measurement_model=d.measurement_model)
               for d in first} | set(second)
     scans[9] = (t2, merged)

@@ -20,6 +20,7 @@ from stonesoup.models.transition.linear import (CombinedLinearGaussianTransition
                                                 ConstantVelocity)
 from stonesoup.predictor.kalman import KalmanPredictor
 from stonesoup.tracker.pointprocess import PointProcessMultiTargetTracker as StockTracker
+from stonesoup.types.array import StateVector
 from stonesoup.types.detection import Clutter, Detection, TrueDetection
 from stonesoup.types.mixture import GaussianMixture
 from stonesoup.types.state import TaggedWeightedGaussianState
@@ -28,7 +29,7 @@ from stonesoup.updater.pointprocess import LCCUpdater as StockLCC
 from stonesoup.updater.pointprocess import PHDUpdater as StockPHD
 
 import ctxmodels
-from ctxmodels import DetectionSet
+from ctxmodels import ClutterDensityModel, DetectionProbabilityModel, DetectionSet, SensorModel
 from ctxmodels.stonesoup.birth import TABLE_I_BIRTH_COVAR, MeasurementDrivenBirth
 from ctxmodels.stonesoup.pointprocess import (CircularRegion, LCCUpdater, PHDUpdater,
                                               PointProcessMultiTargetTracker)
@@ -692,3 +693,71 @@ def test_components_round_trip_through_yaml_and_pickle():
                     assert repr(getattr(copy_, name)) == repr(getattr(obj, name)), name
     birth = yaml.load(yaml.dumps(objects[0]))
     assert birth.components([detection(3, 4)])[0].state_vector.ravel().tolist() == [3, 1, 4, -1]
+
+
+# --- the context PHD updater alone (moved from the removed fast-chain tests) ----------------
+from gmphd_setups import (  # noqa: E402
+    birth_component, radar_lidar_scenario, seeded_uuids, sensor_models, stock_components,
+    tutorial_scenario, with_contexts)
+
+
+def test_context_phd_updater_calls_the_context_once_per_scan():
+    scenario = radar_lidar_scenario()
+    scans = with_contexts(scenario["scans"][:8])
+    parts = stock_components(scenario, context_updater=True)
+    hypothesiser, updater, reducer = parts["hypothesiser"], parts["updater"], parts["reducer"]
+
+    class Counting:
+        def __init__(self, context):
+            self.context, self.calls = context, {"pd": 0, "clutter": 0}
+
+        def prob_detection_states(self, states):
+            self.calls["pd"] += 1
+            return self.context.prob_detection_states(states)
+
+        def clutter_spatial_density_detections(self, detections):
+            self.calls["clutter"] += 1
+            return self.context.clutter_spatial_density_detections(detections)
+
+    mixture = []
+    with seeded_uuids(2):
+        birth = birth_component(scenario)
+        for t, detections in scans:
+            birth.timestamp = t
+            hypotheses = hypothesiser.hypothesise(mixture + [birth], detections, t)
+            counting = Counting(detections.detector_context)
+            update = updater.update(hypotheses, detector_context=counting)
+            gating = any(len(mh) for mh in hypotheses[:-1])
+            assert counting.calls == {"pd": 1, "clutter": int(gating)}
+            mixture = reducer.reduce(update.components)
+
+
+def test_context_with_zero_pd_drops_pairs_and_keeps_missed_weight():
+    """P_D = 0 everywhere: no detection term survives, missed weights are w·p_S."""
+    scenario = tutorial_scenario()
+    blind = SensorModel(detection=DetectionProbabilityModel(factors=[0.0]),
+                        clutter=ClutterDensityModel(factors=[1e-3]))
+    parts = stock_components(scenario, context_updater=True)
+    hypothesiser, updater = parts["hypothesiser"], parts["updater"]
+    t, detections = scenario["scans"][3]
+    prior = [TaggedWeightedGaussianState(StateVector([-27.0, 1.0, 8.5, -0.5]),
+                                         np.diag([4.0, 1.0, 4.0, 1.0]), weight=0.8, tag="a",
+                                         timestamp=t - datetime.timedelta(seconds=1))]
+    hypotheses = hypothesiser.hypothesise(prior, detections, t)
+    assert sum(len(mh) for mh in hypotheses[:-1]) >= 1
+    update = updater.update(hypotheses, detector_context=blind.context((0.0, 0.0, 0.0), t))
+    assert [c.tag for c in update.components] == ["a"]
+    assert float(update.components[0].weight) == pytest.approx(0.8 * 0.99, rel=1e-12)
+
+
+def test_context_errors_name_the_argument():
+    scenario = tutorial_scenario()
+    parts = stock_components(scenario, context_updater=True)
+    hypothesiser, updater = parts["hypothesiser"], parts["updater"]
+    t, detections = scenario["scans"][0]
+    hypotheses = hypothesiser.hypothesise([birth_component(scenario)], detections, t)
+    with pytest.raises(TypeError, match="detector_context"):
+        updater.update(hypotheses, detector_context=object())
+    context = sensor_models()[1].context((0.0, 0.0, 0.0), t)
+    with pytest.raises(ValueError, match="hypotheses"):
+        updater.update([], detector_context=context)

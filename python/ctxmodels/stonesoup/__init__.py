@@ -14,16 +14,11 @@
   (:class:`MeasurementDrivenBirth`) and a surveillance region (:class:`CircularRegion`).
 * Particle filters: :class:`BernoulliParticleUpdater`, :class:`SMCPHDUpdater` (P_D over all
   particles in one array call).
-* Fast GM-PHD chain: :class:`FastGaussianMixtureHypothesiser`, :class:`FastPHDUpdater`,
-  :class:`FastLCCUpdater`, :class:`FastGaussianMixtureReducer` — the stock results, computed
-  a scan at a time in stacked arrays; :class:`FastGNNWith2DAssignment`, the stock GNN
-  association (e.g. inside ``MultiMeasurementInitiator``) with all track × detection
-  distances of a scan computed at once.
-* Whole-scan JPDA: :class:`ArrayJPDATracker`, the (J)PDA mixture tracker with each scan
-  computed by one call into the Rust core (association marginals, updates, mixture
-  reduction), falling back to the component path for configurations it does not cover;
-  :class:`ArrayMultiMeasurementInitiator`, the M-of-N initiator with its holding tracks as
-  arrays.
+* Whole scans in the Rust core: :class:`ArrayPointProcessTracker` (GM-PHD) and
+  :class:`ArrayJPDATracker` with :class:`ArrayMultiMeasurementInitiator` (JPDA) — the same
+  Properties and tracks as the component-path trackers above, which stay as the readable
+  reference; :class:`FastGNNWith2DAssignment`, the stock GNN association with all
+  track × detection distances of a scan computed at once.
 * Reproducibility: :class:`MultiTargetMixtureTracker` and :class:`MultiMeasurementInitiator`
   (the stock JPDA tracker and M-of-N initiator in a stable order); every ctxmodels tracker
   puts a scan's detections in value order (:func:`in_stable_order`) and never lets set
@@ -41,9 +36,6 @@ from .array_jpda import ArrayJPDATracker
 from .birth import MeasurementDrivenBirth
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast_association import FastGNNWith2DAssignment
-from .fast_hypothesiser import FastGaussianMixtureHypothesiser
-from .fast_reducer import FastGaussianMixtureReducer
-from .fast_updater import FastLCCUpdater, FastPHDUpdater
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .hypothesiser import PDAHypothesiser
 from .measurement import AnalyticCartesianToBearingRange
@@ -68,10 +60,6 @@ __all__ = [
     "SMCPHDUpdater",
     "ContextFeeder",
     "FastGNNWith2DAssignment",
-    "FastGaussianMixtureHypothesiser",
-    "FastGaussianMixtureReducer",
-    "FastLCCUpdater",
-    "FastPHDUpdater",
     "ExpectedMissesDeleter",
     "MultiMeasurementInitiator",
     "MultiSensorFeeder",
