@@ -21,7 +21,7 @@ Exit status 0 only if every selected upstream test passed (none deselected but t
 at least one passing test.
 
     python scripts/upstream_tests.py                      # default profile
-    python scripts/upstream_tests.py --profile fast-updaters
+    python scripts/upstream_tests.py --profile array
     python scripts/upstream_tests.py --report out.json -- -x -k pointprocess
 """
 from __future__ import annotations
@@ -56,9 +56,7 @@ UPSTREAM_TESTS = {
     "tracker/tests/test_simple.py": "MultiTargetMixtureTracker",
     "updater/tests/test_pointprocess.py": "PHDUpdater, LCCUpdater",
     "updater/tests/test_particle.py": "BernoulliParticleUpdater, SMCPHDUpdater",
-    "hypothesiser/tests/test_gaussianmixture.py": "GaussianMixtureHypothesiser",
     "hypothesiser/tests/test_probability.py": "PDAHypothesiser",
-    "mixturereducer/tests/test_gaussian_mixture_reducer.py": "GaussianMixtureReducer",
     "deleter/tests/test_time.py": "UpdateTimeStepsDeleter",
     "initiator/tests/test_simple.py":
         "MultiMeasurementInitiator with UpdateTimeStepsDeleter, PDAHypothesiser",

@@ -57,10 +57,6 @@ DEFAULT = {
         "ctxmodels.stonesoup.PointProcessMultiTargetTracker",
     "stonesoup.updater.pointprocess.PHDUpdater": "ctxmodels.stonesoup.PHDUpdater",
     "stonesoup.updater.pointprocess.LCCUpdater": "ctxmodels.stonesoup.LCCUpdater",
-    "stonesoup.hypothesiser.gaussianmixture.GaussianMixtureHypothesiser":
-        "ctxmodels.stonesoup.FastGaussianMixtureHypothesiser",
-    "stonesoup.mixturereducer.gaussianmixture.GaussianMixtureReducer":
-        "ctxmodels.stonesoup.FastGaussianMixtureReducer",
     "stonesoup.hypothesiser.probability.PDAHypothesiser": "ctxmodels.stonesoup.PDAHypothesiser",
     "stonesoup.tracker.simple.MultiTargetMixtureTracker":
         "ctxmodels.stonesoup.MultiTargetMixtureTracker",
@@ -77,17 +73,15 @@ DEFAULT = {
 # A profile is the default map with some stock names given a different substitute.
 PROFILES = {
     "default": DEFAULT,
-    # The one-scan-at-a-time array updaters in place of the context-aware PHD/LCC updaters.
-    "fast-updaters": {
-        **DEFAULT,
-        "stonesoup.updater.pointprocess.PHDUpdater": "ctxmodels.stonesoup.FastPHDUpdater",
-        "stonesoup.updater.pointprocess.LCCUpdater": "ctxmodels.stonesoup.FastLCCUpdater",
-    },
-    # The Rust scan path of the GM-PHD tracker (needs ctxmodels.stonesoup.ArrayPointProcessTracker).
-    "gmphd-array": {
+    # The trackers and initiator that compute whole scans in the Rust core.
+    "array": {
         **DEFAULT,
         "stonesoup.tracker.pointprocess.PointProcessMultiTargetTracker":
             "ctxmodels.stonesoup.ArrayPointProcessTracker",
+        "stonesoup.tracker.simple.MultiTargetMixtureTracker":
+            "ctxmodels.stonesoup.ArrayJPDATracker",
+        "stonesoup.initiator.simple.MultiMeasurementInitiator":
+            "ctxmodels.stonesoup.ArrayMultiMeasurementInitiator",
     },
 }
 # -----------------------------------------------------------------------------------------
