@@ -2,8 +2,9 @@
 memory does not grow per scan after warm-up.
 
 Per scan: a ContextFeeder builds the scan's DetectorContext from a NavigationTrack pose
-(mounted sensor), the PointProcessMultiTargetTracker predicts its mixture and the PHDUpdater
-evaluates P_D over it through the Rust core, and the scan's λ is evaluated for a few
+(mounted sensor), the tracker (the component path, PointProcessMultiTargetTracker, and the
+array path, ArrayPointProcessTracker) predicts its mixture and evaluates P_D over it
+through the Rust core, and the scan's λ is evaluated for a few
 positions. The mixture is held at a fixed size (components in the radar's blind sector:
 P_D 0, weights kept, survival 1; none above the extraction threshold, so no track history
 accumulates), so any steady growth of the process's memory is a leak.
@@ -33,7 +34,10 @@ from stonesoup.updater.kalman import KalmanUpdater
 
 from ctxmodels import (AngularSector, ClutterDensityModel, DetectionProbabilityModel, Mounting,
                        NavigationTrack, RangeBands, SensorModel)
-from ctxmodels.stonesoup import ContextFeeder, PHDUpdater, PointProcessMultiTargetTracker
+from ctxmodels.stonesoup import (ArrayPointProcessTracker, ContextFeeder, PHDUpdater,
+                                 PointProcessMultiTargetTracker)
+
+TRACKERS = [PointProcessMultiTargetTracker, ArrayPointProcessTracker]
 
 T0 = datetime.datetime(2024, 5, 1, 12, 0, 0)
 PERIOD = datetime.timedelta(seconds=0.1)
@@ -62,12 +66,12 @@ def empty_scans(n):
         yield T0 + k * PERIOD, set()
 
 
-def soak(scans, every):
+def soak(scans, every, tracker_class):
     """Runs the tracker over `scans` empty scans; returns (scan index, RSS) samples."""
     navigation = NavigationTrack(timestamps=[T0, T0 + scans * PERIOD],
                                  positions=[[0.0, 0.0], [0.0, 0.0]], headings=[0.0, 0.0])
     updater = KalmanUpdater(MEASUREMENT)
-    tracker = PointProcessMultiTargetTracker(
+    tracker = tracker_class(
         detector=ContextFeeder(empty_scans(scans), sensor_model=RADAR, pose_source=navigation),
         hypothesiser=GaussianMixtureHypothesiser(
             DistanceHypothesiser(KalmanPredictor(TRANSITION), updater, Mahalanobis(),
@@ -105,19 +109,21 @@ def growth_per_scan(samples, warm_up):
     return float(np.polyfit(k, rss, 1)[0])
 
 
-def test_short_soak_memory_is_flat():
-    samples = soak(scans=1500, every=50)
+@pytest.mark.parametrize("tracker_class", TRACKERS, ids=lambda c: c.__name__)
+def test_short_soak_memory_is_flat(tracker_class):
+    samples = soak(scans=1500, every=50, tracker_class=tracker_class)
     slope = growth_per_scan(samples, warm_up=500)
     # A leak of one small object per scan (a context, a 5-row array) is ≥ 100 B/scan.
     assert slope < 50.0, (slope, samples)
 
 
 @pytest.mark.slow
-def test_long_soak_memory_is_flat():
+@pytest.mark.parametrize("tracker_class", TRACKERS, ids=lambda c: c.__name__)
+def test_long_soak_memory_is_flat(tracker_class):
     scans = 100_000
-    samples = soak(scans=scans, every=2000)
+    samples = soak(scans=scans, every=2000, tracker_class=tracker_class)
     slope = growth_per_scan(samples, warm_up=10_000)
-    print(f"\nsoak: {scans} scans, RSS {samples[0][1] / 2**20:.1f} MiB at scan 0, "
+    print(f"\nsoak ({tracker_class.__name__}): {scans} scans, RSS {samples[0][1] / 2**20:.1f} MiB at scan 0, "
           f"{samples[-1][1] / 2**20:.1f} MiB at scan {samples[-1][0]}, "
           f"slope after warm-up {slope:.3f} B/scan")
     assert slope < 5.0, (slope, samples)
