@@ -286,8 +286,9 @@ def parser() -> argparse.ArgumentParser:
                           "run wrote there (listed in its .ctxmodels-outputs.json) and leaves "
                           "other files alone")
     exp.add_argument("--stock", action="store_true",
-                     help="run the stock Stone Soup GM-PHD components instead of ctxmodels' "
-                          "fast drop-ins (same results, slower; for verification)")
+                     help="run the trackers' component path (stock Stone Soup components in "
+                          "ctxmodels' stock-derived trackers) instead of the array trackers "
+                          "(the same tracks to rounding, far slower; for verification)")
     exp.add_argument("--static-as-false", action="store_true",
                      help="count tracks on static sea markers and islets as false tracks "
                           "(default: they are distractors, neither hits nor false tracks)")

@@ -297,7 +297,7 @@ class ExperimentResults:
         lines.append("")
         lines.append(f"Mean ± 95 % interval over seeds [{seeds}]; duration "
                      f"{self.config.duration or 'default'} s per scenario; "
-                     f"{'stock Stone Soup' if self.config.stock else 'fast'} GM-PHD chain; "
+                     f"{'component-path' if self.config.stock else 'array'} trackers; "
                      f"wall time {self.wall_seconds:.0f} s.")
         changed = simulation_changes(self.config.radar, self.config.lidar)
         if changed:
