@@ -117,6 +117,20 @@ def _array(tracker):
                             data_associator=tracker.data_associator, updater=tracker.updater)
 
 
+def _component(tracker):
+    """The component-path tracker and initiator (the reference) with the components of an
+    array ``tracker`` (the experiment builds the array ones)."""
+    held = tracker.initiator
+    initiator = MultiMeasurementInitiator(
+        prior_state=held.prior_state, deleter=held.deleter, data_associator=held.data_associator,
+        updater=held.updater, measurement_model=held.measurement_model,
+        min_points=held.min_points, updates_only=held.updates_only)
+    return MultiTargetMixtureTracker(initiator=initiator, deleter=tracker.deleter,
+                                     detector=tracker.detector,
+                                     data_associator=tracker.data_associator,
+                                     updater=tracker.updater)
+
+
 def tutorial_pair(associator=JPDAwithEHM2, hypothesiser_cls=StockPDAHypothesiser, scans=None,
                   deleter=lambda h: UpdateTimeStepsDeleter(3), **config):
     config = {"clutter_spatial_density": CLUTTER, "prob_detect": PD, **config}
@@ -197,7 +211,9 @@ def _scenario_pair(tracker, duration, closed_form):
     _with_radar_model(run, AnalyticCartesianToBearingRange if closed_form
                       else CartesianToBearingRange)
     spec = trackers.TRACKERS[tracker]
-    return _array(trackers.build_tracker(spec, run)), trackers.build_tracker(spec, run)
+    ours = trackers.build_tracker(spec, run)
+    assert type(ours) is ArrayJPDATracker
+    return ours, _component(trackers.build_tracker(spec, run))
 
 
 @pytest.mark.parametrize("tracker", ["jpda", "jpda-context"])
@@ -273,7 +289,7 @@ def test_array_initiator_on_the_scenarios_radar_and_lidar_scans_bit_for_bit():
     from ctxmodels.experiment import trackers
     from ctxmodels.experiment.scenarios import make_scenario
     run = make_scenario("mixed-range", 0, 12.0)
-    reference = trackers.build_tracker(trackers.TRACKERS["jpda"], run).initiator
+    reference = _component(trackers.build_tracker(trackers.TRACKERS["jpda"], run)).initiator
     ours = _array_initiator(reference)
     released = 0
     for time, detections in trackers._detector(trackers.TRACKERS["jpda"], run):
