@@ -402,8 +402,9 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         prediction = hypothesis.prediction
         gain = mp.cross_covar @ np.linalg.inv(mp.covar)
         covar = prediction.covar - gain @ mp.covar @ gain.T
-        if updater.force_symmetric_covariance:
-            covar = (covar + covar.T) / 2
+        if updater.force_symmetric_covariance:  # (P + Pᵀ)/2 on the plain array: the same
+            plain = np.asarray(covar)              # numbers, without the ufunc wrapper
+            covar = (plain + plain.T) / 2
         mean = prediction.state_vector + gain @ (measurement.state_vector - mp.state_vector)
         return _UPDATE_STATE(state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
                              hypothesis=hypothesis, timestamp=measurement.timestamp)
