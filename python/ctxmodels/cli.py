@@ -273,11 +273,11 @@ def parser() -> argparse.ArgumentParser:
     exp.add_argument("--duration", type=number(), default=60.0,
                      help=f"seconds of each scenario to simulate, {MIN_DURATION:g} (one tick "
                           "of the simulation's clock) up to the scenario's length (default 60, "
-                          "which keeps the default run within ~5 min on 2 cores). The "
+                          "which keeps the default run under a minute on 2 cores). The "
                           "scenarios are 480 s long; on 2 cores `--duration 480 "
-                          "--seeds 3` of the GM-PHD trackers takes ~22 min, and one 480 s "
-                          "JPDA run alone ~3 min (it confirms ~2 600 tracks, most of them on "
-                          "clutter)")
+                          "--seeds 3` of the GM-PHD trackers takes ~1.5 min, and one 480 s "
+                          "JPDA run ~15 s of tracking (it confirms ~2 600 tracks, most of "
+                          "them on clutter); --stock is some 10-20 times slower")
     exp.add_argument("--workers", type=integer(1), default=None,
                      help="parallel processes, ≥ 1 (default: one per core)")
     exp.add_argument("--output", default="results",
