@@ -47,7 +47,8 @@ from stonesoup.types.state import GaussianState
 from stonesoup.types.update import GaussianStateUpdate, Update
 
 from .deleter import UpdateTimeStepsDeleter
-from .fast import (KALMAN_UPDATERS, ObjectFactory, _bearing_range_batch, measurement_batch,
+from .fast import (KALMAN_UPDATERS, ObjectFactory, _analytic_bearing_range_batch,
+                   _bearing_range_batch, measurement_batch,
                    supports_predictor)
 from .fast import apply_wrap, detection_vectors, wrap_plan
 from .fast_association import (
@@ -57,6 +58,7 @@ from .fast_association import (
     _measurement_prediction,
     _weaken_prior_chain,
 )
+from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator
 from .ordering import OrderedDetections, in_stable_order, in_track_order
 
@@ -322,7 +324,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         """What the inner initiator returns for ``detections``. The default
         :class:`~stonesoup.initiator.simple.SimpleMeasurementInitiator` is computed per
         measurement model: a linear model's pseudo-inverse and initial covariance once, a
-        bearing–range model's finite-difference Jacobians, pseudo-inverses and covariances as
+        bearing–range model's Jacobians (finite difference or closed form), pseudo-inverses and covariances as
         stacked arrays (the stock expressions, matrix by matrix); other initiators and models
         run their own code."""
         inner = self.initiator
@@ -334,7 +336,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             model = det.measurement_model if det.measurement_model is not None \
                 else inner.measurement_model
             kind = type(model)
-            if kind is LinearGaussian or (kind is CartesianToBearingRange
+            if kind is LinearGaussian or (kind in (CartesianToBearingRange,
+                                                   AnalyticCartesianToBearingRange)
                                           and len(model.mapping) == 2):
                 groups.setdefault(id(model), (model, []))[1].append(det)
             else:
@@ -369,8 +372,12 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             else:
                 vectors = _inverse_bearing_range(model, dets)
                 means = np.array(vectors, dtype=np.float64)
-                _, _, _, jacobians = _bearing_range_batch(model, means, np.zeros(
-                    (len(dets),) + (means.shape[1],) * 2))
+                zeros = np.zeros((len(dets),) + (means.shape[1],) * 2)
+                # the model's own Jacobian, state by state, bit for bit
+                if type(model) is AnalyticCartesianToBearingRange:
+                    _, _, _, jacobians = _analytic_bearing_range_batch(model, means, zeros, None)
+                else:
+                    _, _, _, jacobians = _bearing_range_batch(model, means, zeros)
                 inverses = np.linalg.pinv(jacobians)
                 stacked = (inverses @ np.asarray(noise)[np.newaxis]) @ inverses.transpose(0, 2, 1)
                 covars = [c.view(CovarianceMatrix) + prior_covar + load for c in stacked]
