@@ -276,7 +276,7 @@ def parser() -> argparse.ArgumentParser:
                           "which keeps the default run under a minute on 2 cores). The "
                           "scenarios are 480 s long; on 2 cores `--duration 480 "
                           "--seeds 3` of the GM-PHD trackers takes ~1.5 min, and one 480 s "
-                          "JPDA run ~15 s of tracking (it confirms ~2 600 tracks, most of "
+                          "JPDA run ~13 s of tracking (it confirms ~2 600 tracks, most of "
                           "them on clutter); --stock is some 10-20 times slower")
     exp.add_argument("--workers", type=integer(1), default=None,
                      help="parallel processes, ≥ 1 (default: one per core)")
