@@ -204,10 +204,10 @@ def _with_radar_model(run, cls):
             detection.measurement_model = models[id(model)]
 
 
-def _scenario_pair(tracker, duration, closed_form):
+def _scenario_pair(tracker, duration, closed_form, scenario="mixed-range"):
     from ctxmodels.experiment import trackers
     from ctxmodels.experiment.scenarios import make_scenario
-    run = make_scenario("mixed-range", 0, duration)
+    run = make_scenario(scenario, 0, duration)
     _with_radar_model(run, AnalyticCartesianToBearingRange if closed_form
                       else CartesianToBearingRange)
     spec = trackers.TRACKERS[tracker]
@@ -216,9 +216,10 @@ def _scenario_pair(tracker, duration, closed_form):
     return ours, _component(trackers.build_tracker(spec, run))
 
 
+@pytest.mark.parametrize("scenario", ["mixed-range", "formation"])
 @pytest.mark.parametrize("tracker", ["jpda", "jpda-context"])
-def test_scenario_run_with_closed_form_jacobian_matches_stock(tracker):
-    ours, reference = _scenario_pair(tracker, 10.0, closed_form=True)
+def test_scenario_run_with_closed_form_jacobian_matches_stock(tracker, scenario):
+    ours, reference = _scenario_pair(tracker, 10.0, closed_form=True, scenario=scenario)
     worst, scans = run_side_by_side(ours, reference)
     assert ours.array_scans == scans > 100
     assert worst <= RTOL
