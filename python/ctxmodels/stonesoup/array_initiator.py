@@ -50,13 +50,12 @@ from .deleter import UpdateTimeStepsDeleter
 from .fast import (KALMAN_UPDATERS, ObjectFactory, _analytic_bearing_range_batch,
                    _bearing_range_batch, measurement_batch,
                    supports_predictor)
-from .fast import apply_wrap, detection_vectors, wrap_plan
 from .fast_association import (
-    SCREEN_MARGIN,
     FastGNNWith2DAssignment,
     _copied_properties,
     _measurement_prediction,
     _weaken_prior_chain,
+    screen_pairs,
 )
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator
@@ -88,31 +87,10 @@ def _inverse_bearing_range(model, detections) -> list:
 
 
 def _screen(batch, dets, missed_distance: float, squared: bool) -> np.ndarray:
-    """``(N, K)`` mask of the pairs that may pass the gate, as
-    :meth:`FastGNNWith2DAssignment._screen` decides it but with LU inverses of the
+    """:func:`~ctxmodels.stonesoup.fast_association.screen_pairs` with LU inverses of the
     innovation covariances (cheaper than pseudo-inverses; the 1e-6 relative margin covers
-    the difference many times over). Every pair when the arrays cannot be formed."""
-    everything = np.ones((len(batch.means), len(dets)), dtype=bool)
-    try:
-        z, kinds = detection_vectors(dets)
-        if z.ndim != 2 or z.shape[1] != batch.means.shape[1]:
-            return everything
-        plan = wrap_plan(batch.angle_rows, kinds, z.shape[1])
-        delta = apply_wrap(-apply_wrap(z[np.newaxis] - batch.means[:, np.newaxis], plan), plan)
-        inverse = np.linalg.inv(batch.covars)
-    except (ValueError, TypeError, np.linalg.LinAlgError):
-        return everything
-    terms = delta[:, :, :, np.newaxis] * inverse[:, np.newaxis] * delta[:, :, np.newaxis, :]
-    d2 = terms.sum(axis=(2, 3))
-    slack = SCREEN_MARGIN * np.abs(terms).sum(axis=(2, 3))
-    if squared:
-        threshold = missed_distance
-    elif missed_distance > 0:
-        threshold = missed_distance * missed_distance
-    else:
-        return np.zeros_like(everything)
-    with np.errstate(invalid="ignore", over="ignore"):
-        return ~(d2 - slack > threshold)
+    the difference many times over)."""
+    return screen_pairs(batch, dets, missed_distance, squared, invert=np.linalg.inv)
 
 #: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
 _UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(

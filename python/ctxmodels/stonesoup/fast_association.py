@@ -188,6 +188,37 @@ def _measurement_prediction(batch, n, timestamp):
         timestamp=timestamp, cross_covar=batch.cross_covars[n].view(Matrix))
 
 
+def screen_pairs(batch, dets, missed_distance: float, squared: bool,
+                 invert=np.linalg.pinv) -> np.ndarray:
+    """``(N, K)`` mask of the track × detection pairs that may pass the gate (see the module
+    docstring), the innovation covariances inverted by ``invert`` (the stock measure's
+    pinv by default); every pair when the arrays cannot be formed (the stock measure then
+    decides, or raises its own error)."""
+    everything = np.ones((len(batch.means), len(dets)), dtype=bool)
+    try:
+        z, kinds = detection_vectors(dets)
+        if z.ndim != 2 or z.shape[1] != batch.means.shape[1]:
+            return everything
+        plan = wrap_plan(batch.angle_rows, kinds, z.shape[1])
+        # the measure's  -(z - ẑ), each step wrapped as the typed vectors wrap it
+        delta = apply_wrap(-apply_wrap(z[np.newaxis] - batch.means[:, np.newaxis], plan), plan)
+        inverse = invert(batch.covars)
+    except (ValueError, TypeError, np.linalg.LinAlgError):
+        return everything
+    terms = delta[:, :, :, np.newaxis] * inverse[:, np.newaxis] * delta[:, :, np.newaxis, :]
+    d2 = terms.sum(axis=(2, 3))
+    slack = SCREEN_MARGIN * np.abs(terms).sum(axis=(2, 3))
+    if squared:
+        threshold = missed_distance
+    elif missed_distance > 0:
+        threshold = missed_distance * missed_distance
+    else:
+        # a square root is never below a non-positive gate (NaN is not below anything)
+        return np.zeros_like(everything)
+    with np.errstate(invalid="ignore", over="ignore"):
+        return ~(d2 - slack > threshold)  # NaN stays a candidate: the measure decides
+
+
 class FastGNNWith2DAssignment(GNNWith2DAssignment):
     r"""Global nearest neighbour by 2-D assignment, hypotheses computed a scan at a time.
 
@@ -308,37 +339,10 @@ class FastGNNWith2DAssignment(GNNWith2DAssignment):
         return result
 
     def _screen(self, batch, dets) -> np.ndarray:
-        """``(N, K)`` mask of the pairs that may pass the gate (see the module docstring);
-        every pair when the arrays cannot be formed (the stock measure then decides, or
-        raises its own error)."""
+        """``(N, K)`` mask of the pairs that may pass the gate (see the module docstring)."""
         hypothesiser = self.hypothesiser
-        missed_distance = float(hypothesiser.missed_distance)
-        squared = type(hypothesiser.measure) is SquaredMahalanobis
-        everything = np.ones((len(batch.means), len(dets)), dtype=bool)
-        try:
-            z, kinds = detection_vectors(dets)
-            if z.ndim != 2 or z.shape[1] != batch.means.shape[1]:
-                return everything
-            plan = wrap_plan(batch.angle_rows, kinds, z.shape[1])
-            # the measure's  -(z - ẑ), each step wrapped as the typed vectors wrap it
-            delta = apply_wrap(-apply_wrap(z[np.newaxis] - batch.means[:, np.newaxis], plan),
-                               plan)
-            inverse = np.linalg.pinv(batch.covars)  # per matrix, as the stock measure
-        except (ValueError, TypeError, np.linalg.LinAlgError):
-            return everything
-        terms = delta[:, :, :, np.newaxis] * inverse[:, np.newaxis] \
-            * delta[:, :, np.newaxis, :]
-        d2 = terms.sum(axis=(2, 3))
-        slack = SCREEN_MARGIN * np.abs(terms).sum(axis=(2, 3))
-        if squared:
-            threshold = missed_distance
-        elif missed_distance > 0:
-            threshold = missed_distance * missed_distance
-        else:
-            # a square root is never below a non-positive gate (NaN is not below anything)
-            return np.zeros_like(everything)
-        with np.errstate(invalid="ignore", over="ignore"):
-            return ~(d2 - slack > threshold)  # NaN stays a candidate: the measure decides
+        return screen_pairs(batch, dets, float(hypothesiser.missed_distance),
+                            type(hypothesiser.measure) is SquaredMahalanobis)
 
     # --- assignment ---------------------------------------------------------------------------
     def associate(self, tracks, detections, timestamp, **kwargs):
