@@ -2,9 +2,6 @@
 the fast GNN association, the array JPDA initiator and the array trackers), held against
 the stock Stone Soup calls they replace."""
 import datetime
-import random
-import uuid
-from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -17,18 +14,9 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from ctxmodels.stonesoup.fast import ObjectFactory, gaussian_arrays, measurement_batch
 
+from gmphd_setups import seeded_uuids
+
 START = datetime.datetime(2024, 1, 1)
-
-
-@contextmanager
-def seeded_uuids(seed=0):
-    rng = random.Random(seed)
-    original = uuid.uuid4
-    uuid.uuid4 = lambda: uuid.UUID(int=rng.getrandbits(128), version=4)
-    try:
-        yield
-    finally:
-        uuid.uuid4 = original
 
 
 def test_bearing_range_measurement_prediction_is_bitwise_stock():
