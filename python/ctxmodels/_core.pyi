@@ -242,6 +242,11 @@ class GaussianMixtureArrays:
         kdtree_max_distance: float | None = None,
     ) -> None:
         """Prune, merge (and make tags unique), truncate, as `GaussianMixtureReducer`."""
+    def track_states(self, tracked: Sequence[int], threshold: float
+                     ) -> tuple[list[int], list[float], _Floats, _Floats, list[int]]:
+        """The rows extending a ``tracked`` tag's track or above ``threshold`` (births
+        excepted), as tags, weights, means (k, D, 1) and covariances (k, D, D), and the
+        ``tracked`` tags no row carries any more."""
     def means(self) -> _Floats: ...
     def covars(self) -> _Floats: ...
     def weights(self) -> _Floats: ...

@@ -200,6 +200,29 @@ impl Mixture {
         self.retain(&keep)
     }
 
+    /// Stone Soup's track extraction: the rows (ascending) whose tag has a track (`tracked`)
+    /// or whose weight exceeds `threshold`, birth components excepted; and the `tracked`
+    /// tags no component carries any more (their tracks end), in the order given.
+    pub fn track_rows(&self, tracked: &[u64], threshold: f64) -> (Vec<usize>, Vec<u64>) {
+        let mut sorted = tracked.to_vec();
+        sorted.sort_unstable();
+        let mut present = vec![false; sorted.len()];
+        let mut rows = Vec::new();
+        for (i, (&tag, &weight)) in self.tags.iter().zip(&self.weights).enumerate() {
+            let found = sorted.binary_search(&tag).ok();
+            if let Some(at) = found {
+                present[at] = true;
+            }
+            if tag != BIRTH && (found.is_some() || weight > threshold) {
+                rows.push(i);
+            }
+        }
+        let gone = tracked.iter().copied()
+            .filter(|tag| sorted.binary_search(tag).is_ok_and(|at| !present[at]))
+            .collect();
+        (rows, gone)
+    }
+
     /// The distinct component times, ascending (a scan predicts once per time step).
     pub fn distinct_times(&self) -> Vec<i64> {
         let mut times = self.times.clone();

@@ -189,6 +189,24 @@ impl PyGaussianMixtureArrays {
         detached(py, || mixture.reduce(&params))
     }
 
+    /// The components that extend or start tracks (see `Mixture::track_rows`) as `(tags,
+    /// weights, means (k, D, 1), covars (k, D, D))`, and the `tracked` tags that left.
+    #[allow(clippy::type_complexity)]
+    fn track_states<'py>(&self, py: Python<'py>, tracked: Vec<u64>, threshold: f64) -> PyResult<(Vec<u64>, Vec<f64>, Bound<'py, PyArray3<f64>>, Bound<'py, PyArray3<f64>>, Vec<u64>)> {
+        let mixture = &self.0;
+        let d = mixture.ndim;
+        let (rows, gone) = mixture.track_rows(&tracked, threshold);
+        let mut means = Vec::with_capacity(rows.len() * d);
+        let mut covars = Vec::with_capacity(rows.len() * d * d);
+        for &i in &rows {
+            means.extend_from_slice(mixture.mean(i));
+            covars.extend_from_slice(mixture.covar(i));
+        }
+        let k = rows.len();
+        Ok((rows.iter().map(|&i| mixture.tags[i]).collect(), rows.iter().map(|&i| mixture.weights[i]).collect(),
+            PyArray1::from_vec(py, means).reshape([k, d, 1])?, PyArray1::from_vec(py, covars).reshape([k, d, d])?, gone))
+    }
+
     fn means<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let (n, d) = (self.0.len(), self.0.ndim);
         Ok(PyArray1::from_slice(py, &self.0.means).reshape([n, d])?)

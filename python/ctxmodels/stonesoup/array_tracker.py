@@ -444,44 +444,31 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
         """The stock ``update_tracks`` and ``end_tracks`` on the arrays: a component whose tag
         has a track extends it; one above the extraction threshold starts one; tracks whose
         tag left the mixture end."""
-        arrays = self._arrays
-        tags = arrays.tags().tolist()
-        weights = arrays.weights()
         tracks = self._track_of_tag
-        tracks_before = len(tracks)
-        with_track = [i for i, tag in enumerate(tags) if tag in tracks]
         # (a Probability threshold compares as a float)
-        extracted = np.flatnonzero(weights > float(self.extraction_threshold)).tolist()
-        chosen = sorted(set(with_track).union(extracted)) if extracted else with_track
-        if chosen:
-            means, covars = arrays.means(), arrays.covars()
-            as_vector, as_covariance = StateVector, CovarianceMatrix
-            for i in chosen:
-                tag = tags[i]
-                if tag == _BIRTH:
-                    continue
-                # own copies: a view would keep the whole scan's arrays alive in the track
-                state = _STATE(means[i].reshape(-1, 1).copy().view(as_vector),
-                               covars[i].copy().view(as_covariance), float(weights[i]),
-                               self._tag_name(tag), time)
-                track = self._track_of_tag.get(tag)
-                if track is None:
-                    track = Track([state], id=state.tag)
-                    self._track_of_tag[tag] = track
-                    self.target_tracks[state.tag] = track
-                else:
-                    track.states.append(state)
-        # end the tracks whose tag left the mixture (rarely any: skip the set otherwise)
-        if len({tags[i] for i in with_track}) < tracks_before \
-                or len(self._tag_names) > len(tracks):
-            present = set(tags)
-            for tag in [t for t in tracks if t not in present]:
-                del self.target_tracks[self._tag_names[tag]]
-                del tracks[tag]
+        tags, weights, means, covars, gone = self._arrays.track_states(
+            list(tracks), float(self.extraction_threshold))
+        # One block per scan; each state's vector and covariance are views of their own row
+        # of it (the core's arrays are not shared, so nothing else keeps it alive).
+        vectors, covariances = means.view(StateVector), covars.view(CovarianceMatrix)
+        row, make, names = np.ndarray.__getitem__, _STATE, self._tag_names
+        for j, tag in enumerate(tags):
+            state = make(row(vectors, j), row(covariances, j), weights[j],
+                         names.get(tag) or self._tag_name(tag), time)
+            track = tracks.get(tag)
+            if track is None:
+                tracks[tag] = self.target_tracks[state.tag] = Track([state], id=state.tag)
+            else:
+                track.states.append(state)
+        for tag in gone:
+            del self.target_tracks[names[tag]]
+            del tracks[tag]
+        if len(names) > len(tracks):
             # names given to untracked components (the mixture was read) live as long as
             # the component, so its tag stays the same string
-            for tag in [t for t in self._tag_names if t not in present]:
-                del self._tag_ids[self._tag_names.pop(tag)]
+            present = set(self._arrays.tags().tolist())
+            for tag in [t for t in names if t not in present and t not in tracks]:
+                del self._tag_ids[names.pop(tag)]
 
     def _component_scan(self, time, detections):
         """One scan through the component path (the parent tracker), arrays converted."""
