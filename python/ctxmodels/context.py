@@ -75,22 +75,13 @@ def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.nda
     of the detections must be the one the sensor's ``position_mapping`` describes. Linear
     detections sharing a model are converted in one matrix product."""
     positions = np.empty((len(detections), 2))
-    groups: dict[int, list[int]] = {}  # by measurement model, in first-appearance order
-    for i, det in enumerate(detections):
-        model = getattr(det, "measurement_model", None)
-        if model is None:
-            raise ValueError(f"detections: detection {i} has no measurement model, so its "
-                             "position (needed for λ) is unknown")
-        groups.setdefault(id(model), []).append(i)
-    for indices in groups.values():
-        model = detections[indices[0]].measurement_model
-        vectors = _measurement_vectors(detections, indices, getattr(model, "ndim_meas", None))
+    for model, indices, vectors in _model_groups(detections, "position (needed for λ)"):
         if isinstance(model, LinearGaussian):
             xy = _position_indices(model, position_mapping, indices[0])
-            positions[indices] = (_pseudo_inverse(model.matrix()) @ vectors.T)[xy].T
+            positions[indices] = (_pseudo_inverse(model.matrix()) @ vectors().T)[xy].T
         elif _batched_bearing_range(model):
             xy = _position_indices(model, position_mapping, indices[0])
-            positions[indices] = _bearing_range_inverse(model, vectors)[:, xy]
+            positions[indices] = _bearing_range_inverse(model, vectors())[:, xy]
         elif hasattr(model, "inverse_function"):
             for i in indices:
                 state = np.asarray(model.inverse_function(detections[i]),
@@ -100,6 +91,35 @@ def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.nda
             raise ValueError(f"detections: detection {indices[0]}'s measurement model "
                              f"{type(model).__name__} has no inverse_function")
     return positions
+
+
+def _model_groups(detections: Sequence, needed_for: str):
+    """The detections grouped by measurement model, in first-appearance order: ``(model,
+    indices, vectors)`` with ``vectors()`` their measurement vectors as float rows (checked
+    against the model's ``ndim_meas``; taken from the collection's stacked ``vectors`` when
+    it carries them, as :class:`~ctxmodels.stonesoup.ordering.OrderedDetections` does)."""
+    n = len(detections)
+    models = [getattr(det, "measurement_model", None) for det in detections]
+    stacked = getattr(detections, "vectors", None)
+    first = models[0] if n else None
+    if n and all(model is first for model in models):
+        groups = {id(first): list(range(n))}  # one model per scan: the usual case
+    else:
+        groups = {}
+        for i, model in enumerate(models):
+            groups.setdefault(id(model), []).append(i)
+    for indices in groups.values():
+        model = models[indices[0]]
+        if model is None:
+            raise ValueError(f"detections: detection {indices[0]} has no measurement model, "
+                             f"so its {needed_for} is unknown")
+        ndim_meas = getattr(model, "ndim_meas", None)
+
+        def vectors(indices=indices, ndim_meas=ndim_meas):
+            if stacked is not None and stacked.shape == (n, ndim_meas):
+                return stacked if len(indices) == n else stacked[indices]
+            return _measurement_vectors(detections, indices, ndim_meas)
+        yield model, indices, vectors
 
 
 def _measurement_vectors(detections: Sequence, indices: list, ndim_meas) -> np.ndarray:
@@ -154,23 +174,48 @@ def _bearing_range_inverse(model, polar: np.ndarray) -> np.ndarray:
     polar-to-Cartesian point rotated back to the world and shifted by the offset."""
     bearing, rng = polar[:, 0], polar[:, 1]
     xyz = np.array([rng * np.cos(bearing), rng * np.sin(bearing), np.zeros(len(polar))])
-    xy = (np.linalg.inv(model.rotation_matrix) @ xyz)[0:2]
+    xy = (_inverse_rotation(model.rotation_matrix) @ xyz)[0:2]
     states = np.zeros((len(polar), model.ndim_state))
     offset = np.asarray(model.translation_offset, dtype=np.float64)[:2, 0]
     states[:, list(model.mapping[:2])] = (xy + offset[:, np.newaxis]).T
     return states
 
 
+_INVERSE_ROTATIONS: dict = {}
+
+
+def _inverse_rotation(rotation) -> np.ndarray:
+    """``inv`` of a model's rotation matrix, cached by value (a moving sensor's scans bring
+    new models; their few headings recur)."""
+    rotation = np.ascontiguousarray(rotation, dtype=np.float64)
+    key = rotation.tobytes()
+    inverse = _INVERSE_ROTATIONS.get(key)
+    if inverse is None:
+        if len(_INVERSE_ROTATIONS) >= 256:
+            _INVERSE_ROTATIONS.clear()
+        inverse = _INVERSE_ROTATIONS[key] = np.linalg.inv(rotation)
+    return inverse
+
+
 def measured_ranges(detections: Sequence) -> np.ndarray:
     """Each detection's measured range from its sensor, (M,): the range element of a 2-D
     bearing–range measurement (Stone Soup's :class:`CartesianToBearingRange`, measured from
     its ``translation_offset``), NaN for any other detection."""
-    ranges = np.full(len(detections), np.nan)
-    for i, det in enumerate(detections):
-        model = getattr(det, "measurement_model", None)
-        if isinstance(model, CartesianToBearingRange) and len(model.mapping) == 2:
-            ranges[i] = float(np.asarray(det.state_vector, dtype=np.float64).ravel()[1])
+    n = len(detections)
+    models = [getattr(det, "measurement_model", None) for det in detections]
+    stacked = getattr(detections, "vectors", None)
+    if n and _measures_range(models[0]) and stacked is not None and stacked.shape == (n, 2) \
+            and all(model is models[0] for model in models):
+        return stacked[:, 1].copy()  # one bearing–range model per scan: the usual case
+    ranges = np.full(n, np.nan)
+    for i, model in enumerate(models):
+        if _measures_range(model):
+            ranges[i] = float(np.asarray(detections[i].state_vector, dtype=np.float64).ravel()[1])
     return ranges
+
+
+def _measures_range(model) -> bool:
+    return isinstance(model, CartesianToBearingRange) and len(model.mapping) == 2
 
 
 #: How far (relative) a measured range may lie from the range of the detection's position
@@ -297,7 +342,8 @@ class DetectorContext(_UpstreamContext):
         """λ of Stone Soup detections, in one array call. ``positions``: their (M, 2) world
         positions if already computed (:func:`detection_positions` with the sensor model's
         ``position_mapping``)."""
-        detections = list(detections)
+        if not isinstance(detections, Sequence):
+            detections = list(detections)
         clutter = self.sensor_model.clutter
         ranges = None
         if clutter.uses_position:
@@ -306,8 +352,8 @@ class DetectorContext(_UpstreamContext):
             ranges = ranges_for_bands(detections, positions, self.pose)
         else:
             positions = np.zeros((len(detections), 2))
-        return clutter.evaluate(self.pose, positions, [d.metadata for d in detections],
-                                ranges=ranges)
+        metadata = [d.metadata for d in detections] if clutter.metadata_keys else None
+        return clutter.evaluate(self.pose, positions, metadata, ranges=ranges)
 
     def clutter_spatial_density(self, detection) -> float:
         """λ of one detection (position from its measurement model, metadata from
