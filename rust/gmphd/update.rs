@@ -35,60 +35,72 @@ pub struct UpdateParams {
 /// (SciPy's `eigh`).
 struct Linearised {
     predicted: Vec<f64>,   // N×m
+    cross: Vec<f64>,       // N×D×m, P Hᵀ
+    innovation: Vec<f64>,  // N×m×m, S = H P Hᵀ + R
     inverse: Vec<f64>,     // N×m×m, S⁻¹
     symmetric_inverse: Vec<f64>, // N×m×m, the inverse of S's lower triangle, mirrored
     log_det: Vec<f64>,     // N, of S's lower triangle; NaN: not positive definite
-    gain: Vec<f64>,        // N×D×m, K = P Hᵀ S⁻¹
-    posterior: Vec<f64>,   // N×D×D, P − K S Kᵀ (symmetrised on request)
 }
 
-fn linearise(mixture: &Mixture, model: &MeasurementModel, force_symmetric: bool) -> Result<Linearised> {
+/// The measurement prediction of every component: what the gate and the likelihoods need.
+fn linearise(mixture: &Mixture, model: &MeasurementModel) -> Linearised {
     let (n, d, m) = (mixture.len(), mixture.ndim, model.ndim_meas());
     let mut out = Linearised {
         predicted: vec![0.0; n * m],
+        cross: vec![0.0; n * d * m],
+        innovation: vec![0.0; n * m * m],
         inverse: vec![0.0; n * m * m],
         symmetric_inverse: vec![0.0; n * m * m],
         log_det: vec![0.0; n],
-        gain: vec![0.0; n * d * m],
-        posterior: vec![0.0; n * d * d],
     };
     let noise = model.noise();
     let mut h = vec![0.0; m * d];
-    let mut cross = vec![0.0; d * m];
-    let mut innovation = vec![0.0; m * m];
-    let mut gain_s = vec![0.0; d * m];
-    let mut correction = vec![0.0; d * d];
     let mut scratch = vec![0.0; 2 * m * m.max(1)];
     for i in 0..n {
         let x = mixture.mean(i);
         let p = mixture.covar(i);
         model.linearise(x, &mut out.predicted[i * m..(i + 1) * m], &mut h);
-        matmul_bt(p, &h, d, d, m, &mut cross); // P Hᵀ
-        matmul(&h, &cross, m, d, m, &mut innovation); // H (P Hᵀ)
+        let cross = &mut out.cross[i * d * m..(i + 1) * d * m];
+        matmul_bt(p, &h, d, d, m, cross); // P Hᵀ
+        let innovation = &mut out.innovation[i * m * m..(i + 1) * m * m];
+        matmul(&h, cross, m, d, m, innovation); // H (P Hᵀ)
         for k in 0..m * m {
             innovation[k] += noise[k];
         }
         let symmetric_inverse = &mut out.symmetric_inverse[i * m * m..(i + 1) * m * m];
-        // not positive definite: only a gated pair, whose likelihood needs the
-        // determinant, is an error (see `update`)
-        out.log_det[i] = spd_inverse_into(&innovation, m, symmetric_inverse, &mut scratch).unwrap_or(f64::NAN);
+        out.log_det[i] = spd_inverse_into(innovation, m, symmetric_inverse, &mut scratch).unwrap_or(f64::NAN);
         let inverse = &mut out.inverse[i * m * m..(i + 1) * m * m];
         let symmetric = (0..m).all(|r| (0..r).all(|c| innovation[r * m + c] == innovation[c * m + r]));
         if symmetric && !out.log_det[i].is_nan() {
             inverse.copy_from_slice(symmetric_inverse);
         } else {
-            general_inverse_into(&innovation, m, inverse, &mut scratch);
+            general_inverse_into(innovation, m, inverse, &mut scratch);
         }
-        let gain = &mut out.gain[i * d * m..(i + 1) * d * m];
-        matmul(&cross, inverse, d, m, m, gain);
-        matmul(gain, &innovation, d, m, m, &mut gain_s); // K S
-        symmetric_product(&gain_s, gain, d, m, &mut correction); // (K S) Kᵀ
-        let posterior = &mut out.posterior[i * d * d..(i + 1) * d * d];
+    }
+    out
+}
+
+/// Kalman gains `K = P Hᵀ S⁻¹` (N×D×m) and posterior covariances `P − K S Kᵀ` (N×D×D,
+/// symmetrised on request), computed only for the components in `needed` (those some
+/// detection updates): most components of a scan are gated by none.
+fn gains(mixture: &Mixture, lin: &Linearised, m: usize, needed: &[bool], force_symmetric: bool) -> (Vec<f64>, Vec<f64>) {
+    let (n, d) = (needed.len(), mixture.ndim);
+    let mut gain = vec![0.0; n * d * m];
+    let mut posterior = vec![0.0; n * d * d];
+    let mut gain_s = vec![0.0; d * m];
+    let mut correction = vec![0.0; d * d];
+    for i in (0..n).filter(|&i| needed[i]) {
+        // (`needed` is empty when the scan has no detections)
+        let p = mixture.covar(i);
+        let k = &mut gain[i * d * m..(i + 1) * d * m];
+        matmul(&lin.cross[i * d * m..(i + 1) * d * m], &lin.inverse[i * m * m..(i + 1) * m * m], d, m, m, k);
+        matmul(k, &lin.innovation[i * m * m..(i + 1) * m * m], d, m, m, &mut gain_s); // K S
+        symmetric_product(&gain_s, k, d, m, &mut correction); // (K S) Kᵀ
+        let posterior = &mut posterior[i * d * d..(i + 1) * d * d];
         for (k, value) in posterior.iter_mut().enumerate() {
             *value = p[k] - correction[k];
         }
         if force_symmetric {
-            // (P + Pᵀ) / 2, as Stone Soup's force_symmetric_covariance
             for r in 0..d {
                 for c in 0..r {
                     let mean = (posterior[r * d + c] + posterior[c * d + r]) / 2.0;
@@ -98,7 +110,7 @@ fn linearise(mixture: &Mixture, model: &MeasurementModel, force_symmetric: bool)
             }
         }
     }
-    Ok(out)
+    (gain, posterior)
 }
 
 fn check_inputs(mixture: &Mixture, model: &MeasurementModel, detections: &[f64], prob_detection: &[f64], clutter: &[f64], params: &UpdateParams) -> Result<usize> {
@@ -140,7 +152,7 @@ impl Mixture {
         let count = check_inputs(self, model, detections, prob_detection, clutter, params)?;
         let (n, d, m) = (self.len(), self.ndim, model.ndim_meas());
         // (no detections: only the missed-detection terms, nothing to linearise)
-        let lin = if count > 0 { linearise(self, model, params.force_symmetric)? } else { linearise(&Mixture::new(d), model, false)? };
+        let lin = if count > 0 { linearise(self, model) } else { linearise(&Mixture::new(d), model) };
 
         // The gate, pair by pair: d(ẑ, z) with ẑ − z wrapped, as the stock measure takes it.
         let mut gated: Vec<Vec<usize>> = vec![Vec::new(); count];
@@ -160,6 +172,12 @@ impl Mixture {
                 members.push(i);
             }
         }
+
+        let mut needed = vec![false; if count > 0 { n } else { 0 }];
+        for &i in gated.iter().flatten() {
+            needed[i] |= !(params.skip_undetectable && prob_detection[i] == 0.0);
+        }
+        let (gain, posterior) = gains(self, &lin, m, &needed, params.force_symmetric);
 
         let mut out = Mixture { ndim: d, next_tag: self.next_tag, ..Default::default() };
         let log_norm = m as f64 * (2.0 * std::f64::consts::PI).ln();
@@ -194,10 +212,10 @@ impl Mixture {
                 weight_sum += weight;
                 // Kalman posterior with the wrapped innovation z − ẑ
                 model.difference(z, predicted, &mut innovation);
-                matvec(&lin.gain[i * d * m..(i + 1) * d * m], &innovation, d, m, &mut correction);
+                matvec(&gain[i * d * m..(i + 1) * d * m], &innovation, d, m, &mut correction);
                 let x = self.mean(i);
                 out.means.extend(x.iter().zip(&correction).map(|(a, b)| a + b));
-                out.covars.extend_from_slice(&lin.posterior[i * d * d..(i + 1) * d * d]);
+                out.covars.extend_from_slice(&posterior[i * d * d..(i + 1) * d * d]);
                 out.weights.push(weight);
                 let tag = if self.tags[i] == BIRTH { out.fresh_tag() } else { self.tags[i] };
                 out.tags.push(tag);
