@@ -441,3 +441,21 @@ def test_shapely_union_is_the_reference_for_the_masks_used_here():
     points = STATES[:, 0::2] / 4
     np.testing.assert_array_equal(land_mask().contains(points),
                                   shapely.intersects_xy(union, points[:, 0], points[:, 1]))
+
+
+def test_poses_a_navigation_track_and_a_mounting_compute_are_ordinary_poses():
+    """pose_at and Mounting.apply build their Poses without the Property checks: each must
+    be the Pose the constructor builds from the same floats, in every respect."""
+    import pickle
+    track = navigation()
+    mounting = Mounting(forward=3.0, left=-1.0, yaw=0.25)
+    for seconds in (0.0, 0.37, 1.5, 2.0, 4.0):  # (4.0: the last sample)
+        pose = track.pose_at(T0 + datetime.timedelta(seconds=seconds))
+        for made in (pose, mounting.apply(pose)):
+            built = Pose(x=made.x, y=made.y, heading=made.heading)
+            assert type(made) is Pose
+            assert made.__dict__ == built.__dict__ and list(made.__dict__) == list(built.__dict__)
+            assert made == built and hash(made) == hash(built) and repr(made) == repr(built)
+            assert pickle.loads(pickle.dumps(made)) == built
+            with pytest.raises(AttributeError, match="immutable"):
+                made.x = 1.0

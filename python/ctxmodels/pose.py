@@ -34,6 +34,16 @@ class Pose(ModelComponent):
         return float(self.x), float(self.y), float(self.heading)
 
 
+def _computed_pose(x: float, y: float, heading: float) -> Pose:
+    """The :class:`Pose` ``Pose(x=x, y=y, heading=heading)`` builds, for floats computed from
+    already validated ones (interpolated, mounted): without the per-Property checks, which
+    cost more than the rest of a scan's context."""
+    pose = object.__new__(Pose)
+    pose.__dict__.update(_initialised=True, _property_x=x, _property_y=y,
+                         _property_heading=heading)
+    return pose
+
+
 class Mounting(ModelComponent):
     """Where a sensor sits on its platform: lever arm in the platform's body frame and the
     yaw of the sensor's boresight relative to the platform heading."""
@@ -51,7 +61,7 @@ class Mounting(ModelComponent):
         """The sensor's pose on a platform at ``platform``."""
         x, y, heading = _core.mount(platform.as_tuple(), float(self.forward), float(self.left),
                                     float(self.yaw))
-        return Pose(x=x, y=y, heading=heading)
+        return _computed_pose(x, y, heading)
 
 
 class PoseSource(ModelComponent):
@@ -141,10 +151,10 @@ class NavigationTrack(PoseSource):
         k = int(np.searchsorted(seconds, t, side="right")) - 1
         if k >= len(seconds) - 1:
             x, y = self.positions[-1]
-            return Pose(x=float(x), y=float(y), heading=float(self.headings[-1]))
+            return _computed_pose(float(x), float(y), float(self.headings[-1]))
         f = (t - seconds[k]) / (seconds[k + 1] - seconds[k])
         x, y = (1 - f) * self.positions[k] + f * self.positions[k + 1]
         h0, h1 = self.headings[k], self.headings[k + 1]
         turn = math.remainder(h1 - h0, 2 * math.pi)
         heading = math.remainder(h0 + f * turn, 2 * math.pi)
-        return Pose(x=float(x), y=float(y), heading=heading)
+        return _computed_pose(float(x), float(y), heading)
