@@ -1,0 +1,99 @@
+"""Which GM-PHD configurations the scan core runs, and what each asks of it.
+
+:class:`~ctxmodels.stonesoup.ArrayPointProcessTracker` reads its components every scan
+into a :class:`_Plan` — the numbers the core's predict, update and reduce take — or learns
+that the configuration is one the core does not cover (see that tracker's docstring for
+the list), and runs the scan through the component path instead.
+"""
+from __future__ import annotations
+
+import numpy as np
+from stonesoup.hypothesiser.distance import DistanceHypothesiser
+from stonesoup.hypothesiser.gaussianmixture import GaussianMixtureHypothesiser
+from stonesoup.measures import Mahalanobis, SquaredMahalanobis
+from stonesoup.mixturereducer.gaussianmixture import GaussianMixtureReducer
+from stonesoup.models.measurement.linear import LinearGaussian
+from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
+from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
+from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
+
+from .. import _core
+from .fast import supports_predictor
+from .measurement import AnalyticCartesianToBearingRange
+from .pointprocess import PHDUpdater
+
+_KALMAN = (KalmanUpdater, ExtendedKalmanUpdater)
+
+
+def _plain_kalman(updater) -> bool:
+    return (type(updater) in _KALMAN and not updater.use_joseph_cov
+            and not updater.force_positive_definite_covariance)
+
+
+class _Plan:
+    """What a supported configuration asks of the core, read from the components."""
+
+    def __init__(self, hypothesiser, updater, reducer):
+        inner = hypothesiser.hypothesiser
+        self.predictor = inner.predictor
+        self.measurement_updater = updater.updater
+        self.gate_updater = inner.updater
+        self.missed_distance = float(inner.missed_distance)
+        self.squared = type(inner.measure) is SquaredMahalanobis
+        self.include_all = bool(inner.include_all)
+        self.prob_survival = float(updater.prob_survival)
+        self.prob_detection = float(updater.prob_detection)
+        self.clutter = float(updater.clutter_spatial_density)
+        self.normalise = bool(updater.normalisation)
+        self.force_symmetric = bool(updater.updater.force_symmetric_covariance)
+        self.reduce = dict(
+            pruning=bool(reducer.pruning), prune_threshold=float(reducer.prune_threshold),
+            merging=bool(reducer.merging), merge_threshold=float(reducer.merge_threshold),
+            truncating=bool(reducer.truncating),
+            max_components=int(min(reducer.max_number_components, np.iinfo(np.uint64).max)),
+            kdtree_max_distance=(None if reducer.kdtree_max_distance is None
+                                 else float(reducer.kdtree_max_distance)))
+
+    @classmethod
+    def of(cls, tracker) -> _Plan | None:
+        hypothesiser, updater, reducer = tracker.hypothesiser, tracker.updater, tracker.reducer
+        if type(hypothesiser) is not GaussianMixtureHypothesiser \
+                or not hypothesiser.order_by_detection:
+            return None
+        inner = hypothesiser.hypothesiser
+        if type(inner) is not DistanceHypothesiser or inner.predict_with_measurements:
+            return None
+        measure = inner.measure
+        if type(measure) not in (Mahalanobis, SquaredMahalanobis) or measure.mapping is not None \
+                or getattr(measure, "mapping2", None) is not None:
+            return None
+        if not supports_predictor(inner.predictor):
+            return None
+        if type(updater) not in (PHDUpdater, _StockPHDUpdater):
+            return None
+        if not (_plain_kalman(updater.updater) and _plain_kalman(inner.updater)):
+            return None
+        if type(reducer) is not GaussianMixtureReducer:
+            return None
+        return cls(hypothesiser, updater, reducer)
+
+    def scan_model(self, model, ndim: int):
+        """The core's form of one measurement model, or None if it has none (both updaters
+        must linearise it as the core does)."""
+        kinds = {type(self.measurement_updater), type(self.gate_updater)}
+        if type(model) is LinearGaussian:
+            if model.ndim_state != ndim:
+                return None
+            return _core.ScanMeasurementModel.linear(
+                np.ascontiguousarray(model.matrix(), dtype=np.float64),
+                np.ascontiguousarray(model.covar(), dtype=np.float64))
+        if type(model) in (CartesianToBearingRange, AnalyticCartesianToBearingRange) \
+                and kinds == {ExtendedKalmanUpdater} and len(model.mapping) == 2 \
+                and model.ndim_state == ndim:
+            offset = np.asarray(model.translation_offset, dtype=np.float64).ravel()
+            return _core.ScanMeasurementModel.bearing_range(
+                (int(model.mapping[0]), int(model.mapping[1])), (float(offset[0]), float(offset[1])),
+                np.ascontiguousarray(model.rotation_matrix, dtype=np.float64),
+                np.ascontiguousarray(model.covar(), dtype=np.float64),
+                type(model) is AnalyticCartesianToBearingRange)
+        return None
