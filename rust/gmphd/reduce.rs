@@ -155,6 +155,43 @@ impl CandidateIndex {
     }
 }
 
+/// For each rank `T`, the lower ranks `k` whose per-axis bounds admit `T`'s own mean
+/// (`δ_a² ≤ limit_ka` on every axis `a`, `δ = m_k − m_T`), ascending: the candidates of `T`'s
+/// first merge test, found in one sweep over the ranks sorted by their first coordinate
+/// (each `k` looks at the means within its radius) instead of one query per `T`. For
+/// finite means only; a rank whose radius is NaN is nobody's candidate, as in the index.
+fn first_candidates(ranked_means: &[f64], limits: &[f64], radius: &[f64], d: usize) -> Vec<Vec<usize>> {
+    let n = radius.len();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| ranked_means[a * d].total_cmp(&ranked_means[b * d]));
+    // the means in that order, contiguous: the inner loop walks them linearly
+    let firsts: Vec<f64> = order.iter().map(|&rank| ranked_means[rank * d]).collect();
+    let sorted: Vec<f64> = order.iter().flat_map(|&rank| ranked_means[rank * d..(rank + 1) * d].iter().copied()).collect();
+    let mut lists = vec![Vec::new(); n];
+    for k in 0..n {
+        let (x, reach) = (ranked_means[k * d], radius[k]);
+        if reach.is_nan() {
+            continue;
+        }
+        let other = &ranked_means[k * d..(k + 1) * d];
+        let limit = &limits[k * d..(k + 1) * d];
+        let low = firsts.partition_point(|&first| first < x - reach);
+        let high = low + firsts[low..].partition_point(|&first| first <= x + reach);
+        for (j, centre) in sorted[low * d..high * d].chunks_exact(d).enumerate() {
+            let mut inside = true;
+            for a in 0..d {
+                let delta = other[a] - centre[a];
+                inside &= !(delta * delta > limit[a]);
+            }
+            let top = order[low + j];
+            if inside && top > k {
+                lists[top].push(k);
+            }
+        }
+    }
+    lists
+}
+
 impl Mixture {
     pub fn reduce(&mut self, params: &ReduceParams) -> Result<()> {
         if params.prune_threshold.is_nan() || params.merge_threshold.is_nan() || params.max_distance.is_some_and(f64::is_nan) {
@@ -167,7 +204,7 @@ impl Mixture {
             self.prune(params.prune_threshold)?;
         }
         if self.len() > 1 && params.merging {
-            self.merge(params.merge_threshold, params.max_distance);
+            self.merge(params.merge_threshold, params.max_distance, true);
             self.unique_tags();
         }
         if self.len() > params.max_components && params.truncating {
@@ -199,7 +236,9 @@ impl Mixture {
         order
     }
 
-    fn merge(&mut self, threshold: f64, max_distance: Option<f64>) {
+    /// `listed`: take each heaviest's first candidates from [`first_candidates`] (false:
+    /// from the index alone; the same merges, which the tests check).
+    pub(super) fn merge(&mut self, threshold: f64, max_distance: Option<f64>, listed: bool) {
         let (n, d) = (self.len(), self.ndim);
         let order = self.ascending();
         // By rank (ascending weight): means, candidates, and the |δ|² above which a rank
@@ -216,6 +255,7 @@ impl Mixture {
             radius[rank] = candidates.limits[rank * d].sqrt() * BOUND_SLACK;
         }
         let index = CandidateIndex::new(&first, &radius);
+        let lists = (listed && ranked_means.iter().all(|x| x.is_finite())).then(|| first_candidates(&ranked_means, &candidates.limits, &radius, d));
         let mut hits = Vec::with_capacity(n);
         let mut out = Mixture { ndim: d, next_tag: self.next_tag, ..Default::default() };
         let mut mean = vec![0.0; d];
@@ -233,10 +273,18 @@ impl Mixture {
             let origin = self.mean(best);
             // Ranks below `top` in increasing order, each against the running merge: a
             // branch-free first test over all of them, the exact ones for the few it keeps,
-            // again from the next rank whenever a merge moves the mean.
+            // again from the next rank whenever a merge moves the mean. Until the first
+            // merge the running mean is `top`'s own, whose candidates were listed at once.
             let mut start = 0;
+            let mut listed = lists.as_ref().map(|lists| &lists[top]);
             loop {
-                index.near(mean[0], start..top, &first, &radius, &mut hits);
+                match listed.take() {
+                    Some(list) => {
+                        hits.clear();
+                        hits.extend(list.iter().copied().filter(|&rank| radius[rank] >= 0.0));
+                    }
+                    None => index.near(mean[0], start..top, &first, &radius, &mut hits),
+                }
                 let mut merged = None;
                 for &rank in &hits {
                     let other = &ranked_means[rank * d..(rank + 1) * d];

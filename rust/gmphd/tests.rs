@@ -134,3 +134,46 @@ fn a_scan_without_detections_keeps_only_missed_terms() {
     assert_eq!(mixture.tags, vec![tag]);
     assert!((mixture.weights[0] - 0.3).abs() < 1e-15);
 }
+
+/// Clustered components (many within merging distance, varied spreads, some covariances a
+/// rounding away from symmetric) from a fixed seed.
+fn clustered_mixture(seed: u64, n: usize) -> Mixture {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let centres: Vec<[f64; 2]> = (0..6).map(|_| [rng.random_range(-2000.0..2000.0), rng.random_range(-2000.0..2000.0)]).collect();
+    let mut mixture = Mixture::new(4);
+    for _ in 0..n {
+        let c = centres[rng.random_range(0..centres.len())];
+        let spread: f64 = 10f64.powf(rng.random_range(0.5..2.5));
+        let mean = [c[0] + rng.random_range(-1.0..1.0) * spread, rng.random_range(-5.0..5.0), c[1] + rng.random_range(-1.0..1.0) * spread, rng.random_range(-5.0..5.0)];
+        let mut covar = diagonal([spread * spread, 25.0, spread * spread * rng.random_range(0.5..2.0), 25.0]);
+        covar[2] = 0.3 * spread * spread;
+        covar[8] = 0.3 * spread * spread;
+        if rng.random_bool(0.1) {
+            covar[8] *= 1.0 + f64::EPSILON; // not symmetric: the index's other bound
+        }
+        let weight = 10f64.powf(rng.random_range(-6.0..0.0));
+        let tag = mixture.reserve_tags(1);
+        mixture.extend(&mean, &covar, &[weight], &[tag], &[0]).unwrap();
+    }
+    mixture
+}
+
+#[test]
+fn listed_first_candidates_merge_as_the_index_does() {
+    let mut merges = 0;
+    for seed in 0..40 {
+        for max_distance in [None, Some(150.0)] {
+            let mixture = clustered_mixture(seed, 300);
+            let (mut listed, mut indexed) = (mixture.clone(), mixture.clone());
+            listed.merge(16.0, max_distance, true);
+            indexed.merge(16.0, max_distance, false);
+            assert_eq!(listed.means, indexed.means, "seed {seed}");
+            assert_eq!(listed.covars, indexed.covars, "seed {seed}");
+            assert_eq!(listed.weights, indexed.weights, "seed {seed}");
+            assert_eq!(listed.tags, indexed.tags, "seed {seed}");
+            merges += mixture.len() - listed.len();
+        }
+    }
+    assert!(merges > 1000, "the set-up should merge often, merged {merges}");
+}
