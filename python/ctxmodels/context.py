@@ -149,15 +149,20 @@ _PSEUDO_INVERSES: dict = {}
 
 
 def _pseudo_inverse(matrix) -> np.ndarray:
-    """``pinv`` of a linear model's matrix, cached by value (scans often bring a new model
-    object with the same matrix)."""
+    """``pinv`` of a linear model's matrix."""
+    return _inverted_by_value(_PSEUDO_INVERSES, matrix, np.linalg.pinv)
+
+
+def _inverted_by_value(cache: dict, matrix, invert, limit: int = 64) -> np.ndarray:
+    """``invert(matrix)``, cached in ``cache`` by the matrix's value: scans often bring a new
+    model object with the same matrix (a moving sensor's few recurring headings)."""
     matrix = np.ascontiguousarray(matrix, dtype=np.float64)
     key = (matrix.shape, matrix.tobytes())
-    inverse = _PSEUDO_INVERSES.get(key)
+    inverse = cache.get(key)
     if inverse is None:
-        if len(_PSEUDO_INVERSES) >= 64:
-            _PSEUDO_INVERSES.clear()
-        inverse = _PSEUDO_INVERSES[key] = np.linalg.pinv(matrix)
+        if len(cache) >= limit:
+            cache.clear()
+        inverse = cache[key] = invert(matrix)
     return inverse
 
 
@@ -185,16 +190,8 @@ _INVERSE_ROTATIONS: dict = {}
 
 
 def _inverse_rotation(rotation) -> np.ndarray:
-    """``inv`` of a model's rotation matrix, cached by value (a moving sensor's scans bring
-    new models; their few headings recur)."""
-    rotation = np.ascontiguousarray(rotation, dtype=np.float64)
-    key = rotation.tobytes()
-    inverse = _INVERSE_ROTATIONS.get(key)
-    if inverse is None:
-        if len(_INVERSE_ROTATIONS) >= 256:
-            _INVERSE_ROTATIONS.clear()
-        inverse = _INVERSE_ROTATIONS[key] = np.linalg.inv(rotation)
-    return inverse
+    """``inv`` of a model's rotation matrix."""
+    return _inverted_by_value(_INVERSE_ROTATIONS, rotation, np.linalg.inv, limit=256)
 
 
 def measured_ranges(detections: Sequence) -> np.ndarray:
