@@ -79,3 +79,21 @@ def test_agreement_check_catches_a_wrong_answer(compare):
     assert check["differ_far_from_boundary"] == 1
     check = compare.agreement(ours, np.array([True, True, True]), near=np.array([False, True, False]))
     assert check["differ_far_from_boundary"] == 0 and check["differ"] == 1
+
+
+def test_tracking_benchmark_times_a_gmphd_tracker_on_both_paths(tmp_path):
+    """benches/bench_tracking.py with a GM-PHD tracker and repeats: both paths see every scan
+    and report the same tracks; a bad tracker name is a usage error (no timing asserted)."""
+    path = Path(__file__).resolve().parents[1] / "benches" / "bench_tracking.py"
+    spec = importlib.util.spec_from_file_location("bench_tracking", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    out = tmp_path / "gmphd.json"
+    assert module.main(["--tracker", "gmphd-context", "--duration", "5", "--repeats", "2",
+                        "--json", str(out)]) == 0
+    results = json.loads(out.read_text())
+    assert results["array"]["scans"] == results["component"]["scans"] > 40
+    assert results["array"]["tracks"] == results["component"]["tracks"]
+    with pytest.raises(SystemExit) as exit_info:
+        module.main(["--tracker", "no-such-tracker"])
+    assert exit_info.value.code == 2

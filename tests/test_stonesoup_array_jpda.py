@@ -485,12 +485,12 @@ def test_same_numbers_across_processes_hash_seeds_and_thread_counts():
 
 # --- the benchmark script ------------------------------------------------------------------------
 def test_benchmark_script_runs_and_reports_both_paths(tmp_path):
-    """benches/bench_jpda.py on a short run: both paths track every scan and the JSON has
-    the promised shape (no timing is asserted)."""
+    """benches/bench_tracking.py (JPDA) on a short run: both paths track every scan and the
+    JSON has the promised shape (no timing is asserted)."""
     import importlib.util
     from pathlib import Path
-    path = Path(__file__).resolve().parents[1] / "benches" / "bench_jpda.py"
-    spec = importlib.util.spec_from_file_location("bench_jpda", path)
+    path = Path(__file__).resolve().parents[1] / "benches" / "bench_tracking.py"
+    spec = importlib.util.spec_from_file_location("bench_tracking", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     out = tmp_path / "jpda.json"

@@ -122,19 +122,16 @@ def drop_distractor_states(tracks, run, times, mapping=(0, 2)) -> list:
     return kept
 
 
-def run_job(job: Job) -> JobResult:
-    """Simulates the scenario, runs the tracker over both sensors' scans, scores it."""
-    from ..stonesoup.ordering import in_track_order
-    from .trackers import TRACKERS, build_tracker
+def track_scans(tracker) -> tuple[float, int, set]:
+    """Runs ``tracker`` over all its scans as a job does: ``(seconds, scans, tracks)`` — the
+    tracking time, the number of scans, and every track it reported on any scan.
 
-    spec = TRACKERS[job.tracker]
-    run = make_scenario(job.scenario, job.seed, job.duration, radar=job.radar, lidar=job.lidar)
-    tracker = build_tracker(spec, run, fast=not job.stock)
-    # The simulated run (every scan's detections, the truths) stays alive and unchanged
-    # while the tracker runs: out of the garbage collector's sight. And the collector is
-    # paused while it tracks: no tracker makes reference cycles (tests hold every tracker
-    # to that), so a collection could free nothing, yet its full passes over the growing
-    # tracks cost a sixth of a P_D-aware run. Refcounting frees everything as before.
+    Whatever the tracker was built from (the simulated run: every scan's detections, the
+    truths) stays alive and unchanged while it runs, so it is frozen out of the garbage
+    collector's sight. And the collector is paused while it tracks: no tracker makes
+    reference cycles (tests hold every tracker to that), so a collection could free
+    nothing, yet its full passes over the growing tracks cost a sixth of a P_D-aware run.
+    Reference counting frees everything as before."""
     gc.freeze()
     collecting = gc.isenabled()
     gc.disable()
@@ -150,6 +147,18 @@ def run_job(job: Job) -> JobResult:
         if collecting:
             gc.enable()
         gc.unfreeze()
+    return seconds, scans, all_tracks
+
+
+def run_job(job: Job) -> JobResult:
+    """Simulates the scenario, runs the tracker over both sensors' scans, scores it."""
+    from ..stonesoup.ordering import in_track_order
+    from .trackers import TRACKERS, build_tracker
+
+    spec = TRACKERS[job.tracker]
+    run = make_scenario(job.scenario, job.seed, job.duration, radar=job.radar, lidar=job.lidar)
+    tracker = build_tracker(spec, run, fast=not job.stock)
+    seconds, scans, all_tracks = track_scans(tracker)
     times = run.radar_times
     # By content, not set (address) order: the metrics then see the same track order in
     # every process.
