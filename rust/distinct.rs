@@ -152,6 +152,41 @@ pub fn ln_in_place(values: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any data (signed zeros, NaN, ±inf, few or many distinct values, lengths across
+        /// chunks): the table holds exactly the distinct bit patterns, or is refused for NaN
+        /// or too many; applying a function through it is applying it per element.
+        #[test]
+        fn a_table_is_its_distinct_values_and_apply_is_per_element(
+            pool in prop::collection::vec(prop_oneof![
+                4 => (0u32..1000).prop_map(|k| f64::from(k) / 999.0),
+                1 => Just(-0.0), 1 => Just(0.0), 1 => Just(f64::NAN),
+                1 => Just(f64::INFINITY), 1 => Just(f64::NEG_INFINITY)], 1..40),
+            picks in prop::collection::vec(any::<prop::sample::Index>(), 0..3000),
+            cap in prop_oneof![Just(MAX_DISTINCT), 1usize..20],
+        ) {
+            let data: Vec<f64> = picks.iter().map(|i| pool[i.index(pool.len())]).collect();
+            let mut distinct: Vec<u64> = data.iter().map(|v| v.to_bits()).collect();
+            distinct.sort_unstable();
+            distinct.dedup();
+            match Distinct::of(&data, cap) {
+                None => prop_assert!(data.iter().any(|v| v.is_nan()) || distinct.len() > cap),
+                Some(table) => {
+                    let mut held: Vec<u64> = table.values().iter().map(|v| v.to_bits()).collect();
+                    held.sort_unstable();
+                    prop_assert_eq!(held, distinct);
+                    let image: Vec<f64> = table.values().iter().map(|v| (v * 3.0 + 1.0).ln()).collect();
+                    let mut got = data.clone();
+                    table.apply(&mut got, &image).unwrap();
+                    for (g, v) in got.iter().zip(&data) {
+                        prop_assert_eq!(g.to_bits(), (v * 3.0 + 1.0).ln().to_bits());
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn distinct_values_sorted_by_bits() {

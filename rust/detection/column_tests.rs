@@ -3,7 +3,9 @@
 
 use super::*;
 use crate::distinct::ln_in_place;
+use crate::fuzz::{detection_factor, mapping, pose, states};
 use crate::land::Polygon;
+use proptest::prelude::*;
 use std::f64::consts::PI;
 
 fn bands(edges: &[f64], values: &[f64]) -> DetectionFactor {
@@ -115,4 +117,45 @@ fn column_errors_name_particles() {
     assert!(err.to_string().contains("2 rows"), "{err}");
     let err = scan.at_particles(&columns, 4, MemoryOrder::F, PositionMapping::default(), &mut [0.0; 9]).unwrap_err();
     assert_eq!(err.argument(), "particles");
+}
+
+proptest! {
+    /// Hostile models, poses, mappings and arrays (NaN, ±inf, ragged lengths, zero rows):
+    /// the particle path never panics, fails exactly where the row path on the same states
+    /// fails, and otherwise gives its bits, in either memory order; its log through the
+    /// table is the per-element `ln`.
+    #[test]
+    fn particles_never_panic_and_agree_with_rows(
+        factors in prop::collection::vec(detection_factor(), 0..5),
+        p in pose(),
+        (rows, ncols, n) in states(),
+        (mx, my) in mapping(),
+        fortran in any::<bool>(),
+    ) {
+        let factors: Vec<DetectionFactor> = factors.into_iter().flatten().collect();
+        let Ok(model) = DetectionModel::new(factors) else { return Ok(()); };
+        let Ok(pose) = Pose::new(p.0, p.1, p.2) else { return Ok(()); };
+        let Ok(mapping) = PositionMapping::new(mx, my) else { return Ok(()); };
+        let scan = model.at_pose(&pose);
+        let mut by_rows = vec![-7.0; n];
+        let row_result = scan.at_states(&rows, ncols, mapping, &mut by_rows);
+        // F order is the rows' memory; C order their transpose (when they are a block).
+        let (particles, order) = if fortran || rows.len() != n * ncols {
+            (rows.clone(), MemoryOrder::F)
+        } else {
+            ((0..ncols * n).map(|k| rows[(k % n) * ncols + k / n]).collect(), MemoryOrder::C)
+        };
+        let mut by_particles = vec![-5.0; n];
+        let result = scan.at_particles(&particles, ncols, order, mapping, &mut by_particles);
+        prop_assert_eq!(result.is_ok(), row_result.is_ok(), "{:?} vs {:?}", result, row_result);
+        if let Err(err) = result {
+            prop_assert_eq!(err.argument(), "particles");
+            return Ok(());
+        }
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        prop_assert_eq!(bits(&by_particles), bits(&by_rows));
+        let mut logs = by_particles.clone();
+        ln_in_place(&mut logs);
+        prop_assert_eq!(bits(&logs), by_particles.iter().map(|p| p.ln().to_bits()).collect::<Vec<_>>());
+    }
 }
