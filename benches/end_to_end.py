@@ -5,9 +5,16 @@
   ``stonesoup.updater.pointprocess.PHDUpdater`` with the constant P_D and clutter density, on
   the same hypotheses (built once by ``GaussianMixtureHypothesiser``; updaters do not change
   them): N components × M detections, default 50 × 20.
-* **Particle P_D**: ``ctxmodels.stonesoup.BernoulliParticleUpdater.get_log_detection_probability``
-  with the context (the same radar, optionally with a land mask and line of sight) over
-  10⁵ particles, against the stock updater's constant.
+* **Particle log P_D** over 10⁵ particles (Stone Soup's (D, N) ``StateVectors``; the same
+  radar, optionally with a land mask and line of sight), measured in the same run, calls
+  interleaved: the path the particle updaters took before
+  (``np.log(context.prob_detection_array(particles.T))``: the transposed view copied to
+  rows, NumPy's log in Python), the core call that replaced it
+  (``context.prob_detection_particles(particles, log=True)``), the updater's
+  ``get_log_detection_probability`` (which makes that call) and the stock updater's
+  constant. The two paths' results are checked bit for bit. Particles as a prediction makes
+  them (C-ordered) and as resampling leaves them (Fortran-ordered: there ``.T`` is already
+  rows, no copy).
 
 Times are medians of repeated scans, per scan. Run ``python benches/end_to_end.py``
 (``--quick`` for a small run, ``--json PATH`` to write the results).
@@ -121,10 +128,34 @@ def bench_phd(n_components, n_detections, repeats):
             "ratio_context_over_stock": t_ours / t_stock, "updated_components": n_out}
 
 
-def bench_particle_pd(n_particles, repeats, with_land):
+def median_times(fns: dict, repeats: int) -> dict:
+    """Median time of each callable, the callables interleaved in every repeat so load
+    changes on a shared machine hit them alike."""
+    for fn in fns.values():
+        fn()
+    samples = {name: [] for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            start = time.perf_counter()
+            fn()
+            samples[name].append(time.perf_counter() - start)
+    return {name: statistics.median(s) for name, s in samples.items()}
+
+
+def old_particle_log_pd(context, prediction):
+    """The particle updaters' path before prob_detection_particles: rows for
+    prob_detection_array (the transposed view, copied unless Fortran-ordered), NumPy's log."""
+    particles = np.asarray(prediction.state_vector, dtype=np.float64)
+    pd = np.asarray(context.prob_detection_array(particles.T), dtype=np.float64)
+    with np.errstate(divide="ignore"):
+        return np.log(pd)
+
+
+def bench_particle_pd(n_particles, repeats, with_land, order="C"):
     rng = np.random.default_rng(4)
-    particles = StateVectors(np.vstack([rng.uniform(-3000, 1000, n_particles), rng.normal(0, 3, n_particles),
-                                        rng.uniform(-1500, 2000, n_particles), rng.normal(0, 3, n_particles)]))
+    states = np.vstack([rng.uniform(-3000, 1000, n_particles), rng.normal(0, 3, n_particles),
+                        rng.uniform(-1500, 2000, n_particles), rng.normal(0, 3, n_particles)])
+    particles = StateVectors(np.asarray(states, order=order))
     log_weight = np.full(n_particles, -np.log(n_particles))
     prediction = BernoulliParticleStatePrediction(state_vector=particles, log_weight=log_weight,
                                                   existence_probability=0.6, timestamp=T0 + SCAN)
@@ -133,11 +164,19 @@ def bench_particle_pd(n_particles, repeats, with_land):
     ours = BernoulliParticleUpdater(measurement_model=MEASUREMENT, detection_probability=0.4)
     log_pd = ours.get_log_detection_probability(prediction, context)
     assert log_pd.shape == (n_particles,) and np.isfinite(log_pd).any() and np.isneginf(log_pd).any()
-    t_stock = median_time(lambda: stock.get_log_detection_probability(prediction), repeats)
-    t_ours = median_time(lambda: ours.get_log_detection_probability(prediction, context), repeats)
-    return {"benchmark": "particle_log_pd" + ("_land_sight" if with_land else ""), "particles": n_particles,
-            "ms_per_scan": {"stock": t_stock * 1e3, "ctxmodels_context": t_ours * 1e3},
-            "ns_per_particle": {"stock": t_stock / n_particles * 1e9, "ctxmodels_context": t_ours / n_particles * 1e9}}
+    assert log_pd.tobytes() == old_particle_log_pd(context, prediction).tobytes()
+    assert log_pd.tobytes() == context.prob_detection_particles(particles, log=True).tobytes()
+    times = median_times({
+        "old_path": lambda: old_particle_log_pd(context, prediction),
+        "new_call": lambda: context.prob_detection_particles(particles, log=True),
+        "updater": lambda: ours.get_log_detection_probability(prediction, context),
+        "stock": lambda: stock.get_log_detection_probability(prediction),
+    }, repeats)
+    name = "particle_log_pd" + ("_land_sight" if with_land else "") + ("_fortran" if order == "F" else "")
+    return {"benchmark": name, "particles": n_particles, "order": order,
+            "ms_per_scan": {k: v * 1e3 for k, v in times.items()},
+            "ns_per_particle": {k: v / n_particles * 1e9 for k, v in times.items()},
+            "ratio_old_over_new": times["old_path"] / times["new_call"]}
 
 
 def main(argv=None) -> int:
@@ -155,12 +194,14 @@ def main(argv=None) -> int:
                            "repeats": repeats, "quick": args.quick},
                "results": [bench_phd(args.components, args.detections, repeats),
                            bench_particle_pd(particles, repeats, with_land=False),
+                           bench_particle_pd(particles, repeats, with_land=False, order="F"),
                            bench_particle_pd(particles, repeats, with_land=True)]}
     print(f"# {os.cpu_count()} cores · {repeats} repeats (median per scan)")
     for r in results["results"]:
         times = "  ".join(f"{k} {v:8.3f} ms" for k, v in r["ms_per_scan"].items())
         size = (f"{r['components']}×{r['detections']}" if "components" in r else f"{r['particles']} particles")
-        print(f"{r['benchmark']:26s} {size:>18s}  {times}")
+        ratio = f"  old/new {r['ratio_old_over_new']:.2f}×" if "ratio_old_over_new" in r else ""
+        print(f"{r['benchmark']:34s} {size:>18s}  {times}{ratio}")
     if args.json:
         with open(args.json, "w") as f:
             json.dump(results, f, indent=2)

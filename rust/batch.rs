@@ -1,5 +1,6 @@
-//! Batch evaluation over (N, ncols) row-major float64 state arrays: the position mapping,
-//! the split of rows over threads, and the first-bad-row error.
+//! Batch evaluation over float64 state arrays, as (N, ncols) rows or as Stone Soup's (D, N)
+//! particle columns: the position mapping, the gather of positions from either layout, the
+//! split of states over threads, and the first-bad-row error.
 
 use crate::error::{ModelError, Result};
 use rayon::prelude::*;
@@ -38,6 +39,66 @@ impl PositionMapping {
     }
 }
 
+/// How N states of D values lie in a flat C-ordered array.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layout {
+    /// (N, D): state i is row i (a mixture's means).
+    Rows { ncols: usize },
+    /// (D, N): state i is column i (Stone Soup's `StateVectors` of particles), read in place
+    /// with stride N instead of transposing.
+    Columns { nstates: usize },
+}
+
+impl Layout {
+    /// Positions of states `first..first + xs.len()` into `xs`, `ys`. One gather for both
+    /// layouts, so P_D is computed by the same kernel whichever way the states lie.
+    #[inline]
+    pub fn gather(self, data: &[f64], first: usize, mapping: PositionMapping, xs: &mut [f64], ys: &mut [f64]) {
+        let n = xs.len();
+        match self {
+            // Stone Soup's [x, vx, y, vy]: fixed offsets let the gather vectorise.
+            Layout::Rows { ncols: 4 } if mapping == PositionMapping::default() => {
+                for (i, row) in data[first * 4..(first + n) * 4].chunks_exact(4).enumerate() {
+                    xs[i] = row[0];
+                    ys[i] = row[2];
+                }
+            }
+            Layout::Rows { ncols } => {
+                for (i, row) in data[first * ncols..(first + n) * ncols].chunks_exact(ncols).enumerate() {
+                    xs[i] = row[mapping.x];
+                    ys[i] = row[mapping.y];
+                }
+            }
+            // A particle's x and y are contiguous runs of their rows.
+            Layout::Columns { nstates } => {
+                xs.copy_from_slice(&data[mapping.x * nstates + first..][..n]);
+                ys.copy_from_slice(&data[mapping.y * nstates + first..][..n]);
+            }
+        }
+    }
+}
+
+/// Memory order of a (D, N) particle array.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MemoryOrder {
+    /// Row-major: row j holds dimension j of every particle (Stone Soup's `StateVectors`
+    /// as built by stacking or by a transition model).
+    C,
+    /// Column-major: each particle's column is contiguous (what NumPy gives for
+    /// `state_vector[:, indices]`, i.e. after resampling).
+    F,
+}
+
+impl MemoryOrder {
+    /// The layout of the N states of a (ndim, N) array in this order.
+    pub fn layout(self, ndim: usize, n: usize) -> Layout {
+        match self {
+            MemoryOrder::C => Layout::Columns { nstates: n },
+            MemoryOrder::F => Layout::Rows { ncols: ndim },
+        }
+    }
+}
+
 /// Rows handled by one task: large enough to amortise scheduling, small enough that the
 /// per-chunk scratch stays in L1/L2.
 pub const CHUNK: usize = 1024;
@@ -58,6 +119,20 @@ where
     } else {
         out.chunks_mut(CHUNK).enumerate().filter_map(run).min()
     }
+}
+
+/// Checks a (D, N) particle array of `ndim` rows against N = `n_out` states and the mapping.
+pub fn check_columns(states: &[f64], ndim: usize, n_out: usize, mapping: PositionMapping, argument: &'static str) -> Result<()> {
+    if mapping.x >= ndim || mapping.y >= ndim {
+        return Err(ModelError::shape(
+            argument,
+            format!("has {ndim} rows (state dimensions), but position_mapping ({}, {}) reads beyond them", mapping.x, mapping.y),
+        ));
+    }
+    if states.len() != ndim * n_out {
+        return Err(ModelError::shape(argument, format!("must hold {ndim} × {n_out} values (one column per output), got {}", states.len())));
+    }
+    Ok(())
 }
 
 /// Checks the state array's length against N rows of `ncols`.

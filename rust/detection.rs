@@ -6,7 +6,7 @@
 //! The expected P_D of a Gaussian position, E[P_D(p)] with p ~ N(m, P), is evaluated with a
 //! [`Rule`](crate::cubature::Rule).
 
-use crate::batch::{check_rows, for_each_chunk, PositionMapping, CHUNK};
+use crate::batch::{check_columns, check_rows, for_each_chunk, Layout, MemoryOrder, PositionMapping, CHUNK};
 use crate::cubature::{cholesky2, Rule};
 use crate::error::{check_probability, ModelError, Result};
 use crate::land::LandMask;
@@ -168,26 +168,33 @@ impl ScanDetection<'_> {
     pub fn at_states(&self, states: &[f64], ncols: usize, mapping: PositionMapping, out: &mut [f64]) -> Result<()> {
         mapping.check(ncols, "states")?;
         check_rows(states, ncols, out.len(), "states")?;
-        let bad = for_each_chunk(out, |first, chunk| {
+        match self.at_layout(states, Layout::Rows { ncols }, mapping, out) {
+            Some(row) => Err(ModelError::non_finite("states", row, "position is NaN or infinite")),
+            None => Ok(()),
+        }
+    }
+
+    /// P_D at the position of each particle of `particles`, a (ndim, N) array (one column
+    /// per particle, Stone Soup's `StateVectors`; N = `out.len()`) in memory order `order`,
+    /// read in place: no transpose. Same kernel as [`Self::at_states`], so the same bits.
+    pub fn at_particles(&self, particles: &[f64], ndim: usize, order: MemoryOrder, mapping: PositionMapping, out: &mut [f64]) -> Result<()> {
+        check_columns(particles, ndim, out.len(), mapping, "particles")?;
+        match self.at_layout(particles, order.layout(ndim, out.len()), mapping, out) {
+            Some(i) => Err(ModelError::invalid("particles", format!("particle {i} (column {i}) has a NaN or infinite position"))),
+            None => Ok(()),
+        }
+    }
+
+    /// P_D of every state of a checked array; the first state whose position is not finite.
+    fn at_layout(&self, states: &[f64], layout: Layout, mapping: PositionMapping, out: &mut [f64]) -> Option<usize> {
+        for_each_chunk(out, |first, chunk| {
             let n = chunk.len();
-            let rows = &states[first * ncols..(first + n) * ncols];
             SCRATCH.with(|cell| {
                 let scratch = &mut *cell.borrow_mut();
                 let (xs, ys) = (&mut scratch.xs[..n], &mut scratch.ys[..n]);
-                if ncols == 4 && mapping == PositionMapping::default() {
-                    // Stone Soup's [x, vx, y, vy]: fixed offsets let the gather vectorise.
-                    for (i, row) in rows.chunks_exact(4).enumerate() {
-                        xs[i] = row[0];
-                        ys[i] = row[2];
-                    }
-                } else {
-                    for (i, row) in rows.chunks_exact(ncols).enumerate() {
-                        xs[i] = row[mapping.x];
-                        ys[i] = row[mapping.y];
-                    }
-                }
+                layout.gather(states, first, mapping, xs, ys);
                 // Branch-free scan for NaN/inf (all exponent bits set); the rare bad chunk is
-                // then searched for its first bad row.
+                // then searched for its first bad state.
                 let mut non_finite = 0u64;
                 for i in 0..n {
                     non_finite |= (is_non_finite(xs[i]) | is_non_finite(ys[i])) as u64;
@@ -200,11 +207,7 @@ impl ScanDetection<'_> {
                 self.at_points(scratch, chunk);
                 bad
             })
-        });
-        match bad {
-            Some(row) => Err(ModelError::non_finite("states", row, "position is NaN or infinite")),
-            None => Ok(()),
-        }
+        })
     }
 
     /// Expected P_D over each Gaussian N(mean_i, P_i), P_i the position block of the
@@ -295,6 +298,9 @@ impl ScanDetection<'_> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod column_tests;
 
 #[cfg(test)]
 mod tests {

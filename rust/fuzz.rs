@@ -140,7 +140,7 @@ fn range_bands_args() -> impl Strategy<Value = (Vec<f64>, Vec<f64>, Vec<bool>)> 
     ]
 }
 
-fn detection_factor() -> impl Strategy<Value = Option<DetectionFactor>> {
+pub(crate) fn detection_factor() -> impl Strategy<Value = Option<DetectionFactor>> {
     prop_oneof![
         2 => probability().prop_map(|v| Some(DetectionFactor::Constant(v))),
         3 => range_bands_args().prop_map(|(e, v, u)| RangeBands::new(e, v, u).ok().map(DetectionFactor::Range)),
@@ -164,19 +164,19 @@ fn clutter_factor() -> impl Strategy<Value = Option<ClutterFactor>> {
     ]
 }
 
-fn pose() -> impl Strategy<Value = (f64, f64, f64)> {
+pub(crate) fn pose() -> impl Strategy<Value = (f64, f64, f64)> {
     (coord(), coord(), prop_oneof![4 => angle(), 1 => wild()])
 }
 
 /// State rows: usually a consistent (N, ncols) block, sometimes a ragged length.
-fn states() -> impl Strategy<Value = (Vec<f64>, usize, usize)> {
+pub(crate) fn states() -> impl Strategy<Value = (Vec<f64>, usize, usize)> {
     (0usize..7, 0usize..80, any::<bool>()).prop_flat_map(|(ncols, n, ragged)| {
         let len = n * ncols + usize::from(ragged && ncols > 1);
         (prop::collection::vec(prop_oneof![9 => coord(), 1 => wild()], len), Just(ncols), Just(n))
     })
 }
 
-fn mapping() -> impl Strategy<Value = (usize, usize)> {
+pub(crate) fn mapping() -> impl Strategy<Value = (usize, usize)> {
     prop_oneof![4 => Just((0, 2)), 1 => (0usize..7, 0usize..7)]
 }
 

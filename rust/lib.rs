@@ -9,6 +9,7 @@ pub mod batch;
 pub mod clutter;
 pub mod cubature;
 pub mod detection;
+pub mod distinct;
 pub mod error;
 pub mod gmphd;
 pub mod jpda;
@@ -22,10 +23,11 @@ pub mod sight;
 #[cfg(feature = "python")]
 mod python;
 
-pub use batch::PositionMapping;
+pub use batch::{MemoryOrder, PositionMapping};
 pub use clutter::{ClutterFactor, ClutterModel, MetadataThreshold};
 pub use cubature::Rule;
 pub use detection::{DetectionFactor, DetectionModel, ScanDetection};
+pub use distinct::{ln_in_place, Distinct};
 pub use error::{ModelError, Result};
 pub use land::{LandMask, Polygon};
 pub use pose::{Mounting, Pose, SensorFrame};

@@ -1,7 +1,7 @@
 //! The only module that knows about Python: converts arguments at the boundary, releases
 //! the GIL around evaluation, and turns core errors (and, defensively, panics) into Python
 //! exceptions. Input arrays arrive as C-contiguous float64 (the Python layer converts;
-//! unaligned ones are copied here). Arrays are borrowed with numpy's fallible borrows and no
+//! unaligned ones are copied here); particle arrays may also be Fortran-ordered. Arrays are borrowed with numpy's fallible borrows and no
 //! `unwrap`: an `out=` that overlaps an input, or that another thread's call is writing, is
 //! a ValueError, not a panic.
 
@@ -26,6 +26,7 @@ use std::sync::Arc;
 
 mod mixture;
 mod jpda;
+mod particles;
 
 fn to_py(err: ModelError) -> PyErr {
     PyValueError::new_err(err.to_string())
@@ -53,14 +54,23 @@ fn borrow<'py, D: Dimension>(array: &Bound<'py, PyArray<f64, D>>, argument: &str
     if !array.is_c_contiguous() {
         return Err(value_error(argument, "must be C-contiguous"));
     }
+    borrow_contiguous(array, argument)
+}
+
+/// [`borrow`] for callers that read the memory order (C or Fortran) from the borrowed array.
+fn borrow_contiguous<'py, D: Dimension>(array: &Bound<'py, PyArray<f64, D>>, argument: &str) -> PyResult<PyReadonlyArray<'py, f64, D>> {
+    if !array.is_contiguous() {
+        return Err(value_error(argument, "must be C- or Fortran-contiguous"));
+    }
     let view = array
         .try_readonly()
         .map_err(|_| value_error(argument, "is being written by another call (it is, or overlaps, an out= buffer in use)"))?;
     if array.is_aligned() {
         return Ok(view);
     }
-    // The shared borrow stays held while numpy copies, so no call can write it meanwhile.
-    let copy = array.call_method0("copy")?.cast_into::<PyArray<f64, D>>()?;
+    // The shared borrow stays held while numpy copies, so no call can write it meanwhile;
+    // order "K" keeps a Fortran-ordered array Fortran-ordered.
+    let copy = array.call_method1("copy", ("K",))?.cast_into::<PyArray<f64, D>>()?;
     drop(view);
     copy.try_readonly().map_err(|_| value_error(argument, "could not borrow an aligned copy"))
 }
@@ -311,6 +321,22 @@ impl PyDetectionModel {
             model.at_pose(&pose).at_states(data, ncols, mapping, buffer)
         })?;
         Ok(result)
+    }
+
+    /// P_D at each particle of `particles` (D, N), C- or Fortran-ordered, read in place;
+    /// `log`: log P_D (log 0 = -inf, NumPy's bits); `missed`: also 1 − P_D (or its log),
+    /// returned as a pair.
+    #[pyo3(signature = (pose, particles, position_mapping = (0, 2), log = false, missed = false))]
+    fn evaluate_particles<'py>(
+        &self,
+        py: Python<'py>,
+        pose: (f64, f64, f64),
+        particles: Bound<'py, PyArray2<f64>>,
+        position_mapping: (i64, i64),
+        log: bool,
+        missed: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        particles::evaluate(py, &self.0, pose, particles, position_mapping, log, missed)
     }
 
     /// Expected P_D of Gaussians (`means` (N, D), `covars` (N, D, D)) under `rule`.

@@ -1,7 +1,8 @@
 """Concurrency: contexts and models are shared, immutable, and evaluate with the GIL released.
 
-* Many Python threads evaluating the same context at once (each call large enough that the
-  core also splits it over its own Rayon threads) give results bit-identical to serial ones.
+* Many Python threads evaluating the same context at once (P_D, expected P_D, λ, and log
+  P_D over the same states as particle columns; each call large enough that the core also
+  splits it over its own Rayon threads) give results bit-identical to serial ones.
 * Results do not depend on the number of Rayon threads (a subprocess with
   RAYON_NUM_THREADS=1 reproduces them bit for bit).
 * A long evaluation lets another Python thread run meanwhile (the GIL is released): a counter
@@ -17,6 +18,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+import pytest
 
 from ctxmodels import (AngularSector, ClutterDensityModel, DetectionProbabilityModel, LandMask,
                        LineOfSight, MetadataThreshold, Pose, RangeBands, SensorModel)
@@ -47,9 +49,12 @@ def inputs(seed, n=N):
 
 
 def evaluate_all(context, means, covars, areas):
+    # The particle form reads the same states as (D, N) columns; log and log(1 - P_D).
     return (context.prob_detection_array(means),
             context.prob_detection_array(means, covars),
-            context.clutter_spatial_density_array(means[:, 0::2], areas))
+            context.clutter_spatial_density_array(means[:, 0::2], areas),
+            *context.prob_detection_particles(np.ascontiguousarray(means.T), log=True,
+                                              missed=True))
 
 
 def digest(results):
@@ -114,13 +119,19 @@ def test_results_do_not_depend_on_the_number_of_rayon_threads():
         assert child.stdout.strip() == here, (threads, child.stderr)
 
 
-def test_evaluation_releases_the_gil():
+@pytest.mark.parametrize("call", ["expected", "particles"])
+def test_evaluation_releases_the_gil(call):
     """While the main thread is inside one long Rust call, a pure-Python counter thread keeps
     running. The switch interval is made huge, so the main thread never has the GIL taken
     from it: between reading the counter and returning from the call, the counter can only
     advance if the call itself releases the GIL. No timing thresholds."""
     context = sensor("gauss-hermite").context((0.0, 0.0, 0.0))
     means, covars, _ = inputs(3, n=200_000)
+    if call == "particles":  # P_D and its log at 2e5 particles, land + sight
+        particles = np.ascontiguousarray(means.T)
+        evaluate = lambda: context.prob_detection_particles(particles, log=True)  # noqa: E731
+    else:
+        evaluate = lambda: context.prob_detection_array(means, covars)  # noqa: E731
     context.prob_detection_array(means[:10], covars[:10])  # compile and warm up first
     stop = threading.Event()
     running = threading.Event()
@@ -140,12 +151,13 @@ def test_evaluation_releases_the_gil():
         running.wait()
         time.sleep(0)
         before = count[0]
-        result = context.prob_detection_array(means, covars)  # 16 nodes x 2e5 rows, land + sight
+        result = evaluate()  # expected: 16 nodes x 2e5 rows, land + sight
         during = count[0] - before
     finally:
         stop.set()
         sys.setswitchinterval(old)
         thread.join()
+    result = np.exp(result) if call == "particles" else result
     assert result.shape == (200_000,) and np.all((result >= 0) & (result <= 1))
     assert during > 0, "the counter thread never ran while P_D was being evaluated"
 

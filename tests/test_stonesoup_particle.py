@@ -347,6 +347,78 @@ def test_smcphd_initiator_gets_the_scan_context():
     assert all(n == 0 for n, _ in blind)  # nothing can be confirmed where P_D = 0
 
 
+@pytest.mark.parametrize("prob", [0.9, 0.917, 0.0, 1.0])
+def test_constant_context_logs_are_the_stocks_bits(prob):
+    """log P_D and log(1 - P_D) of a constant context are the stock updaters' NumPy logs
+    of the constant, bit for bit (NumPy's AVX-512 log and libm's differ in the last bit at
+    0.917 and at 1 - 0.917; whole filter runs round such a bit away)."""
+    prediction = bernoulli_prediction(n=5000)
+    context = constant_context(prob)
+    stock = StockBernoulli(measurement_model=None, detection_probability=prob)
+    ours = BernoulliParticleUpdater(measurement_model=None, detection_probability=0.5)
+    with np.errstate(divide="ignore"):
+        want = stock.get_log_detection_probability(prediction)
+    assert ours.get_log_detection_probability(prediction, context).tobytes() == want.tobytes()
+    detections = [Detection(np.array([[20.0], [1.0]]), timestamp=prediction.timestamp,
+                            measurement_model=MEASUREMENT)]
+    hypotheses = smcphd_hypotheses(prediction, detections)
+    context = constant_context(prob, clutter=0.25)
+    stock = StockSMCPHD(measurement_model=None, prob_detect=prob, clutter_intensity=0.25)
+    ours = SMCPHDUpdater(measurement_model=None, prob_detect=0.5, clutter_intensity=1.0)
+    np.random.seed(2)  # the likelihood draws noise
+    with np.errstate(divide="ignore"):
+        want = stock.get_log_weights_per_hypothesis(hypotheses)
+    np.random.seed(2)
+    assert ours.get_log_weights_per_hypothesis(hypotheses, context).tobytes() == want.tobytes()
+
+
+class ParticleCountingContext(CountingContext):
+    """A ctxmodels context's particle call, counted: the updaters' core path."""
+
+    def __init__(self, context):
+        super().__init__(context)
+        self.calls["prob_detection_particles"] = 0
+
+    def prob_detection_particles(self, particles, *, log=False, missed=False):
+        self.calls["prob_detection_particles"] += 1
+        return self.context.prob_detection_particles(particles, log=log, missed=missed)
+
+
+@pytest.mark.parametrize("make", [banded_context, lambda: constant_context(0.917)],
+                         ids=["banded", "constant 0.917"])
+def test_core_path_gives_the_row_path_bits(make):
+    """One ``prob_detection_particles`` call (columns read in place, logs in the core) and
+    no ``prob_detection_array``; the numbers bit for bit those of a context that only has
+    ``prob_detection_array`` (transposed particles, NumPy's log in Python)."""
+    prediction = bernoulli_prediction(n=5000)
+    detections = [Detection(np.array([[20.0], [1.0]]), timestamp=prediction.timestamp,
+                            measurement_model=MEASUREMENT)]
+    core, rows = ParticleCountingContext(make()), CountingContext(make())
+    bernoulli = BernoulliParticleUpdater(measurement_model=None, clutter_rate=1,
+                                         clutter_distribution=1, detection_probability=0.5)
+    log_pd = bernoulli.get_log_detection_probability(prediction, core)
+    assert log_pd.tobytes() == bernoulli.get_log_detection_probability(prediction, rows).tobytes()
+    if make is banded_context:
+        assert np.isneginf(log_pd).any() and np.isfinite(log_pd).any()
+    hypotheses = bernoulli_hypotheses(prediction, detections, prediction.timestamp)
+    a = bernoulli.update(hypotheses, detector_context=core)
+    b = bernoulli.update(hypotheses, detector_context=rows)
+    assert a.log_weight.tobytes() == b.log_weight.tobytes()
+    assert a.existence_probability == b.existence_probability
+
+    smcphd = SMCPHDUpdater(measurement_model=None, prob_detect=0.5, clutter_intensity=1.0)
+    hypotheses = smcphd_hypotheses(prediction, detections)
+    np.random.seed(1)  # the stock likelihood draws noise
+    weights = smcphd.get_log_weights_per_hypothesis(hypotheses, detector_context=core)
+    np.random.seed(1)
+    assert weights.tobytes() == smcphd.get_log_weights_per_hypothesis(
+        hypotheses, detector_context=rows).tobytes()
+    # log P_D, the Bernoulli update, the SMC-PHD weights: one P_D call each.
+    assert core.calls == {"prob_detection_array": 0, "prob_detection_particles": 3,
+                          "clutter_spatial_density_detections": 2}
+    assert rows.calls["prob_detection_array"] == 3
+
+
 def test_context_must_be_a_context():
     updater = SMCPHDUpdater(measurement_model=None, prob_detect=0.5, clutter_intensity=1.0)
     prediction = bernoulli_prediction(n=10)

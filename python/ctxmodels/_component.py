@@ -201,6 +201,16 @@ def as_rows(array: Any, name: str, *, ncols: int | None = None) -> np.ndarray:
     return rows
 
 
+def as_columns(array: Any, name: str) -> np.ndarray:
+    """A (D, N) float64 array the core reads in place, one column per state (Stone Soup's
+    particles): C- or Fortran-ordered and aligned as given (particles are either, Fortran
+    after resampling picks columns), anything else copied C-ordered; or a clear error."""
+    if isinstance(array, np.ndarray) and array.dtype == np.float64 and array.ndim == 2 \
+            and array.flags.aligned and (array.flags.c_contiguous or array.flags.f_contiguous):
+        return np.asarray(array)  # a StateVectors becomes a plain view: no copy
+    return as_array(array, name, 2, "a (D, N) array, one column per particle")
+
+
 def frozen_copy(array: np.ndarray) -> np.ndarray:
     """A private read-only copy of an array a component keeps: later edits of the caller's
     array cannot reach it, and edits of the stored one fail loudly."""

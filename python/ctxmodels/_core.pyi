@@ -8,7 +8,7 @@ another call is writing, is a ``ValueError`` naming ``out``. ``order`` must be i
 every rule.
 """
 from collections.abc import Sequence
-from typing import Any, Literal, TypeAlias, final
+from typing import Any, Literal, TypeAlias, final, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -94,6 +94,28 @@ class DetectionModel:
         out: _Floats | None = None,
     ) -> _Floats:
         """P_D at the positions of `states` (N, D) for a sensor at `pose` (x, y, heading)."""
+    @overload
+    def evaluate_particles(
+        self,
+        pose: _Pose,
+        particles: _Floats,
+        position_mapping: _Mapping = ...,
+        log: bool = False,
+        missed: Literal[False] = False,
+    ) -> _Floats:
+        """P_D at each particle of `particles` (D, N), C- or Fortran-ordered, read in place;
+        `log`: log P_D (log 0 = -inf, NumPy's bits); `missed`: also 1 − P_D (or its log),
+        returned as a pair."""
+    @overload
+    def evaluate_particles(
+        self,
+        pose: _Pose,
+        particles: _Floats,
+        position_mapping: _Mapping = ...,
+        log: bool = False,
+        *,
+        missed: Literal[True],
+    ) -> tuple[_Floats, _Floats]: ...
     def expected(
         self,
         pose: _Pose,

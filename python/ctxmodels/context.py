@@ -292,6 +292,52 @@ class DetectorContext(_UpstreamContext):
         return model.detection.expected(self.pose, means, covars, mapping,
                                         model.pd_evaluation, model.pd_order, out=out)
 
+    def prob_detection_particles(self, particles, *, log: bool = False, missed: bool = False
+                                 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+        r"""P_D at every particle of a particle state, in one call into the core.
+
+        For particles :math:`x^{(1)}, \dots, x^{(N)}`, the columns of ``particles``,
+
+        .. math::
+            p_i = P_D\bigl(x^{(i)}; S\bigr), \qquad
+            \ell_i = \log p_i \quad (\log 0 = -\infty),
+
+        P_D read at each particle's position (the sensor model's ``position_mapping`` rows)
+        as :meth:`prob_detection_array` reads it at a mean: bit for bit
+        ``prob_detection_array(particles.T)``, and with ``log`` bit for bit ``numpy.log`` of
+        that. The array is read in place, C- or Fortran-ordered (other layouts and dtypes are
+        copied first), so there is no transposed copy; the logs are looked up in the core per
+        particle from a table of the scan's distinct P_D values (a handful: products of band,
+        sector and land values) that NumPy's ``log`` fills, GIL released (past 256 distinct
+        values NumPy takes the log of every value).
+
+        Parameters
+        ----------
+        particles : array_like, shape (D, N)
+            One column per particle: a particle state's ``state_vector``
+            (:class:`~stonesoup.types.array.StateVectors`).
+        log : bool
+            Return :math:`\ell_i` instead of :math:`p_i`.
+        missed : bool
+            Also return :math:`1 - p_i` (:math:`\log(1 - p_i)` with ``log``), the
+            missed-detection factor, from the same evaluation.
+
+        Returns
+        -------
+        : :class:`numpy.ndarray` of shape (N,)
+            :math:`p_i` or :math:`\ell_i`; with ``missed`` a pair ``(detected, missed)``.
+
+        Raises
+        ------
+        ValueError
+            ``particles`` is not 2-D, has fewer rows than ``position_mapping`` reads, or a
+            particle's position is NaN or infinite (naming the first such particle).
+        """
+        model = self.sensor_model
+        return model.detection.evaluate_particles(self.pose, particles,
+                                                  tuple(model.position_mapping),
+                                                  log=log, missed=missed)
+
     def prob_detection_states(self, states: Sequence) -> np.ndarray:
         """P_D of Stone Soup states, predictions or hypotheses, in one array call."""
         states = [_state_of(s) for s in states]

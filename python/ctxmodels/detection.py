@@ -7,8 +7,8 @@ import numpy as np
 from stonesoup.base import Property
 
 from . import _core
-from ._component import (ModelComponent, as_array, as_float, as_int, as_position_mapping, as_rows,
-                         as_sequence, check_out)
+from ._component import (ModelComponent, as_array, as_columns, as_float, as_int,
+                         as_position_mapping, as_rows, as_sequence, check_out)
 from .land import LandMask, LineOfSight
 from .pose import Pose
 from .range_bands import RangeBands
@@ -62,6 +62,16 @@ class DetectionProbabilityModel(ModelComponent):
         mapping = _mapping_within(position_mapping, rows, "states")
         return self._compiled().evaluate(pose.as_tuple(), rows, mapping,
                                          check_out(out, rows.shape[0], states=rows))
+
+    def evaluate_particles(self, pose: Pose, particles, position_mapping=(0, 2), *, log=False,
+                           missed=False):
+        """P_D at each column of ``particles`` (D, N), read in place; ``log``: log P_D;
+        ``missed``: also 1 - P_D (or its log), as a pair. See
+        :meth:`~ctxmodels.DetectorContext.prob_detection_particles`."""
+        columns = as_columns(particles, "particles")
+        mapping = as_position_mapping(position_mapping)
+        return self._compiled().evaluate_particles(pose.as_tuple(), columns, mapping,
+                                                   bool(log), bool(missed))
 
     def expected(self, pose: Pose, means, covars, position_mapping=(0, 2), rule="cubature",
                  order=3, *, out=None) -> np.ndarray:

@@ -3,9 +3,12 @@ r"""Context-aware Bernoulli particle and SMC-PHD updaters.
 Drop-ins for :class:`stonesoup.updater.particle.BernoulliParticleUpdater` and
 :class:`stonesoup.updater.particle.SMCPHDUpdater` (Stone Soup 1.9.1): P_D is evaluated at
 *every particle* of the prediction in one
-:meth:`~ctxmodels.DetectorContext.prob_detection_array` call into the Rust core, and the
-clutter intensity :math:`\lambda(z; S)` of every detection in one
-:meth:`~ctxmodels.DetectorContext.clutter_spatial_density_detections` call.
+:meth:`~ctxmodels.DetectorContext.prob_detection_particles` call into the Rust core (the
+(D, N) particles read in place, log P_D and log(1 - P_D) taken there), and the clutter
+intensity :math:`\lambda(z; S)` of every detection in one
+:meth:`~ctxmodels.DetectorContext.clutter_spatial_density_detections` call. A context of
+another kind needs only ``prob_detection_array``: it gets the transposed particles and
+NumPy's log, with the same numbers.
 
 **How the context reaches them.** Stone Soup 1.9.1 has no Bernoulli or SMC-PHD tracker: the
 Bernoulli example builds ``MultipleHypothesis([SingleHypothesis(prediction, detection) for
@@ -65,10 +68,18 @@ class _ParticleContextMixin:
         return self._scan_context
 
     @staticmethod
-    def _particle_prob_detection(prediction, detector_context) -> np.ndarray:
-        """P_D at each particle, (N,), from one array call."""
+    def _particle_prob_detection(prediction, detector_context, *, missed=False):
+        """log P_D at each particle, (N,), from one array call; with ``missed`` also
+        log(1 - P_D), as a pair."""
         particles = np.asarray(prediction.state_vector, dtype=np.float64)
-        return np.asarray(detector_context.prob_detection_array(particles.T), dtype=np.float64)
+        in_core = getattr(detector_context, "prob_detection_particles", None)
+        if in_core is not None:  # ctxmodels: (D, N) read in place, logs in the core
+            return in_core(particles, log=True, missed=missed)
+        # Any other context with the array method: rows for it, NumPy's log here.
+        prob_detection = np.asarray(detector_context.prob_detection_array(particles.T),
+                                    dtype=np.float64)
+        log_pd = _log(prob_detection)
+        return (log_pd, _log(1 - prob_detection)) if missed else log_pd
 
 
 def _check_context(detector_context) -> None:
@@ -109,7 +120,7 @@ class BernoulliParticleUpdater(_ParticleContextMixin, _StockBernoulliUpdater):
         context = self._context(detector_context)
         if context is None:
             return super().get_log_detection_probability(prediction)
-        return _log(self._particle_prob_detection(prediction, context))
+        return self._particle_prob_detection(prediction, context)
 
     def update(self, hypotheses, detector_context=None, **kwargs):
         """Bernoulli update of one scan; see the class docstring. Hypotheses as the stock
@@ -205,14 +216,13 @@ class SMCPHDUpdater(_ParticleContextMixin, _StockSMCPHDUpdater):
         prediction = hypotheses[0].prediction
         detections = [h.measurement for h in hypotheses if h]
         num_samples = prediction.state_vector.shape[1]
-        prob_detection = self._particle_prob_detection(prediction, context)
+        log_pd, log_missed = self._particle_prob_detection(prediction, context, missed=True)
         log_weight = prediction.log_weight
         log_likelihood = self._get_measurement_loglikelihoods(prediction, detections)
 
-        detected = _log(prob_detection)[:, np.newaxis] + log_likelihood \
-            + log_weight[:, np.newaxis]
+        detected = log_pd[:, np.newaxis] + log_likelihood + log_weight[:, np.newaxis]
         weights = np.full((num_samples, len(detections) + 1), -np.inf)
-        weights[:, 0] = _log(1 - prob_detection) + log_weight
+        weights[:, 0] = log_missed + log_weight
         if detections:
             clutter = np.log(np.asarray(
                 context.clutter_spatial_density_detections(detections), dtype=np.float64))
