@@ -456,6 +456,23 @@ def test_core_errors_name_the_argument_and_no_panic_escapes():
         _core.jpda_marginals(np.ones((2, 3)), np.ones((2, 1), dtype=bool))
 
 
+def test_intractable_cluster_is_a_value_error_naming_its_size():
+    """A cluster whose exact EHM2 tree exceeds the core's budget (≈ 1 GB) is a ValueError
+    naming the cluster, from the marginals and from a whole scan: never an abort."""
+    tracks, dets = 60, 60
+    weights = 1.0 + (np.arange(tracks * (dets + 1)) % 7).reshape(tracks, dets + 1) / 10
+    with pytest.raises(ValueError, match=r"^weights: .*cluster of 60 tracks and 60 detections"
+                                         r".* is intractable"):
+        _core.jpda_marginals(weights, np.ones((tracks, dets), dtype=bool))
+    model = _core.JPDAMeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
+                                              np.eye(2))
+    tracks, dets = 40, 40
+    z = np.sin(np.arange(2 * dets) * 0.37).reshape(dets, 2)
+    with pytest.raises(ValueError, match="cluster of 40 tracks and 40 detections"):
+        _core.jpda_scan(model, np.zeros((tracks, 4)), np.stack([np.eye(4) * 100.0] * tracks), z,
+                        np.full(tracks, 0.9), np.full(dets, 1e-3), 0.95, float("inf"))
+
+
 # --- determinism ------------------------------------------------------------------------------------
 _DIGEST = """
 import hashlib, json, sys
