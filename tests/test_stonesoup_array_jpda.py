@@ -272,16 +272,16 @@ def test_covariance_verdict_is_the_deleters_at_the_boundary():
     mapping the deleter would index otherwise (a tuple, NumPy integers) asks the deleter."""
     from stonesoup.types.state import GaussianState as State
     from stonesoup.types.track import Track
-    from ctxmodels.stonesoup.array_jpda import _covariance_says
+    from ctxmodels.stonesoup.array_jpda import _covariance_check
     threshold = 2.0 * 200.0 ** 2
     for pxx in (40000.0, np.nextafter(40000.0, 0.0), np.nextafter(40000.0, np.inf), 7e4, 1e3):
         track = Track([State(np.zeros((4, 1)), np.diag([pxx, 1.0, 40000.0, 1.0]))])
         for mapping in ([0, 2], [2, 0], [0], [-4, -2], [np.int64(0), 2], None, []):
             deleter = CovarianceBasedDeleter(covar_trace_thresh=threshold, mapping=mapping)
-            assert _covariance_says(deleter, track) == deleter.check_for_deletion(track)
+            assert _covariance_check(deleter)(track) == deleter.check_for_deletion(track)
     track = Track([State(np.zeros((4, 1)), np.eye(4))])
     with pytest.raises(IndexError):  # as the deleter: a tuple indexes the diagonal as 2-D
-        _covariance_says(CovarianceBasedDeleter(covar_trace_thresh=1.0, mapping=(0, 2)), track)
+        _covariance_check(CovarianceBasedDeleter(covar_trace_thresh=1.0, mapping=(0, 2)))(track)
 
 
 def test_jpda_context_position_bound_is_the_gmphds():

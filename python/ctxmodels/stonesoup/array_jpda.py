@@ -463,6 +463,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         records = type(hypothesiser) is PDAHypothesiser
         pd_list = prob_detect.tolist()
         plan = self._deletion_plan()
+        counting = () if plan is None else self._counting(plan, hypothesiser)
         gated = out["gated"]
         marginals = out["marginals"]
         detections = scan.detections
@@ -481,7 +482,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
                 state = _PREDICTION(state_vector=mean, covar=covar, timestamp=time)
                 metadata = None
             self._append(track, state, metadata)
-            self._count(track, state, pd_list[t], hypothesiser, plan)
+            self._count(track, state, pd_list[t], counting)
 
     @staticmethod
     def _update_metadata(track, detections, columns, marginals):
@@ -535,13 +536,22 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         return plan
 
     @staticmethod
-    def _state_pd(member, prob_detect, hypothesiser):
-        if member.hypothesiser is not None and member.hypothesiser is hypothesiser:
-            return prob_detect
-        return float(member.default_prob_detect)
+    def _counting(plan, hypothesiser):
+        """Per counter slot of ``plan``, what ``_count`` appends for a miss: "steps" (the
+        timestamp), or the P_D the expected-misses member reads for the state (the scan's
+        P_D when its hypothesiser is the scan's, else its default: None)."""
+        counting = []
+        for kind, member in plan.counted:
+            if kind == "steps":
+                counting.append(("steps", None))
+            elif member.hypothesiser is not None and member.hypothesiser is hypothesiser:
+                counting.append(("expected", None))
+            else:
+                counting.append(("expected", float(member.default_prob_detect)))
+        return counting
 
-    def _count(self, track, state, prob_detect, hypothesiser, plan):
-        if plan is None or not plan.counted:
+    def _count(self, track, state, prob_detect, counting):
+        if not counting:
             return
         counter = self._counters.get(track)
         if counter is None or counter.length != len(track) - 1:
@@ -549,8 +559,8 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             return  # re-read from the track when next needed
         counter.length += 1
         backed = is_detection_backed(state)
-        for k, (kind, member) in enumerate(plan.counted):
-            values = counter.values
+        values = counter.values
+        for k, (kind, default) in enumerate(counting):
             if kind == "steps":
                 if backed:
                     values[k] = {state.timestamp}
@@ -559,7 +569,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             elif backed:
                 values[k] = []
             else:
-                pd = self._state_pd(member, prob_detect, hypothesiser)
+                pd = prob_detect if default is None else default
                 if pd != 0.0:
                     values[k].append(pd)
 
@@ -594,31 +604,39 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         plan = self._deletion_plan()
         if plan is None:
             return self.deleter.delete_tracks(tracks)
+        # each member's check, its parameters read once a scan, in the composite's order
+        checks = []
+        for kind, member, k in plan.members:
+            if kind == "steps":
+                checks.append((kind, k, member.time_steps_since_update))
+            elif kind == "expected":
+                checks.append((kind, k, float(member.expected_misses)))
+            else:
+                checks.append((kind, k, _covariance_check(member)))
         deleted = set()
         counters = self._counters
         intersect = plan.intersect
+        counted = bool(plan.counted)
         for track in tracks:
-            counter = None
-            if plan.counted:
+            if counted:
                 counter = counters.get(track)
                 if counter is None or counter.length != len(track):
                     counter = self._read_counter(track, plan)
             # the composite's rule, member by member in its order: all (intersect) or any
             verdict = intersect
-            for kind, member, k in plan.members:
+            for kind, k, parameter in checks:
                 if kind == "steps":
-                    says = len(counter.values[k]) > member.time_steps_since_update
+                    says = len(counter.values[k]) > parameter
                 elif kind == "expected":
-                    threshold = float(member.expected_misses)
                     total = 0.0
                     says = False
                     for pd in reversed(counter.values[k]):  # newest first, as the deleter sums
                         total += pd
-                        if total >= threshold:
+                        if total >= parameter:
                             says = True
                             break
                 else:
-                    says = _covariance_says(member, track)
+                    says = parameter(track)
                 if says != intersect:
                     verdict = says
                     break
@@ -668,25 +686,29 @@ class _DeletionPlan:
         return self._signature(deleter) == self._seen
 
 
-def _covariance_says(deleter, track) -> bool:
-    """``CovarianceBasedDeleter.check_for_deletion(track)``: Stone Soup 1.9.1 deletes when
-    the sum of the last state's covariance diagonal over ``mapping`` (all of it when
-    ``mapping`` is None or empty) is strictly greater than ``covar_trace_thresh``. With a
-    list of one or two plain int indices the sum is read directly (NumPy's sum of two
-    float64 is their one IEEE addition, so the verdict is the same); any other mapping,
-    threshold or covariance asks the deleter."""
+def _covariance_check(deleter):
+    """``CovarianceBasedDeleter.check_for_deletion`` as a function of the track: Stone Soup
+    1.9.1 deletes when the sum of the last state's covariance diagonal over ``mapping`` (all
+    of it when ``mapping`` is None or empty) is strictly greater than ``covar_trace_thresh``.
+    With a list of one or two plain int indices and a float threshold the sum is read
+    directly (NumPy's sum of two float64 is their one IEEE addition, so the verdict is the
+    same); any other mapping or threshold, or a covariance that is not a 2-D float64 array,
+    asks the deleter."""
     mapping = deleter.mapping
     threshold = deleter.covar_trace_thresh
-    covar = track.states[-1].covar
-    if (type(mapping) is list and 0 < len(mapping) <= 2 and all(type(i) is int for i in mapping)
-            and type(threshold) is float and type(covar) in _COVARIANCE_TYPES
-            and covar.dtype == np.float64 and covar.ndim == 2):
-        if len(mapping) == 1:
-            trace = covar.item(mapping[0], mapping[0])
-        else:
-            trace = covar.item(mapping[0], mapping[0]) + covar.item(mapping[1], mapping[1])
+    if not (type(mapping) is list and 0 < len(mapping) <= 2
+            and all(type(i) is int for i in mapping) and type(threshold) is float):
+        return lambda track: bool(deleter.check_for_deletion(track))
+    i, j = mapping if len(mapping) == 2 else (mapping[0], None)
+
+    def check(track) -> bool:
+        covar = track.states[-1].covar
+        if not (type(covar) in _COVARIANCE_TYPES and covar.dtype == np.float64
+                and covar.ndim == 2):
+            return bool(deleter.check_for_deletion(track))
+        trace = covar.item(i, i) if j is None else covar.item(i, i) + covar.item(j, j)
         return trace > threshold
-    return bool(deleter.check_for_deletion(track))
+    return check
 
 
 _COVARIANCE_TYPES = (CovarianceMatrix, np.ndarray)
