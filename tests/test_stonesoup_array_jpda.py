@@ -214,7 +214,8 @@ COMPOSITES = {
         _covariance(15.0), UpdateTimeStepsDeleter(4),
         ExpectedMissesDeleter(expected_misses=1.5, hypothesiser=h))),
         lambda h: CompositeDeleter(intersect=False, deleters=(
-            UpdateTimeStepsDeleter(4), ExpectedMissesDeleter(expected_misses=1.5, hypothesiser=h)))),
+            UpdateTimeStepsDeleter(4),
+            ExpectedMissesDeleter(expected_misses=1.5, hypothesiser=h)))),
     # intersection: misses and uncertainty both needed; a stock steps deleter
     "steps-and-covariance": (False, lambda h: CompositeDeleter(intersect=True, deleters=[
         StockUpdateTimeStepsDeleter(1), _covariance(4.0)]),
