@@ -26,6 +26,9 @@ import sys
 import numpy as np
 import pytest
 from stonesoup.dataassociator.probability import JPDA, JPDAwithEHM, JPDAwithEHM2, JPDAwithLBP
+from stonesoup.deleter.error import CovarianceBasedDeleter
+from stonesoup.deleter.multi import CompositeDeleter
+from stonesoup.deleter.time import UpdateTimeStepsDeleter as StockUpdateTimeStepsDeleter
 from stonesoup.hypothesiser.probability import PDAHypothesiser as StockPDAHypothesiser
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.predictor.kalman import KalmanPredictor
@@ -172,8 +175,7 @@ def test_include_all_matches_stock():
 def test_context_run_matches_the_context_aware_pipeline(deleter):
     """P_D per track and λ per detection from a context (range bands), the ctxmodels
     hypothesiser, and deletion on expected misses (P_D summed since the last detection)."""
-    scans = list(ContextFeeder(tutorial_scans(seed=11, steps=24, clutter_max=4),
-                               sensor_model=VARYING, pose_source=ORIGIN))
+    scans = _context_scans()
     make = (lambda h: ExpectedMissesDeleter(expected_misses=1.5, hypothesiser=h)) \
         if deleter == "expected" else (lambda h: UpdateTimeStepsDeleter(3))
     ours, reference = tutorial_pair(hypothesiser_cls=PDAHypothesiser, scans=scans,
@@ -186,6 +188,131 @@ def test_context_run_matches_the_context_aware_pipeline(deleter):
     for track in ours.tracks:
         recorded = hypothesiser.recorded_prob_detect(track)
         assert recorded is None or recorded in (0.95, 0.35, 0.2)
+
+
+# --- conformance: composite and covariance deleters -----------------------------------------
+def _context_scans():
+    return list(ContextFeeder(tutorial_scans(seed=11, steps=24, clutter_max=4),
+                              sensor_model=VARYING, pose_source=ORIGIN))
+
+
+def _covariance(threshold, mapping=(0, 2)):
+    return CovarianceBasedDeleter(covar_trace_thresh=threshold,
+                                  mapping=None if mapping is None else list(mapping))
+
+
+#: (name, context scans?, deleter of the run, the run without the covariance bound). The
+#: thresholds are within the tracks' position traces on these scans (1 to 70 m²), so the
+#: covariance member decides some deletions (asserted).
+COMPOSITES = {
+    # the experiment's jpda-context form: expected misses or position uncertainty
+    "expected-or-covariance": (True, lambda h: CompositeDeleter(intersect=False, deleters=[
+        ExpectedMissesDeleter(expected_misses=1.5, hypothesiser=h), _covariance(20.0)]),
+        lambda h: ExpectedMissesDeleter(expected_misses=1.5, hypothesiser=h)),
+    # covariance first, and both counters at once (two slots)
+    "covariance-or-both-counters": (True, lambda h: CompositeDeleter(intersect=False, deleters=(
+        _covariance(15.0), UpdateTimeStepsDeleter(4),
+        ExpectedMissesDeleter(expected_misses=1.5, hypothesiser=h))),
+        lambda h: CompositeDeleter(intersect=False, deleters=(
+            UpdateTimeStepsDeleter(4),
+            ExpectedMissesDeleter(expected_misses=1.5, hypothesiser=h)))),
+    # intersection: misses and uncertainty both needed; a stock steps deleter
+    "steps-and-covariance": (False, lambda h: CompositeDeleter(intersect=True, deleters=[
+        StockUpdateTimeStepsDeleter(1), _covariance(4.0)]),
+        lambda h: StockUpdateTimeStepsDeleter(1)),
+    # the whole trace (mapping None: the deleter is asked) in a union
+    "steps-or-whole-trace": (False, lambda h: CompositeDeleter(intersect=False, deleters=[
+        UpdateTimeStepsDeleter(3), _covariance(12.0, mapping=None)]),
+        lambda h: UpdateTimeStepsDeleter(3)),
+    # a plain covariance deleter (one index)
+    "covariance-alone": (False, lambda h: _covariance(6.0, mapping=(2,)), None),
+}
+
+
+def _lengths(tracker):
+    seen = set()
+    for _, tracks in tracker:
+        seen |= tracks
+    return sorted(len(track) for track in seen)
+
+
+@pytest.mark.parametrize("name", list(COMPOSITES))
+def test_composite_and_covariance_deleters_match_the_component_path(name):
+    """CompositeDeleter (union and intersection) of the counted deleters and Stone Soup's
+    CovarianceBasedDeleter, evaluated by the array path without calling the deleter: the
+    tracks after every scan are the component path's."""
+    context, make, without = COMPOSITES[name]
+    config = dict(hypothesiser_cls=PDAHypothesiser, scans=_context_scans(),
+                  clutter_spatial_density=1.0) if context else {}
+    ours, reference = tutorial_pair(deleter=make, **config)
+    worst, scans = run_side_by_side(ours, reference)
+    assert ours.array_scans == scans and ours.component_scans == 0
+    assert worst <= RTOL
+    assert ours._plan is not None and ours._plan.deleter is ours.deleter  # not called
+    if without is not None:  # the covariance member changed which tracks were deleted
+        config = dict(config, scans=_context_scans()) if context else config
+        bound, _ = tutorial_pair(deleter=make, **config)
+        unbound, _ = tutorial_pair(deleter=without, **config)
+        assert _lengths(bound) != _lengths(unbound)
+
+
+def test_unsupported_composite_members_call_the_deleter():
+    """A member the array path cannot evaluate: the composite is called, same tracks."""
+    class Never(CovarianceBasedDeleter):
+        pass
+    make = lambda h: CompositeDeleter(intersect=False, deleters=[  # noqa: E731
+        UpdateTimeStepsDeleter(3), Never(covar_trace_thresh=6.0, mapping=[0, 2])])
+    ours, reference = tutorial_pair(deleter=make)
+    worst, scans = run_side_by_side(ours, reference)
+    assert ours.array_scans == scans and worst <= RTOL
+    assert ours._plan is None
+
+
+def test_covariance_verdict_is_the_deleters_at_the_boundary():
+    """The direct check is Stone Soup's: strictly greater than the threshold deletes; a
+    mapping the deleter would index otherwise (a tuple, NumPy integers) asks the deleter."""
+    from stonesoup.types.state import GaussianState as State
+    from stonesoup.types.track import Track
+    from ctxmodels.stonesoup.array_jpda import _covariance_check
+    threshold = 2.0 * 200.0 ** 2
+    for pxx in (40000.0, np.nextafter(40000.0, 0.0), np.nextafter(40000.0, np.inf), 7e4, 1e3):
+        track = Track([State(np.zeros((4, 1)), np.diag([pxx, 1.0, 40000.0, 1.0]))])
+        for mapping in ([0, 2], [2, 0], [0], [-4, -2], [np.int64(0), 2], None, []):
+            deleter = CovarianceBasedDeleter(covar_trace_thresh=threshold, mapping=mapping)
+            assert _covariance_check(deleter)(track) == deleter.check_for_deletion(track)
+    track = Track([State(np.zeros((4, 1)), np.eye(4))])
+    with pytest.raises(IndexError):  # as the deleter: a tuple indexes the diagonal as 2-D
+        _covariance_check(CovarianceBasedDeleter(covar_trace_thresh=1.0, mapping=(0, 2)))(track)
+
+
+def test_jpda_context_position_bound_is_the_gmphds():
+    """The experiment's context-aware JPDA deletes exactly the tracks whose x/y position
+    uncertainty the GM-PHD's bound would drop (RMS σ > MAX_POSITION_STD), and keeps the
+    paper's JPDA deleter."""
+    from stonesoup.deleter.multi import CompositeDeleter as Composite
+    from stonesoup.types.state import GaussianState as State
+    from stonesoup.types.track import Track
+    from ctxmodels.experiment import trackers
+    from ctxmodels.experiment.scenarios import make_scenario
+    run = make_scenario("mixed-range", 0, 2.0)
+    deleter = trackers.build_tracker(trackers.TRACKERS["jpda-context"], run).deleter
+    assert type(deleter) is Composite and deleter.intersect is False
+    expected, covariance = deleter.deleters
+    assert type(expected) is ExpectedMissesDeleter and type(covariance) is CovarianceBasedDeleter
+    paper = trackers.build_tracker(trackers.TRACKERS["jpda"], run).deleter
+    assert type(paper) is UpdateTimeStepsDeleter and paper.time_steps_since_update == 30
+    from ctxmodels.stonesoup.pointprocess import PointProcessMultiTargetTracker
+    from stonesoup.types.state import TaggedWeightedGaussianState
+    sigma = trackers.MAX_POSITION_STD
+    for variance in (sigma ** 2, np.nextafter(sigma ** 2, np.inf), 0.9 * sigma ** 2,
+                     1.1 * sigma ** 2):
+        covar = np.diag([variance, 1.0, sigma ** 2, 1.0])
+        component = TaggedWeightedGaussianState(np.zeros((4, 1)), covar, weight=1.0)
+        kept = PointProcessMultiTargetTracker._certain_enough(
+            type("Bound", (), {"max_position_std": sigma, "position_mapping": (0, 2)})(),
+            [component])
+        deleted = covariance.check_for_deletion(Track([State(np.zeros((4, 1)), covar)]))
+        assert deleted == (not kept)
 
 
 # --- conformance: the experiment's scenario ---------------------------------------------------
@@ -454,6 +581,23 @@ def test_core_errors_name_the_argument_and_no_panic_escapes():
         _core.jpda_marginals(np.array([[0.0, 1.0], [0.0, 1.0]]), np.ones((2, 1), dtype=bool))
     with pytest.raises(ValueError, match="^gated"):
         _core.jpda_marginals(np.ones((2, 3)), np.ones((2, 1), dtype=bool))
+
+
+def test_intractable_cluster_is_a_value_error_naming_its_size():
+    """A cluster whose exact EHM2 tree exceeds the core's budget (≈ 1 GB) is a ValueError
+    naming the cluster, from the marginals and from a whole scan: never an abort."""
+    tracks, dets = 60, 60
+    weights = 1.0 + (np.arange(tracks * (dets + 1)) % 7).reshape(tracks, dets + 1) / 10
+    with pytest.raises(ValueError, match=r"^weights: .*cluster of 60 tracks and 60 detections"
+                                         r".* is intractable"):
+        _core.jpda_marginals(weights, np.ones((tracks, dets), dtype=bool))
+    model = _core.JPDAMeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
+                                              np.eye(2))
+    tracks, dets = 40, 40
+    z = np.sin(np.arange(2 * dets) * 0.37).reshape(dets, 2)
+    with pytest.raises(ValueError, match="cluster of 40 tracks and 40 detections"):
+        _core.jpda_scan(model, np.zeros((tracks, 4)), np.stack([np.eye(4) * 100.0] * tracks), z,
+                        np.full(tracks, 0.9), np.full(dets, 1e-3), 0.95, float("inf"))
 
 
 # --- determinism ------------------------------------------------------------------------------------

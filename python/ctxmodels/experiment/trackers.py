@@ -11,7 +11,16 @@ brute-force ``JPDA``, without enumerating every joint event); M-of-N logic throu
 ``MultiMeasurementInitiator`` (3 detections) and deletion after 30 missed updates.
 JPDA (context-aware, ours): the same with ctxmodels' context-aware hypothesiser and an
 :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` (delete when Σ P_D over the misses since
-the last detection reaches 3) — a miss only counts as far as the sensor could see the track.
+the last detection reaches 3) — a miss only counts as far as the sensor could see the track —
+or, whichever comes first, Stone Soup's ``CovarianceBasedDeleter`` on the position: the
+GM-PHD's bound on position uncertainty (RMS x/y σ ≤ 200 m: delete once P_xx + P_yy >
+2·200² m²), for the same physical reason. A track the sensors cannot see (P_D = 0: blind
+sector, beyond the lidar while the radar looks elsewhere) accrues no expected misses, so
+without the bound it coasts for minutes while its covariance grows without bound (constant
+velocity: position variance ∝ t³). Such a track no longer says where a target is, and its
+ever wider gate takes in more and more detections: by 240 s of the mixed-range scenario
+there were up to 166 tracks a scan, in clusters of ~145 tracks sharing ~35 detections whose
+exact joint association outgrew memory. The paper's JPDA keeps its stock deleter (30 misses).
 
 All trackers symmetrise each Kalman posterior (Stone Soup's ``force_symmetric_covariance``):
 the standard-form update :math:`P - K S K^T` amplifies its own round-off asymmetry on a
@@ -67,9 +76,14 @@ JPDA_MIN_POINTS = 3
 JPDA_DELETE_AFTER = 30
 JPDA_EXPECTED_MISSES = 3.0
 REGION_MARGIN = 500.0
-#: Components unseen long enough to be this uncertain (RMS x/y σ, m) are dropped: a settled
-#: track survives ≈ 55 s unseen, about a crossing of the 65° blind sector at 200 m and 5 m/s.
+#: Components (GM-PHD) and context-aware JPDA tracks unseen long enough to be this uncertain
+#: (RMS x/y σ, m) are dropped: a settled track survives ≈ 55 s unseen, about a crossing of the
+#: 65° blind sector at 200 m and 5 m/s.
 MAX_POSITION_STD = 200.0
+#: State indices of x and y (state [x, vx, y, vy]); a list, as Stone Soup's
+#: ``CovarianceBasedDeleter`` indexes the covariance's diagonal with it (a tuple would index
+#: a 1-D array as two axes).
+POSITION_MAPPING = [0, 2]
 #: The JPDA runs (stock Stone Soup association, the slowest trackers) cover the paper's two
 #: scenarios; the islands scenario is about the GM-PHD's land and line-of-sight models.
 PAPER_SCENARIOS = ("mixed-range", "formation")
@@ -105,8 +119,8 @@ TRACKERS: dict[str, TrackerSpec] = {spec.name: spec for spec in (
     TrackerSpec("gmphd-context", "GM-PHD (context-aware)", "P_D and λ per the paper's equations",
                 "gmphd", pd="context", clutter="context"),
     TrackerSpec("jpda-context", "JPDA (context-aware)",
-                "context P_D/λ, deletion on expected misses Σ P_D ≥ 3", "jpda", pd="context",
-                clutter="context", only_scenarios=PAPER_SCENARIOS),
+                "context P_D/λ, deletion on expected misses Σ P_D ≥ 3 or position σ > 200 m",
+                "jpda", pd="context", clutter="context", only_scenarios=PAPER_SCENARIOS),
     TrackerSpec("gmphd-sight", "GM-PHD (line-of-sight)",
                 "context-aware plus land mask and radar shadow", "gmphd", pd="context",
                 clutter="context", line_of_sight=True, only_scenarios=("islands",)),
@@ -178,7 +192,22 @@ def build_tracker(spec: TrackerSpec, run, fast: bool = True):
     return _gmphd(spec, run, predictor, updater, detector, fast)
 
 
+def position_std_deleter():
+    r"""Stone Soup's ``CovarianceBasedDeleter`` deleting a track whose RMS x/y position σ
+    exceeds :data:`MAX_POSITION_STD`: the GM-PHD's bound (``retain_position_std`` keeps a
+    component while :math:`P_{xx} + P_{yy} \le 2\sigma_{\max}^2`). Stone Soup 1.9.1 deletes
+    when the sum of the ``mapping``'s diagonal entries of the last state's covariance is
+    strictly greater than ``covar_trace_thresh`` (``mapping`` None or empty: the whole trace),
+    so with the threshold :math:`2\sigma_{\max}^2` (80000 m², exact in floating point) it
+    deletes exactly the tracks the GM-PHD bound would drop."""
+    from stonesoup.deleter.error import CovarianceBasedDeleter
+    return CovarianceBasedDeleter(covar_trace_thresh=2.0 * MAX_POSITION_STD ** 2,
+                                  mapping=list(POSITION_MAPPING))
+
+
 def _jpda(spec, predictor, updater, detector, fast):
+    from stonesoup.deleter.multi import CompositeDeleter
+
     from ..stonesoup import (ArrayJPDATracker, ArrayMultiMeasurementInitiator,
                              ExpectedMissesDeleter, FastGNNWith2DAssignment,
                              MultiMeasurementInitiator, MultiTargetMixtureTracker,
@@ -187,8 +216,9 @@ def _jpda(spec, predictor, updater, detector, fast):
     hypothesiser = hypothesiser_class(predictor, updater, clutter_spatial_density=UNIFORM_CLUTTER,
                                       prob_detect=UNIFORM_PD, prob_gate=JPDA_PROB_GATE)
     if spec.uses_context:
-        deleter = ExpectedMissesDeleter(expected_misses=JPDA_EXPECTED_MISSES,
-                                        hypothesiser=hypothesiser)
+        deleter = CompositeDeleter(intersect=False, deleters=[
+            ExpectedMissesDeleter(expected_misses=JPDA_EXPECTED_MISSES, hypothesiser=hypothesiser),
+            position_std_deleter()])
     else:
         deleter = UpdateTimeStepsDeleter(time_steps_since_update=JPDA_DELETE_AFTER)
     prior = GaussianState(np.zeros((4, 1)), np.diag(INIT_STD ** 2))

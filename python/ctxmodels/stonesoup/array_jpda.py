@@ -53,7 +53,12 @@ Deletion: with a ctxmodels or stock :class:`~stonesoup.deleter.time.UpdateTimeSt
 or a ctxmodels :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` (``delete_last_pred``
 off), each track's misses since its last detection-backed state are counted as states are
 appended instead of walking the track; the verdicts are the deleter's own (the expected
-misses are summed newest first, as the deleter sums them). Any other deleter is called.
+misses are summed newest first, as the deleter sums them). A
+:class:`~stonesoup.deleter.error.CovarianceBasedDeleter` reads only the last state's
+covariance, which is checked directly. A :class:`~stonesoup.deleter.multi.CompositeDeleter`
+(``delete_last_pred`` off) whose members (a list or tuple) are any of these is evaluated
+member by member with its own rule: delete when all say so (``intersect``) or when any does.
+Any other deleter is called.
 
 Determinism: detections in :func:`~ctxmodels.stonesoup.in_stable_order`, tracks in creation
 order; the core runs on one thread in index order.
@@ -63,6 +68,8 @@ from __future__ import annotations
 
 import numpy as np
 from stonesoup.dataassociator.probability import JPDA, JPDAwithEHM, JPDAwithEHM2
+from stonesoup.deleter.error import CovarianceBasedDeleter
+from stonesoup.deleter.multi import CompositeDeleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 from stonesoup.hypothesiser.probability import PDAHypothesiser as _StockPDAHypothesiser
 from stonesoup.models.measurement.linear import LinearGaussian
@@ -223,11 +230,12 @@ def _updater_supported(updater) -> bool:
 
 # --- deletion counters ----------------------------------------------------------------------
 class _MissCounter:
-    """Per track, what a supported deleter reads from the states since the track's last
-    detection-backed one: the distinct timestamps (``UpdateTimeStepsDeleter``) or the P_D of
-    each state, newest last (``ExpectedMissesDeleter``; zeros are dropped, as adding 0.0 never
-    changes a sum). ``length`` is the track length the entry describes: a track changed from
-    outside is re-read once."""
+    """Per track and counting deleter (``values``, one entry per member of the deletion plan
+    with a counter), what it reads from the states since the track's last detection-backed
+    one: the distinct timestamps (``UpdateTimeStepsDeleter``) or the P_D of each state,
+    newest last (``ExpectedMissesDeleter``; zeros are dropped, as adding 0.0 never changes a
+    sum). ``length`` is the track length the entry describes: a track changed from outside
+    is re-read once."""
 
     __slots__ = ("length", "values")
 
@@ -245,6 +253,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self._counters: dict[Track, _MissCounter] = {}
+        self._plan = None
         self._models: dict = {}
         self.array_scans = 0
         self.component_scans = 0
@@ -453,6 +462,8 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         updates = out["is_update"].tolist()
         records = type(hypothesiser) is PDAHypothesiser
         pd_list = prob_detect.tolist()
+        plan = self._deletion_plan()
+        counting = () if plan is None else self._counting(plan, hypothesiser)
         gated = out["gated"]
         marginals = out["marginals"]
         detections = scan.detections
@@ -471,7 +482,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
                 state = _PREDICTION(state_vector=mean, covar=covar, timestamp=time)
                 metadata = None
             self._append(track, state, metadata)
-            self._count(track, state, pd_list[t], hypothesiser)
+            self._count(track, state, pd_list[t], counting)
 
     @staticmethod
     def _update_metadata(track, detections, columns, marginals):
@@ -496,26 +507,51 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         track.states.append(state)
 
     # --- deletion -------------------------------------------------------------------------
-    def _deleter_kind(self):
+    def _deletion_plan(self):
+        """How the array path reaches the deleter's verdicts, or None to call the deleter.
+        A supported deleter, or a ``CompositeDeleter`` of supported deleters, is a
+        :class:`_DeletionPlan`; the composite's own ``delete_last_pred`` must be off (its
+        members' is never read: the composite asks only their ``check_for_deletion``)."""
         deleter = self.deleter
         if getattr(deleter, "delete_last_pred", False):
             return None
-        kind = type(deleter)
-        if kind in (UpdateTimeStepsDeleter, _StockUpdateTimeStepsDeleter):
-            return "steps"
-        if kind is ExpectedMissesDeleter:
-            return "expected"
-        return None
+        plan = self._plan
+        if plan is not None and plan.deleter is deleter and plan.still_describes(deleter):
+            return plan
+        if type(deleter) is CompositeDeleter:
+            members = deleter.deleters
+            if not isinstance(members, (list, tuple)):
+                return None  # (a set's order, a one-shot iterator: the deleter decides)
+            kinds = [_member_kind(member) for member in members]
+            if any(kind is None for kind in kinds):
+                return None
+            plan = _DeletionPlan(deleter, bool(deleter.intersect), list(zip(kinds, members)))
+        else:
+            kind = _member_kind(deleter)
+            if kind is None:
+                return None
+            plan = _DeletionPlan(deleter, True, [(kind, deleter)])
+        self._plan = plan
+        self._counters.clear()  # counters of another plan: re-read
+        return plan
 
-    def _state_pd(self, prob_detect, hypothesiser):
-        deleter = self.deleter
-        if deleter.hypothesiser is not None and deleter.hypothesiser is hypothesiser:
-            return prob_detect
-        return float(deleter.default_prob_detect)
+    @staticmethod
+    def _counting(plan, hypothesiser):
+        """Per counter slot of ``plan``, what ``_count`` appends for a miss: "steps" (the
+        timestamp), or the P_D the expected-misses member reads for the state (the scan's
+        P_D when its hypothesiser is the scan's, else its default: None)."""
+        counting = []
+        for kind, member in plan.counted:
+            if kind == "steps":
+                counting.append(("steps", None))
+            elif member.hypothesiser is not None and member.hypothesiser is hypothesiser:
+                counting.append(("expected", None))
+            else:
+                counting.append(("expected", float(member.default_prob_detect)))
+        return counting
 
-    def _count(self, track, state, prob_detect, hypothesiser):
-        kind = self._deleter_kind()
-        if kind is None:
+    def _count(self, track, state, prob_detect, counting):
+        if not counting:
             return
         counter = self._counters.get(track)
         if counter is None or counter.length != len(track) - 1:
@@ -523,71 +559,159 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             return  # re-read from the track when next needed
         counter.length += 1
         backed = is_detection_backed(state)
-        if kind == "steps":
-            if backed:
-                counter.values = {state.timestamp}
+        values = counter.values
+        for k, (kind, default) in enumerate(counting):
+            if kind == "steps":
+                if backed:
+                    values[k] = {state.timestamp}
+                else:
+                    values[k].add(state.timestamp)
+            elif backed:
+                values[k] = []
             else:
-                counter.values.add(state.timestamp)
-        else:
-            if backed:
-                counter.values = []
-            else:
-                pd = self._state_pd(prob_detect, hypothesiser)
+                pd = prob_detect if default is None else default
                 if pd != 0.0:
-                    counter.values.append(pd)
+                    values[k].append(pd)
 
-    def _read_counter(self, track, kind):
+    def _read_counter(self, track, plan):
         """The counter of ``track`` read from its states (once per track, or after a change
         from outside)."""
         states = track.states
-        if kind == "steps":
-            values = set()
-            for state in reversed(states):
-                values.add(state.timestamp)
-                if is_detection_backed(state):
-                    break
-        else:
-            values = []
-            for index in range(len(states) - 1, 0, -1):
-                if is_detection_backed(states[index]):
-                    break
-                pd = self.deleter._prob_detect(track, index)
-                if pd != 0.0:
-                    values.append(pd)
-            values.reverse()
+        values = []
+        for kind, member in plan.counted:
+            if kind == "steps":
+                stamps = set()
+                for state in reversed(states):
+                    stamps.add(state.timestamp)
+                    if is_detection_backed(state):
+                        break
+                values.append(stamps)
+            else:
+                misses = []
+                for index in range(len(states) - 1, 0, -1):
+                    if is_detection_backed(states[index]):
+                        break
+                    pd = member._prob_detect(track, index)
+                    if pd != 0.0:
+                        misses.append(pd)
+                misses.reverse()
+                values.append(misses)
         counter = _MissCounter(len(track), values)
         self._counters[track] = counter
         return counter
 
     def _delete(self, tracks):
-        kind = self._deleter_kind()
-        if kind is None:
+        plan = self._deletion_plan()
+        if plan is None:
             return self.deleter.delete_tracks(tracks)
+        # each member's check, its parameters read once a scan, in the composite's order
+        checks = []
+        for kind, member, k in plan.members:
+            if kind == "steps":
+                checks.append((kind, k, member.time_steps_since_update))
+            elif kind == "expected":
+                checks.append((kind, k, float(member.expected_misses)))
+            else:
+                checks.append((kind, k, _covariance_check(member)))
         deleted = set()
         counters = self._counters
-        if kind == "steps":
-            limit = self.deleter.time_steps_since_update
-        else:
-            threshold = float(self.deleter.expected_misses)
+        intersect = plan.intersect
+        counted = bool(plan.counted)
         for track in tracks:
-            counter = counters.get(track)
-            if counter is None or counter.length != len(track):
-                counter = self._read_counter(track, kind)
-            if kind == "steps":
-                verdict = len(counter.values) > limit
-            else:
-                total = 0.0
-                verdict = False
-                for pd in reversed(counter.values):  # newest first, as the deleter sums
-                    total += pd
-                    if total >= threshold:
-                        verdict = True
-                        break
+            if counted:
+                counter = counters.get(track)
+                if counter is None or counter.length != len(track):
+                    counter = self._read_counter(track, plan)
+            # the composite's rule, member by member in its order: all (intersect) or any
+            verdict = intersect
+            for kind, k, parameter in checks:
+                if kind == "steps":
+                    says = len(counter.values[k]) > parameter
+                elif kind == "expected":
+                    total = 0.0
+                    says = False
+                    for pd in reversed(counter.values[k]):  # newest first, as the deleter sums
+                        total += pd
+                        if total >= parameter:
+                            says = True
+                            break
+                else:
+                    says = parameter(track)
+                if says != intersect:
+                    verdict = says
+                    break
             if verdict:
                 deleted.add(track)
         for track in deleted:
             counters.pop(track, None)
         return deleted
+
+
+def _member_kind(deleter):
+    """What the array path evaluates for a (member) deleter: miss counters ("steps",
+    "expected"), the last covariance ("covariance"), or None (not supported)."""
+    kind = type(deleter)
+    if kind in (UpdateTimeStepsDeleter, _StockUpdateTimeStepsDeleter):
+        return "steps"
+    if kind is ExpectedMissesDeleter:
+        return "expected"
+    if kind is CovarianceBasedDeleter:
+        return "covariance"
+    return None
+
+
+class _DeletionPlan:
+    """A supported deleter as the array path evaluates it: ``members`` are (kind, deleter,
+    counter slot) in the composite's order (one member for a plain deleter; a plain deleter
+    is an intersection of one), ``counted`` the members with a miss counter, in slot order.
+    The plan is rebuilt when the composite's members or rule change."""
+
+    __slots__ = ("deleter", "intersect", "members", "counted", "_seen")
+
+    def __init__(self, deleter, intersect, members):
+        self.deleter = deleter
+        self.intersect = intersect
+        self.counted = [(kind, member) for kind, member in members if kind != "covariance"]
+        slots = {id(member): k for k, (_, member) in enumerate(self.counted)}
+        self.members = [(kind, member, slots.get(id(member))) for kind, member in members]
+        self._seen = self._signature(deleter)
+
+    @staticmethod
+    def _signature(deleter):
+        if type(deleter) is CompositeDeleter:
+            return (bool(deleter.intersect), tuple(id(m) for m in deleter.deleters))
+        return None
+
+    def still_describes(self, deleter) -> bool:
+        return self._signature(deleter) == self._seen
+
+
+def _covariance_check(deleter):
+    """``CovarianceBasedDeleter.check_for_deletion`` as a function of the track: Stone Soup
+    1.9.1 deletes when the sum of the last state's covariance diagonal over ``mapping`` (all
+    of it when ``mapping`` is None or empty) is strictly greater than ``covar_trace_thresh``.
+    With a list of one or two plain int indices and a float threshold the sum is read
+    directly (NumPy's sum of two float64 is their one IEEE addition, so the verdict is the
+    same); any other mapping or threshold, or a covariance that is not a 2-D float64 array,
+    asks the deleter."""
+    mapping = deleter.mapping
+    threshold = deleter.covar_trace_thresh
+    if not (type(mapping) is list and 0 < len(mapping) <= 2
+            and all(type(i) is int for i in mapping) and type(threshold) is float):
+        return lambda track: bool(deleter.check_for_deletion(track))
+    i, j = mapping if len(mapping) == 2 else (mapping[0], None)
+
+    def check(track) -> bool:
+        covar = track.states[-1].covar
+        if not (type(covar) in _COVARIANCE_TYPES and covar.dtype == np.float64
+                and covar.ndim == 2):
+            return bool(deleter.check_for_deletion(track))
+        trace = covar.item(i, i) if j is None else covar.item(i, i) + covar.item(j, j)
+        return trace > threshold
+    return check
+
+
+_COVARIANCE_TYPES = (CovarianceMatrix, np.ndarray)
 
 
 __all__ = ["ArrayJPDATracker"]
