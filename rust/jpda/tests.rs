@@ -271,3 +271,96 @@ fn predict_is_the_kalman_prediction() {
     assert_eq!(x, vec![3.0, 2.0]);
     assert_eq!(p, vec![2.25, 1.5, 1.5, 2.0]);
 }
+
+/// The JPDA's and the GM-PHD's measurement models compared bit for bit on random states and
+/// sensor poses: the condition for sharing one model. Bearing–range: about a fifth of the
+/// predicted measurements and a third of the Jacobians differ in the last bits, because the
+/// JPDA rounds the 3×3 rotation product as NumPy's kernels do (one fused multiply-add,
+/// `mul_add`) and the GM-PHD as plain products and sums. Linear: equal values, but a row of
+/// −0.0 products sums to −0.0 (nalgebra) or +0.0 (the GM-PHD). Kept, ignored, as the record
+/// of why the two models stay separate.
+#[test]
+#[ignore = "not bit-identical: the JPDA's rotation product is fused (mul_add), and linear rows of -0.0 differ in sign"]
+fn jpda_and_gmphd_models_are_bit_identical() {
+    use crate::gmphd;
+    let mut rng = StdRng::seed_from_u64(11);
+    let mut report = Vec::new();
+    for (jpda_kind, gm_kind) in [(Jacobian::FiniteDifference, gmphd::Jacobian::FiniteDifference), (Jacobian::Analytic, gmphd::Jacobian::Analytic)] {
+        let (mut z_diff, mut h_diff, mut cases) = (0, 0, 0);
+        let mut first = None;
+        for _ in 0..5000 {
+            let yaw = rng.random_range(-PI..PI);
+            let (s, c) = yaw.sin_cos();
+            let rotation = [c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0];
+            let offset = [rng.random_range(-5e4..5e4), rng.random_range(-5e4..5e4)];
+            let noise = [1e-4, 0.0, 0.0, 25.0];
+            let x: Vec<f64> = (0..4).map(|_| rng.random_range(-6e4..6e4)).collect();
+            let ours = MeasurementModel::bearing_range([0, 2], offset, &rotation, &noise, jpda_kind).unwrap();
+            let theirs = gmphd::MeasurementModel::BearingRange { mapping: [0, 2], offset, rotation, noise, jacobian: gm_kind };
+            let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
+            let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
+            theirs.linearise(&x, &mut z_b, &mut h_b);
+            cases += 1;
+            let z_same = (0..2).all(|i| z_a[i].to_bits() == z_b[i].to_bits());
+            let h_same = (0..2).all(|i| (0..4).all(|k| h_a[(i, k)].to_bits() == h_b[i * 4 + k].to_bits()));
+            z_diff += usize::from(!z_same);
+            h_diff += usize::from(!h_same);
+            if (!z_same || !h_same) && first.is_none() {
+                first = Some(format!("x {x:?} offset {offset:?} yaw {yaw}: z {:?} vs {z_b:?}, h {:?} vs {h_b:?}", z_a.as_slice(), h_a.transpose().as_slice()));
+            }
+        }
+        if z_diff + h_diff > 0 {
+            report.push(format!("{jpda_kind:?}: {z_diff}/{cases} predicted measurements and {h_diff}/{cases} Jacobians differ; first: {}", first.unwrap()));
+        }
+    }
+    // Linear models: nalgebra's product against the GM-PHD's row sum started from +0.0. Equal
+    // in value; a row whose products are all −0.0 sums to −0.0 here and +0.0 there.
+    let (mut zero_sign, mut linear_cases) = (0, 0);
+    for _ in 0..5000 {
+        let pick = |rng: &mut StdRng| if rng.random::<f64>() < 0.3 { [0.0, -0.0][rng.random_range(0..2)] } else { rng.random_range(-1e3..1e3) };
+        let matrix: Vec<f64> = (0..8).map(|_| pick(&mut rng)).collect();
+        let x: Vec<f64> = (0..4).map(|_| pick(&mut rng)).collect();
+        let ours = MeasurementModel::linear(&matrix, 2, 4, &[1.0, 0.0, 0.0, 1.0]).unwrap();
+        let theirs = gmphd::MeasurementModel::Linear { matrix: matrix.clone(), noise: vec![1.0, 0.0, 0.0, 1.0], ndim_meas: 2 };
+        let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
+        let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
+        theirs.linearise(&x, &mut z_b, &mut h_b);
+        linear_cases += 1;
+        for i in 0..2 {
+            assert_eq!(z_a[i], z_b[i], "{matrix:?} {x:?}");
+            zero_sign += usize::from(z_a[i].to_bits() != z_b[i].to_bits());
+            for k in 0..4 {
+                assert_eq!(h_a[(i, k)].to_bits(), h_b[i * 4 + k].to_bits());
+            }
+        }
+    }
+    if zero_sign > 0 {
+        report.push(format!("Linear: {zero_sign} predicted values of {linear_cases} models differ in the sign of a zero"));
+    }
+    assert!(report.is_empty(), "{}", report.join("\n"));
+}
+
+/// The bearing helpers, shared with the GM-PHD, against their definitions: Stone Soup's
+/// floored `((x + π) mod 2π) − π` (the JPDA's former `rem_euclid` form) and NumPy's
+/// `spacing` (the JPDA's former sign-branch form), bit for bit.
+#[test]
+fn shared_bearing_helpers_are_the_jpda_formulae() {
+    let floored = |x: f64| (x + PI).rem_euclid(2.0 * PI) - PI;
+    let numpy_spacing = |x: f64| {
+        let magnitude = x.abs();
+        let step = f64::from_bits(magnitude.to_bits() + 1) - magnitude;
+        if x.is_sign_negative() {
+            -step
+        } else {
+            step
+        }
+    };
+    let mut rng = StdRng::seed_from_u64(12);
+    let mut values: Vec<f64> = (0..100_000).map(|_| rng.random_range(-40.0..40.0)).collect();
+    values.extend((0..10_000).map(|_| rng.random_range(-1e6..1e6)));
+    values.extend([0.0, -0.0, PI, -PI, 3.0 * PI, -3.0 * PI, f64::MIN_POSITIVE, -f64::MIN_POSITIVE, 1e300, -1e300, 5e-324, -5e-324]);
+    for v in values {
+        assert_eq!(mod_bearing(v).to_bits(), floored(v).to_bits(), "mod_bearing({v:e})");
+        assert_eq!(spacing(v).to_bits(), numpy_spacing(v).to_bits(), "spacing({v:e})");
+    }
+}
