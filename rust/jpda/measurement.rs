@@ -2,32 +2,11 @@
 //! `CartesianToBearingRange` with its finite-difference or the closed-form Jacobian.
 
 use super::check_finite;
+// Bit-identical to the JPDA's former copies (tests::shared_bearing_helpers_are_the_jpda_formulae).
+pub(super) use crate::gmphd::measurement::spacing;
+pub use crate::gmphd::measurement::mod_bearing;
 use crate::error::{ModelError, Result};
 use nalgebra::{DMatrix, DVector};
-use std::f64::consts::PI;
-
-const TWO_PI: f64 = 2.0 * PI;
-
-/// Stone Soup's `mod_bearing`: `((x + π) mod 2π) − π`, the floored modulo of Python/NumPy.
-pub fn mod_bearing(x: f64) -> f64 {
-    (x + PI).rem_euclid(TWO_PI) - PI
-}
-
-/// NumPy's `spacing`: the distance from `x` to the next float away from zero (negative for
-/// negative `x`).
-pub(super) fn spacing(x: f64) -> f64 {
-    if !x.is_finite() {
-        return f64::NAN;
-    }
-    let magnitude = x.abs();
-    let next = f64::from_bits(magnitude.to_bits() + 1);
-    let step = next - magnitude;
-    if x.is_sign_negative() {
-        -step
-    } else {
-        step
-    }
-}
 
 /// How the bearing–range model is linearised.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
