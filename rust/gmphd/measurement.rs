@@ -45,7 +45,7 @@ pub fn mod_bearing(x: f64) -> f64 {
 }
 
 /// NumPy's `spacing`: the distance to the next float away from zero, signed like `x`.
-fn spacing(x: f64) -> f64 {
+pub fn spacing(x: f64) -> f64 {
     let magnitude = x.abs();
     let next = f64::from_bits(magnitude.to_bits() + 1);
     (next - magnitude).copysign(x)

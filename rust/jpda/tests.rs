@@ -1,0 +1,366 @@
+//! Unit tests of the JPDA core: marginals against enumeration, tree budgets, the scan, the
+//! measurement model.
+
+use super::marginals::{joint_marginals_within, TreeLimits};
+use super::measurement::spacing;
+use super::*;
+use std::f64::consts::PI;
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+
+fn random_problem(rng: &mut StdRng, tracks: usize, dets: usize, density: f64) -> (Vec<f64>, Vec<bool>) {
+    let valid: Vec<bool> = (0..tracks * dets).map(|_| rng.random::<f64>() < density).collect();
+    let weights: Vec<f64> = (0..tracks * (dets + 1)).map(|_| rng.random::<f64>().powi(3) * 10.0 + 1e-12).collect();
+    (weights, valid)
+}
+
+#[test]
+fn marginals_equal_brute_force_enumeration() {
+    let mut rng = StdRng::seed_from_u64(7);
+    for case in 0..300 {
+        let tracks = 1 + case % 7;
+        let dets = case % 9;
+        let density = [0.2, 0.5, 0.9][case % 3];
+        let (weights, valid) = random_problem(&mut rng, tracks, dets, density);
+        let ehm = joint_marginals(&weights, &valid, tracks, dets).unwrap();
+        let brute = brute_force_marginals(&weights, &valid, tracks, dets).unwrap();
+        for (a, b) in ehm.iter().zip(&brute) {
+            assert!((a - b).abs() <= 1e-12 * b.abs().max(1e-300) + 1e-15, "case {case}: {a} vs {b}");
+        }
+        for t in 0..tracks {
+            let row: f64 = ehm[t * (dets + 1)..(t + 1) * (dets + 1)].iter().sum();
+            assert!((row - 1.0).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn marginals_survive_weights_that_would_underflow_a_product() {
+    // 40 tracks in one chain, each with weights around 1e-20: the product of one event
+    // is 1e-800, far below f64; the per-level rescaling keeps every node representable.
+    let (tracks, dets) = (40, 41);
+    let mut weights = vec![0.0; tracks * (dets + 1)];
+    let mut valid = vec![false; tracks * dets];
+    for t in 0..tracks {
+        weights[t * (dets + 1)] = 1e-20;
+        for j in [t, t + 1] {
+            valid[t * dets + j] = true;
+            weights[t * (dets + 1) + 1 + j] = 3e-20 * (1.0 + j as f64 / 10.0);
+        }
+    }
+    let marginals = joint_marginals(&weights, &valid, tracks, dets).unwrap();
+    assert!(marginals.iter().all(|m| m.is_finite()));
+    for t in 0..tracks {
+        let row: f64 = marginals[t * (dets + 1)..(t + 1) * (dets + 1)].iter().sum();
+        assert!((row - 1.0).abs() < 1e-12);
+    }
+    // Scaling every weight by one constant changes no marginal.
+    let scaled: Vec<f64> = weights.iter().map(|w| w * 1e20).collect();
+    let reference = joint_marginals(&scaled, &valid, tracks, dets).unwrap();
+    for (a, b) in marginals.iter().zip(&reference) {
+        assert!((a - b).abs() <= 1e-12);
+    }
+}
+
+#[test]
+fn impossible_cluster_is_an_error_naming_the_weights() {
+    // Two tracks, no missed-detection mass, one shared detection: no valid joint event.
+    let weights = vec![0.0, 1.0, 0.0, 1.0];
+    let valid = vec![true, true];
+    let err = joint_marginals(&weights, &valid, 2, 1).unwrap_err();
+    assert_eq!(err.argument(), "weights");
+    assert_eq!(brute_force_marginals(&weights, &valid, 2, 1).unwrap_err().argument(), "weights");
+}
+
+/// `tracks` tracks each gating every one of `dets` detections: one cluster whose exact
+/// tree is the subsets of detections used so far (Σ_k C(M, k) nodes per level).
+fn dense_cluster(tracks: usize, dets: usize) -> (Vec<f64>, Vec<bool>) {
+    let weights: Vec<f64> = (0..tracks * (dets + 1)).map(|i| 1.0 + (i % 7) as f64 / 10.0).collect();
+    (weights, vec![true; tracks * dets])
+}
+
+#[test]
+fn intractable_cluster_is_an_error_naming_its_size() {
+    // 60 tracks sharing 60 detections: C(60, 30) ≈ 1.2e17 used-detection sets; the link
+    // budget stops the tree after a few hundred thousand nodes (< 0.2 GB, under a second).
+    let (tracks, dets) = (60, 60);
+    let (weights, valid) = dense_cluster(tracks, dets);
+    let err = joint_marginals(&weights, &valid, tracks, dets).unwrap_err();
+    assert_eq!(err.argument(), "weights");
+    let message = err.to_string();
+    assert!(message.contains("cluster of 60 tracks and 60 detections"), "{message}");
+    assert!(message.contains("intractable"), "{message}");
+    // A tractable cluster next to it in the same call is not the one named.
+    let mut w = weights.clone();
+    let mut v = valid.clone();
+    w.extend([0.5, 0.0].iter().cycle().take(dets + 1));
+    v.extend(std::iter::repeat_n(false, dets));
+    let err = joint_marginals(&w, &v, tracks + 1, dets).unwrap_err();
+    assert!(err.to_string().contains("cluster of 60 tracks and 60 detections"));
+}
+
+#[test]
+fn each_tree_budget_is_enforced_and_a_cluster_within_it_is_exact() {
+    let (tracks, dets) = (6, 5);
+    let (weights, valid) = dense_cluster(tracks, dets);
+    // Nodes per level: 1, 6, 16, 26, 31, 32 (used sets of ≤ l of 5 detections): 112.
+    let exact = brute_force_marginals(&weights, &valid, tracks, dets).unwrap();
+    let ample = TreeLimits { nodes: 112, edges: 112 * 6 };
+    let within = joint_marginals_within(ample, &weights, &valid, tracks, dets).unwrap();
+    for (a, b) in within.iter().zip(&exact) {
+        assert!((a - b).abs() <= 1e-12, "{a} vs {b}");
+    }
+    let nodes = joint_marginals_within(TreeLimits { nodes: 111, ..ample }, &weights, &valid, tracks, dets).unwrap_err();
+    assert!(nodes.to_string().contains("cluster of 6 tracks and 5 detections"), "{nodes}");
+    assert!(nodes.to_string().contains("more than 111 nodes"), "{nodes}");
+    // Links: each level's nodes × 6 hypotheses × 1 child, the last level none: 80 × 6.
+    let edges = joint_marginals_within(TreeLimits { edges: 80 * 6 - 1, ..ample }, &weights, &valid, tracks, dets).unwrap_err();
+    assert!(edges.to_string().contains("more than 479 node links"), "{edges}");
+    assert!(joint_marginals_within(TreeLimits { edges: 80 * 6, ..ample }, &weights, &valid, tracks, dets).is_ok());
+}
+
+#[test]
+fn scan_of_an_intractable_cluster_is_an_error_not_an_abort() {
+    // 40 tracks at one place, 40 detections around it, an open gate: one cluster of all.
+    let model = linear_model();
+    let (tracks, dets) = (40, 40);
+    let means = vec![0.0; tracks * 4];
+    let covars: Vec<f64> = (0..tracks * 16).map(|k| if k % 16 % 5 == 0 { 100.0 } else { 0.0 }).collect();
+    let detections: Vec<f64> = (0..dets * 2).map(|k| (k as f64 * 0.37).sin()).collect();
+    let prob_detect = vec![0.9; tracks];
+    let clutter = vec![1e-3; dets];
+    let input = ScanInput {
+        dim: 4,
+        means: &means,
+        covars: &covars,
+        detections: &detections,
+        prob_detect: &prob_detect,
+        clutter: &clutter,
+        prob_gate: 0.95,
+        gate_threshold: f64::INFINITY,
+        include_all: false,
+        force_symmetric: false,
+    };
+    let err = scan(&model, &input).unwrap_err();
+    assert_eq!(err.argument(), "weights");
+    assert!(err.to_string().contains("cluster of 40 tracks and 40 detections"), "{err}");
+}
+
+#[test]
+fn mod_bearing_is_the_floored_modulo() {
+    assert_eq!(mod_bearing(PI), -PI);
+    assert_eq!(mod_bearing(-PI), -PI);
+    assert_eq!(mod_bearing(0.5), 0.5);
+    assert!((mod_bearing(3.0 * PI + 0.25) - (-PI + 0.25)).abs() < 1e-12);
+    assert_eq!(spacing(1.0), f64::EPSILON);
+    assert_eq!(spacing(-1.0), -f64::EPSILON);
+}
+
+fn bearing_range(jacobian: Jacobian) -> MeasurementModel {
+    let h: f64 = 0.7;
+    let rotation = [h.cos(), h.sin(), 0.0, -h.sin(), h.cos(), 0.0, 0.0, 0.0, 1.0];
+    MeasurementModel::bearing_range([0, 2], [10.0, -5.0], &rotation, &[1e-4, 0.0, 0.0, 25.0], jacobian).unwrap()
+}
+
+#[test]
+fn analytic_and_finite_difference_jacobians_agree() {
+    let x = DVector::from_vec(vec![300.0, 2.0, -150.0, 1.0]);
+    let (z_fd, h_fd) = bearing_range(Jacobian::FiniteDifference).linearise(&x);
+    let (z_an, h_an) = bearing_range(Jacobian::Analytic).linearise(&x);
+    assert_eq!(z_fd, z_an);
+    // Forward differences with steps of 1e-8 (negative coordinates) carry an error of
+    // one ulp of the value over the step: ~6e-14 / 1e-8 for a range of 300 m (Stone Soup's
+    // own Jacobian here is off by 3.7e-6 in ∂ρ/∂y).
+    for (a, b) in h_fd.iter().zip(h_an.iter()) {
+        assert!((a - b).abs() <= 1e-5, "{a} vs {b}");
+    }
+    assert_eq!(h_an[(0, 1)], 0.0);
+    assert_eq!(h_fd[(1, 3)], 0.0);
+}
+
+fn linear_model() -> MeasurementModel {
+    MeasurementModel::linear(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], 2, 4, &[0.75, 0.0, 0.0, 0.75]).unwrap()
+}
+
+#[test]
+fn scan_of_one_track_is_the_pda_update() {
+    // One track, two detections: marginals are the normalised PDA weights, and the
+    // posterior the mixture of the missed prediction and the two Kalman updates.
+    let model = linear_model();
+    let means = [0.0, 1.0, 0.0, 1.0];
+    let covars = [1.5, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.5, 0.0, 0.0, 0.0, 0.0, 0.5];
+    let detections = [0.5, -0.3, 1.2, 0.4];
+    let input = ScanInput {
+        dim: 4,
+        means: &means,
+        covars: &covars,
+        detections: &detections,
+        prob_detect: &[0.9],
+        clutter: &[0.125, 0.125],
+        prob_gate: 0.95,
+        gate_threshold: 5.991464547107979,
+        include_all: false,
+        force_symmetric: false,
+    };
+    let out = scan(&model, &input).unwrap();
+    assert_eq!(out.gated, vec![true, true]);
+    for (w, m) in out.weights.iter().zip(&out.marginals) {
+        assert!((w - m).abs() < 1e-14);
+    }
+    // By hand: S = P_xy + R = 2.25 I.
+    let s = 2.25_f64;
+    let lik = |dx: f64, dy: f64| (-(dx * dx + dy * dy) / (2.0 * s)).exp() / (2.0 * PI * s);
+    let w = [1.0 - 0.9 * 0.95, 0.9 * lik(0.5, -0.3) / 0.125, 0.9 * lik(1.2, 0.4) / 0.125];
+    let total: f64 = w.iter().sum();
+    for (k, wk) in w.iter().enumerate() {
+        assert!((out.weights[k] - wk / total).abs() < 1e-14);
+    }
+    let gain = 1.5 / s;
+    let x0 = w[1] / total * gain * 0.5 + w[2] / total * gain * 1.2;
+    assert!((out.means[0] - x0).abs() < 1e-14);
+    assert!(out.is_update[0]);
+    let taken: Vec<bool> = (0..2).map(|j| w[1 + j] > w[0]).collect();
+    assert_eq!(out.taken, taken);
+}
+
+#[test]
+fn scan_without_detections_keeps_the_prediction() {
+    let model = linear_model();
+    let means = [1.0, 2.0, 3.0, 4.0];
+    let covars: Vec<f64> = (0..16).map(|k| if k % 5 == 0 { 2.0 } else { 0.0 }).collect();
+    let input = ScanInput { dim: 4, means: &means, covars: &covars, detections: &[], prob_detect: &[0.4], clutter: &[], prob_gate: 0.95, gate_threshold: 6.0, include_all: false, force_symmetric: false };
+    let out = scan(&model, &input).unwrap();
+    assert_eq!(out.means, means.to_vec());
+    assert_eq!(out.covars, covars);
+    assert!(!out.is_update[0]);
+}
+
+#[test]
+fn bad_inputs_name_their_argument() {
+    let model = linear_model();
+    let means = [0.0; 4];
+    let covars: Vec<f64> = (0..16).map(|k| if k % 5 == 0 { 1.0 } else { 0.0 }).collect();
+    let base = ScanInput { dim: 4, means: &means, covars: &covars, detections: &[0.0, 0.0], prob_detect: &[0.5], clutter: &[1.0], prob_gate: 0.95, gate_threshold: 6.0, include_all: false, force_symmetric: false };
+    let cases: Vec<(ScanInput, &str)> = vec![
+        (ScanInput { prob_detect: &[1.5], ..base }, "prob_detect"),
+        (ScanInput { clutter: &[0.0], ..base }, "clutter_density"),
+        (ScanInput { detections: &[f64::NAN, 0.0], ..base }, "detections"),
+        (ScanInput { detections: &[0.0], ..base }, "detections"),
+        (ScanInput { means: &[0.0, 0.0, f64::INFINITY, 0.0], ..base }, "means"),
+        (ScanInput { covars: &covars[..15], ..base }, "covars"),
+        (ScanInput { prob_gate: -0.1, ..base }, "prob_gate"),
+        (ScanInput { gate_threshold: f64::NAN, ..base }, "gate_threshold"),
+        (ScanInput { dim: 3, means: &[0.0; 3], covars: &[0.0; 9], ..base }, "model"),
+    ];
+    for (input, argument) in cases {
+        assert_eq!(scan(&model, &input).unwrap_err().argument(), argument);
+    }
+    let singular = vec![0.0; 16];
+    let zero_noise = MeasurementModel::linear(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], 2, 4, &[0.0; 4]).unwrap();
+    assert_eq!(scan(&zero_noise, &ScanInput { covars: &singular, ..base }).unwrap_err().argument(), "covars");
+    assert_eq!(MeasurementModel::linear(&[1.0], 2, 4, &[0.0; 4]).unwrap_err().argument(), "matrix");
+    assert_eq!(MeasurementModel::bearing_range([0, 0], [0.0; 2], &[0.0; 9], &[0.0; 4], Jacobian::Analytic).unwrap_err().argument(), "mapping");
+    assert_eq!(predict(4, &means, &covars, &[1], &covars, &covars).unwrap_err().argument(), "transition_index");
+}
+
+#[test]
+fn predict_is_the_kalman_prediction() {
+    let f = [1.0, 1.0, 0.0, 1.0];
+    let q = [0.25, 0.5, 0.5, 1.0];
+    let (x, p) = predict(2, &[1.0, 2.0], &[1.0, 0.0, 0.0, 1.0], &[0], &f, &q).unwrap();
+    assert_eq!(x, vec![3.0, 2.0]);
+    assert_eq!(p, vec![2.25, 1.5, 1.5, 2.0]);
+}
+
+/// The JPDA's and the GM-PHD's measurement models compared bit for bit on random states and
+/// sensor poses: the condition for sharing one model. Bearing–range: about a fifth of the
+/// predicted measurements and a third of the Jacobians differ in the last bits, because the
+/// JPDA rounds the 3×3 rotation product as NumPy's kernels do (one fused multiply-add,
+/// `mul_add`) and the GM-PHD as plain products and sums. Linear: equal values, but a row of
+/// −0.0 products sums to −0.0 (nalgebra) or +0.0 (the GM-PHD). Kept, ignored, as the record
+/// of why the two models stay separate.
+#[test]
+#[ignore = "not bit-identical: the JPDA's rotation product is fused (mul_add), and linear rows of -0.0 differ in sign"]
+fn jpda_and_gmphd_models_are_bit_identical() {
+    use crate::gmphd;
+    let mut rng = StdRng::seed_from_u64(11);
+    let mut report = Vec::new();
+    for (jpda_kind, gm_kind) in [(Jacobian::FiniteDifference, gmphd::Jacobian::FiniteDifference), (Jacobian::Analytic, gmphd::Jacobian::Analytic)] {
+        let (mut z_diff, mut h_diff, mut cases) = (0, 0, 0);
+        let mut first = None;
+        for _ in 0..5000 {
+            let yaw = rng.random_range(-PI..PI);
+            let (s, c) = yaw.sin_cos();
+            let rotation = [c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0];
+            let offset = [rng.random_range(-5e4..5e4), rng.random_range(-5e4..5e4)];
+            let noise = [1e-4, 0.0, 0.0, 25.0];
+            let x: Vec<f64> = (0..4).map(|_| rng.random_range(-6e4..6e4)).collect();
+            let ours = MeasurementModel::bearing_range([0, 2], offset, &rotation, &noise, jpda_kind).unwrap();
+            let theirs = gmphd::MeasurementModel::BearingRange { mapping: [0, 2], offset, rotation, noise, jacobian: gm_kind };
+            let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
+            let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
+            theirs.linearise(&x, &mut z_b, &mut h_b);
+            cases += 1;
+            let z_same = (0..2).all(|i| z_a[i].to_bits() == z_b[i].to_bits());
+            let h_same = (0..2).all(|i| (0..4).all(|k| h_a[(i, k)].to_bits() == h_b[i * 4 + k].to_bits()));
+            z_diff += usize::from(!z_same);
+            h_diff += usize::from(!h_same);
+            if (!z_same || !h_same) && first.is_none() {
+                first = Some(format!("x {x:?} offset {offset:?} yaw {yaw}: z {:?} vs {z_b:?}, h {:?} vs {h_b:?}", z_a.as_slice(), h_a.transpose().as_slice()));
+            }
+        }
+        if z_diff + h_diff > 0 {
+            report.push(format!("{jpda_kind:?}: {z_diff}/{cases} predicted measurements and {h_diff}/{cases} Jacobians differ; first: {}", first.unwrap()));
+        }
+    }
+    // Linear models: nalgebra's product against the GM-PHD's row sum started from +0.0. Equal
+    // in value; a row whose products are all −0.0 sums to −0.0 here and +0.0 there.
+    let (mut zero_sign, mut linear_cases) = (0, 0);
+    for _ in 0..5000 {
+        let pick = |rng: &mut StdRng| if rng.random::<f64>() < 0.3 { [0.0, -0.0][rng.random_range(0..2)] } else { rng.random_range(-1e3..1e3) };
+        let matrix: Vec<f64> = (0..8).map(|_| pick(&mut rng)).collect();
+        let x: Vec<f64> = (0..4).map(|_| pick(&mut rng)).collect();
+        let ours = MeasurementModel::linear(&matrix, 2, 4, &[1.0, 0.0, 0.0, 1.0]).unwrap();
+        let theirs = gmphd::MeasurementModel::Linear { matrix: matrix.clone(), noise: vec![1.0, 0.0, 0.0, 1.0], ndim_meas: 2 };
+        let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
+        let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
+        theirs.linearise(&x, &mut z_b, &mut h_b);
+        linear_cases += 1;
+        for i in 0..2 {
+            assert_eq!(z_a[i], z_b[i], "{matrix:?} {x:?}");
+            zero_sign += usize::from(z_a[i].to_bits() != z_b[i].to_bits());
+            for k in 0..4 {
+                assert_eq!(h_a[(i, k)].to_bits(), h_b[i * 4 + k].to_bits());
+            }
+        }
+    }
+    if zero_sign > 0 {
+        report.push(format!("Linear: {zero_sign} predicted values of {linear_cases} models differ in the sign of a zero"));
+    }
+    assert!(report.is_empty(), "{}", report.join("\n"));
+}
+
+/// The bearing helpers, shared with the GM-PHD, against their definitions: Stone Soup's
+/// floored `((x + π) mod 2π) − π` (the JPDA's former `rem_euclid` form) and NumPy's
+/// `spacing` (the JPDA's former sign-branch form), bit for bit.
+#[test]
+fn shared_bearing_helpers_are_the_jpda_formulae() {
+    let floored = |x: f64| (x + PI).rem_euclid(2.0 * PI) - PI;
+    let numpy_spacing = |x: f64| {
+        let magnitude = x.abs();
+        let step = f64::from_bits(magnitude.to_bits() + 1) - magnitude;
+        if x.is_sign_negative() {
+            -step
+        } else {
+            step
+        }
+    };
+    let mut rng = StdRng::seed_from_u64(12);
+    let mut values: Vec<f64> = (0..100_000).map(|_| rng.random_range(-40.0..40.0)).collect();
+    values.extend((0..10_000).map(|_| rng.random_range(-1e6..1e6)));
+    values.extend([0.0, -0.0, PI, -PI, 3.0 * PI, -3.0 * PI, f64::MIN_POSITIVE, -f64::MIN_POSITIVE, 1e300, -1e300, 5e-324, -5e-324]);
+    for v in values {
+        assert_eq!(mod_bearing(v).to_bits(), floored(v).to_bits(), "mod_bearing({v:e})");
+        assert_eq!(spacing(v).to_bits(), numpy_spacing(v).to_bits(), "spacing({v:e})");
+    }
+}
