@@ -272,22 +272,20 @@ fn predict_is_the_kalman_prediction() {
     assert_eq!(p, vec![2.25, 1.5, 1.5, 2.0]);
 }
 
-/// The JPDA's and the GM-PHD's measurement models compared bit for bit on random states and
-/// sensor poses: the condition for sharing one model. Bearing–range: about a fifth of the
-/// predicted measurements and a third of the Jacobians differ in the last bits, because the
-/// JPDA rounds the 3×3 rotation product as NumPy's kernels do (one fused multiply-add,
-/// `mul_add`) and the GM-PHD as plain products and sums. Linear: equal values, but a row of
-/// −0.0 products sums to −0.0 (nalgebra) or +0.0 (the GM-PHD). Kept, ignored, as the record
-/// of why the two models stay separate.
+/// The JPDA's and the GM-PHD's measurement models compute the same function, to rounding, on
+/// random states and sensor poses. They are not bit for bit the same, so they stay two: for
+/// bearing–range about a fifth of the predicted measurements and a third of the Jacobians
+/// differ in the last bits, because the JPDA rounds the 3×3 rotation product as NumPy's
+/// kernels do (one fused multiply-add, `mul_add`) and the GM-PHD as plain products and sums;
+/// for linear models the values are equal, but a row of −0.0 products sums to −0.0
+/// (nalgebra) or +0.0 (the GM-PHD). Sharing one model would change one tracker's numbers.
 #[test]
-#[ignore = "not bit-identical: the JPDA's rotation product is fused (mul_add), and linear rows of -0.0 differ in sign"]
-fn jpda_and_gmphd_models_are_bit_identical() {
+fn jpda_and_gmphd_models_agree_to_rounding() {
     use crate::gmphd;
     let mut rng = StdRng::seed_from_u64(11);
-    let mut report = Vec::new();
-    for (jpda_kind, gm_kind) in [(Jacobian::FiniteDifference, gmphd::Jacobian::FiniteDifference), (Jacobian::Analytic, gmphd::Jacobian::Analytic)] {
-        let (mut z_diff, mut h_diff, mut cases) = (0, 0, 0);
-        let mut first = None;
+    let mut worst = [0.0f64; 4]; // z (analytic, FD), h (analytic, FD): relative differences
+    let mut differ_in_bits = 0;
+    for (slot, (jpda_kind, gm_kind)) in [(Jacobian::Analytic, gmphd::Jacobian::Analytic), (Jacobian::FiniteDifference, gmphd::Jacobian::FiniteDifference)].into_iter().enumerate() {
         for _ in 0..5000 {
             let yaw = rng.random_range(-PI..PI);
             let (s, c) = yaw.sin_cos();
@@ -300,22 +298,25 @@ fn jpda_and_gmphd_models_are_bit_identical() {
             let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
             let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
             theirs.linearise(&x, &mut z_b, &mut h_b);
-            cases += 1;
-            let z_same = (0..2).all(|i| z_a[i].to_bits() == z_b[i].to_bits());
-            let h_same = (0..2).all(|i| (0..4).all(|k| h_a[(i, k)].to_bits() == h_b[i * 4 + k].to_bits()));
-            z_diff += usize::from(!z_same);
-            h_diff += usize::from(!h_same);
-            if (!z_same || !h_same) && first.is_none() {
-                first = Some(format!("x {x:?} offset {offset:?} yaw {yaw}: z {:?} vs {z_b:?}, h {:?} vs {h_b:?}", z_a.as_slice(), h_a.transpose().as_slice()));
+            for i in 0..2 {
+                // the bearing compared as an angle (a difference across ±π is one of 2π)
+                let dz = if i == 0 { mod_bearing(z_a[i] - z_b[i]) } else { z_a[i] - z_b[i] };
+                worst[slot] = worst[slot].max(dz.abs() / z_b[i].abs().max(1.0));
+                differ_in_bits += usize::from(z_a[i].to_bits() != z_b[i].to_bits());
+                let scale = (0..4).map(|k| h_b[i * 4 + k].abs()).fold(0.0, f64::max);
+                for k in 0..4 {
+                    worst[2 + slot] = worst[2 + slot].max((h_a[(i, k)] - h_b[i * 4 + k]).abs() / scale);
+                }
             }
         }
-        if z_diff + h_diff > 0 {
-            report.push(format!("{jpda_kind:?}: {z_diff}/{cases} predicted measurements and {h_diff}/{cases} Jacobians differ; first: {}", first.unwrap()));
-        }
     }
-    // Linear models: nalgebra's product against the GM-PHD's row sum started from +0.0. Equal
-    // in value; a row whose products are all −0.0 sums to −0.0 here and +0.0 there.
-    let (mut zero_sign, mut linear_cases) = (0, 0);
+    assert!(worst[0] < 1e-12 && worst[1] < 1e-12, "predicted measurements differ by {worst:?}");
+    assert!(worst[2] < 1e-12, "analytic Jacobians differ by {worst:?}");
+    // Stone Soup's finite difference divides a last-bit difference of the function by its
+    // tiny step: at 60 km such a Jacobian carries ~1 % round-off of its own (measured 1.3 %).
+    assert!(worst[3] < 0.05, "finite-difference Jacobians differ by {worst:?}");
+    assert!(differ_in_bits > 0, "bit-identical after all: the two models could be one");
+    // Linear models: equal values (only a zero's sign may differ).
     for _ in 0..5000 {
         let pick = |rng: &mut StdRng| if rng.random::<f64>() < 0.3 { [0.0, -0.0][rng.random_range(0..2)] } else { rng.random_range(-1e3..1e3) };
         let matrix: Vec<f64> = (0..8).map(|_| pick(&mut rng)).collect();
@@ -325,19 +326,13 @@ fn jpda_and_gmphd_models_are_bit_identical() {
         let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
         let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
         theirs.linearise(&x, &mut z_b, &mut h_b);
-        linear_cases += 1;
         for i in 0..2 {
             assert_eq!(z_a[i], z_b[i], "{matrix:?} {x:?}");
-            zero_sign += usize::from(z_a[i].to_bits() != z_b[i].to_bits());
             for k in 0..4 {
                 assert_eq!(h_a[(i, k)].to_bits(), h_b[i * 4 + k].to_bits());
             }
         }
     }
-    if zero_sign > 0 {
-        report.push(format!("Linear: {zero_sign} predicted values of {linear_cases} models differ in the sign of a zero"));
-    }
-    assert!(report.is_empty(), "{}", report.join("\n"));
 }
 
 /// The bearing helpers, shared with the GM-PHD, against their definitions: Stone Soup's
