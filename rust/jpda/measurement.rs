@@ -8,14 +8,8 @@ pub use crate::gmphd::measurement::mod_bearing;
 use crate::error::{ModelError, Result};
 use nalgebra::{DMatrix, DVector};
 
-/// How the bearing–range model is linearised.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Jacobian {
-    /// Stone Soup's `jacobian()`: forward differences with step `max(10⁸·spacing(x_i), 10⁻⁸)`.
-    FiniteDifference,
-    /// `∂φ/∂x_{m_k} = (r₀R₁ₖ − r₁R₀ₖ)/ρ²`, `∂ρ/∂x_{m_k} = (r₀R₀ₖ + r₁R₁ₖ)/ρ`, `r = R·[x−t₀, y−t₁, 0]`.
-    Analytic,
-}
+/// How the bearing–range model is linearised: the GM-PHD's choice, the same two kinds.
+pub use crate::gmphd::Jacobian;
 
 /// The measurement model of a scan's detections.
 #[derive(Debug, Clone)]
