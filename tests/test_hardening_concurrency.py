@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from ctxmodels import (AngularSector, ClutterDensityModel, DetectionProbabilityModel, LandMask,
-                       LineOfSight, MetadataThreshold, Pose, RangeBands, SensorModel)
+                       LineOfSight, MetadataThreshold, RangeBands, SensorModel)
 
 N = 40_000  # above the core's parallel threshold (32768 rows): Rayon threads are used too
 ISLAND = np.array([[100.0, -50.0], [300.0, -50.0], [300.0, 150.0], [100.0, 150.0]])
