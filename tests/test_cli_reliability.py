@@ -272,11 +272,13 @@ def test_second_run_replaces_the_previous_outputs_only(tmp_path, capsys):
     assert main(["experiment", *TINY, "--no-plots", "--output", str(out)]) == 0
     after = {p.name for p in out.iterdir()}
     # The first run's figures are gone; the user's files, even ctxmodels-like names, stay.
-    assert after == {"results.md", "results.csv", "results.json", "notes.txt",
-                     "coverage_custom.png", cli.OutputFolder.MANIFEST}
+    assert after == {"results.md", "results.csv", "results.json", "findings.md",
+                     "findings.json", "notes.txt", "coverage_custom.png",
+                     cli.OutputFolder.MANIFEST}
     assert (out / "notes.txt").read_text() == "mine"
     manifest = json.loads((out / cli.OutputFolder.MANIFEST).read_text())
-    assert manifest["files"] == ["results.csv", "results.json", "results.md"]
+    assert manifest["files"] == ["findings.json", "findings.md", "results.csv", "results.json",
+                                 "results.md"]
     capsys.readouterr()
 
 

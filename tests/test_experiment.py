@@ -93,9 +93,13 @@ def test_run_experiment_writes_table_and_files(tmp_path):
     summary = json.loads(paths["json"].read_text())
     assert {row["tracker"] for row in summary["scores"]} == {"gmphd-uniform", "gmphd-context"}
     for row in summary["scores"]:
-        mean, half = row["combined"]["hota"]
-        assert 0 <= mean <= 100 and half >= 0
+        hota = row["combined"]["hota"]
+        assert 0 <= hota["low"] <= hota["mean"] <= hota["high"] <= 100
     assert len(paths["csv"].read_text().splitlines()) == 1 + 8
+    findings = json.loads(paths["findings_json"].read_text())
+    # No finding has all its trackers among these two: each says so instead of a verdict.
+    assert findings and {f["verdict"] for f in findings} == {"not run"}
+    assert all(f["hota_difference"] is None for f in findings)
 
 
 def test_any_executor_works(tmp_path):
@@ -139,24 +143,26 @@ def test_tracks_on_static_objects_are_distractors():
     from stonesoup.types.state import State
     from stonesoup.types.track import Track
 
-    from ctxmodels.experiment.runner import drop_distractor_states
+    from ctxmodels.experiment import metrics
+    from ctxmodels.experiment.scoring import drop_distractors, score_run
     run = make_scenario("mixed-range", 0, 5.0)
     times = run.radar_times
     marker = run.static_positions[0]
-    vessel = next(iter(run.truths))
+    vessel = run.truth_by_id[sorted(run.truth_by_id)[0]]
     vessel_at = {s.timestamp: s for s in vessel.states}
     on_marker = Track([State([[marker[0] + 2], [0], [marker[1]], [0]], timestamp=t) for t in times])
     on_vessel = Track([State(vessel_at[t].state_vector.copy(), timestamp=t) for t in times])
     far_away = Track([State([[5000.0], [0], [5000.0], [0]], timestamp=t) for t in times])
-    kept = drop_distractor_states([on_marker, on_vessel, far_away], run, times)
-    assert sorted(len(t) for t in kept) == [len(times), len(times)]
-    assert all(t.id in (on_vessel.id, far_away.id) for t in kept)
-    # Scored against vessels only, the marker track no longer costs anything.
-    from ctxmodels.experiment import metrics
-    with_marker = metrics.gospa(run.truths, [on_marker, on_vessel], times).rms
-    without = metrics.gospa(run.truths, drop_distractor_states([on_marker, on_vessel], run, times),
-                            times).rms
-    assert without < with_marker
+    tracks = [on_marker, on_vessel, far_away]
+    frames = metrics.frames_from_stonesoup(list(run.truth_by_id.values()), tracks, times)
+    kept, dropped = drop_distractors(frames, run.static_positions)
+    assert dropped.tolist() == [0] * len(times)  # every position of the marker track, only
+    assert all(frame.track_ids.tolist() == [1, 2] for frame in kept)
+    # Scored against vessels only, the marker track no longer costs anything, and it is gone.
+    scored, plain = score_run(run, tracks[:2]), score_run(run, tracks[:2], static_distractors=False)
+    assert (scored.track_count, plain.track_count) == (1, 2)
+    assert scored.gospa.rms < plain.gospa.rms
+    assert scored.tracks_per_time == (1,) * len(times) and plain.tracks_per_time == (2,) * len(times)
 
 
 def test_cli_sensitivity_options_change_the_simulated_sensors_only(tmp_path, capsys):

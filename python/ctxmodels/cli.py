@@ -47,13 +47,15 @@ def _run_experiment(args, folder) -> int:
         print(f"ctxmodels experiment: {tracker} does not run on "
               f"{', '.join(s for t, s in args.skipped if t == tracker)}; skipped there",
               file=sys.stderr)
+    length = f"{args.duration:g} s" if args.duration else "all"
     print(f"ctxmodels experiment: {len(config.jobs())} runs "
           f"({len(args.scenarios)} scenarios × trackers × {args.seeds} seeds), "
-          f"{args.duration:g} s each, {config.workers or 'all'} workers", file=sys.stderr)
+          f"{length} of each scenario, {config.workers or 'all'} workers", file=sys.stderr)
     results = None
     try:
         results = run_experiment(config, progress=not args.quiet)
-        print(results.table_markdown())
+        print(results.markdown())
+        print(f"\nctxmodels experiment: {results.timing_line()}", file=sys.stderr)
         try:
             with folder.staging() as stage:
                 staged = results.save(stage)
@@ -241,6 +243,7 @@ def _list(args) -> int:
 
 
 def parser() -> argparse.ArgumentParser:
+    from .experiment.runner import FULL_SEEDS, QUICK_DURATION, QUICK_SEEDS
     from .experiment.scenarios import SCENARIOS
     from .experiment.trackers import TRACKERS
     main = argparse.ArgumentParser(
@@ -254,30 +257,36 @@ def parser() -> argparse.ArgumentParser:
         description="Simulates the paper's asynchronous radar (0.8 Hz, 50–1612 m, 65° rear "
                     "blind sector) and lidar (10 Hz, ≤ 80 m) scenarios, runs each tracker "
                     "(JPDA, GM-PHD uniform / radar-only / P_D-aware / context-aware, ...) on "
-                    "each seed, and scores HOTA and RMS GOSPA at radar timestamps. Prints the "
-                    "table (paper Table II layout, mean ± 95 %% interval over seeds) and "
-                    "writes results.md/.csv/.json and PNG figures to --output.")
+                    "each seed, and scores HOTA and RMS GOSPA at radar timestamps. With no "
+                    "options it runs the full study (every tracker, all 480 s of each "
+                    "scenario, 10 seeds: about 5-8 min on 2 cores). Prints the table (paper "
+                    "Table II layout, mean and 95 %% bootstrap interval over seeds), the "
+                    "paper's findings as paired comparisons with verdicts, and tracks per "
+                    "radar scan; writes results.md/.csv/.json, findings.md/.json and PNG "
+                    "figures to --output.")
     exp.add_argument("--scenarios", nargs="+", default=list(SCENARIOS), choices=list(SCENARIOS),
                      metavar="NAME", help=f"scenarios to run (default: all of {list(SCENARIOS)})")
     exp.add_argument("--trackers", nargs="+", default=None, metavar="NAME",
                      choices=list(TRACKERS) + ["all"],
-                     help="trackers to compare, or 'all' (default: the paper's five and the "
-                          "line-of-sight GM-PHD; `ctxmodels list` names them all). Trackers "
+                     help="trackers to compare, or 'all' (default: all; `ctxmodels list` "
+                          "names them). Trackers "
                           "run only on the scenarios they are made for (gmphd-sight needs the "
                           "islands' land, the JPDAs run on the paper's two scenarios); a "
                           "named tracker that fits none of --scenarios is an error")
-    exp.add_argument("--seeds", type=integer(1, MAX_SEEDS), default=2,
-                     help=f"Monte Carlo seeds per scenario, 1–{MAX_SEEDS} (default 2)")
+    exp.add_argument("--seeds", type=integer(1, MAX_SEEDS), default=None,
+                     help=f"Monte Carlo seeds per scenario, 1–{MAX_SEEDS} (default "
+                          f"{FULL_SEEDS}; {QUICK_SEEDS} with --quick)")
     exp.add_argument("--seed-start", type=integer(0), default=0,
                      help="first seed, ≥ 0 (default 0)")
-    exp.add_argument("--duration", type=number(), default=60.0,
+    exp.add_argument("--duration", type=number(), default=None,
                      help=f"seconds of each scenario to simulate, {MIN_DURATION:g} (one tick "
-                          "of the simulation's clock) up to the scenario's length (default 60, "
-                          "which keeps the default run under a minute on 2 cores). The "
-                          "scenarios are 480 s long; on 2 cores `--duration 480 "
-                          "--seeds 3` of the GM-PHD trackers takes ~1.5 min, and one 480 s "
-                          "JPDA run ~13 s of tracking (it confirms ~2 600 tracks, most of "
-                          "them on clutter); --stock is some 10-20 times slower")
+                          "of the simulation's clock) up to the scenario's length (default: "
+                          f"all of it, 480 s; {QUICK_DURATION:g} with --quick); shorter runs "
+                          "cut a window from the start of the same timeline")
+    exp.add_argument("--quick", action="store_true",
+                     help=f"a smoke run for trying things: {QUICK_SEEDS} seeds of "
+                          f"{QUICK_DURATION:g} s (under a minute on 2 cores); --seeds and "
+                          "--duration still override it")
     exp.add_argument("--workers", type=integer(1), default=None,
                      help="parallel processes, ≥ 1 (default: one per core)")
     exp.add_argument("--output", default="results",

@@ -84,8 +84,13 @@ def check_experiment(args) -> None:
                              f"{', '.join(skipped)}; it runs only on "
                              f"{', '.join(spec.only_scenarios or ())}{why}")
         args.skipped += [(tracker, s) for s in skipped]
+    from .experiment.runner import FULL_SEEDS, QUICK_DURATION, QUICK_SEEDS
+    if args.seeds is None:
+        args.seeds = QUICK_SEEDS if args.quick else FULL_SEEDS
+    if args.duration is None and args.quick:
+        args.duration = QUICK_DURATION
     length = min(SCENARIOS[s].layout().default_duration for s in args.scenarios)
-    if not MIN_DURATION <= args.duration <= length:
+    if args.duration is not None and not MIN_DURATION <= args.duration <= length:
         raise UsageError(f"argument --duration: expected seconds in [{MIN_DURATION:g}, "
                          f"{length:g}] (the scenarios are {length:g} s long), "
                          f"got {args.duration:g}")

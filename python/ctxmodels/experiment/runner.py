@@ -18,41 +18,25 @@ evaluation times of all scenarios — and are then averaged over seeds.
 Reported tracks are Stone Soup's own: a track is present at a radar timestamp when it has a
 state at exactly that time (see :mod:`ctxmodels.experiment.trackers`).
 
-Ground truth is the moving vessels (the paper's RTK-logged targets). Static objects — sea
-markers and islets, detected by both sensors — are *distractors*, handled as MOTChallenge
-evaluations handle them (TrackEval removes tracker outputs matched to distractor ground
-truth before scoring): at each evaluation time, track states are assigned jointly to vessels
-and static objects (Hungarian, HOTA similarity), and states assigned to a static object with
-similarity ≥ 0.5 are dropped. A track on a charted marker is then neither a hit nor a false
-track; without this, the paper's scores (HOTA ≈ 90 % on Scenario 1 with several markers
-and islets in view) would be impossible. ``ExperimentConfig.static_distractors=False`` turns it
-off (static-object tracks then count as false tracks).
+Ground truth is the moving vessels; tracks on static objects (sea markers, islets) are
+distractors, neither hits nor false tracks (see :mod:`ctxmodels.experiment.scoring`;
+``ExperimentConfig.static_distractors=False`` counts them as false tracks).
 """
 from __future__ import annotations
 
 import concurrent.futures
-import csv
+import functools
 import gc
-import hashlib
-import io
-import json
-import math
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
-
-import numpy as np
-from stonesoup.types.track import Track
+from dataclasses import dataclass, field
 
 from . import metrics
-from .executors import (InlineExecutor, sigint_blocked, stop_now, worker_ignores_sigint,
-                        write_atomic)
+from .executors import InlineExecutor, sigint_blocked, stop_now, worker_ignores_sigint
+from .report import ExperimentResults, simulation_changes  # noqa: F401 (re-exported)
 from .scenarios import SCENARIOS, LidarConfig, RadarConfig, make_scenario
-
-#: Scenario names in table order, and the short labels of the results table.
-SCENARIO_LABELS = {"mixed-range": "Scenario 1", "formation": "Scenario 2", "islands": "Scenario 3"}
+from .scoring import score_run, tracks_digest
 
 
 @dataclass(frozen=True)
@@ -82,44 +66,10 @@ class JobResult:
     #: SHA-256 of every reported track state (time, mean, covariance), in track order: equal
     #: digests mean bit-identical tracks.
     digest: str = ""
-
-
-def drop_distractor_states(tracks, run, times, mapping=(0, 2)) -> list:
-    """Tracks without the states that lie on static objects (see the module docs)."""
-    from scipy.optimize import linear_sum_assignment
-    statics = run.static_positions
-    if not len(statics):
-        return list(tracks)
-    wanted = set(times)
-    vessels_at: dict = {}
-    for truth in run.truth_by_id.values():  # by id, not set order
-        for state in truth.states:
-            if state.timestamp in wanted:
-                vessels_at.setdefault(state.timestamp, []).append(
-                    [float(state.state_vector[mapping[0]]), float(state.state_vector[mapping[1]])])
-    by_time: dict = {}
-    for k, track in enumerate(tracks):
-        for state in track.states:
-            if state.timestamp in wanted:
-                by_time.setdefault(state.timestamp, []).append((k, state))
-    dropped: set = set()
-    for time_, entries in by_time.items():
-        points = np.array([[float(s.state_vector[mapping[0]]), float(s.state_vector[mapping[1]])]
-                           for _, s in entries])
-        objects = np.vstack([np.array(vessels_at.get(time_, []), dtype=float).reshape(-1, 2),
-                             statics])
-        n_vessels = len(objects) - len(statics)
-        similarity = metrics.position_similarity(objects, points)  # (objects, tracks)
-        rows, cols = linear_sum_assignment(-similarity)
-        for r, c in zip(rows, cols):
-            if r >= n_vessels and similarity[r, c] >= 0.5:
-                dropped.add(id(entries[c][1]))
-    kept = []
-    for track in tracks:
-        states = [s for s in track.states if id(s) not in dropped]
-        if states:
-            kept.append(Track(states, id=track.id))
-    return kept
+    #: Tracks and vessels present at each radar time (distractors dropped), for the
+    #: track-count report.
+    tracks_per_time: tuple = ()
+    truths_per_time: tuple = ()
 
 
 def track_scans(tracker) -> tuple[float, int, set]:
@@ -156,50 +106,47 @@ def run_job(job: Job) -> JobResult:
     from .trackers import TRACKERS, build_tracker
 
     spec = TRACKERS[job.tracker]
-    run = make_scenario(job.scenario, job.seed, job.duration, radar=job.radar, lidar=job.lidar)
+    run = simulated_run(job.scenario, job.seed, job.duration, job.radar, job.lidar)
     tracker = build_tracker(spec, run, fast=not job.stock)
     seconds, scans, all_tracks = track_scans(tracker)
-    times = run.radar_times
     # By content, not set (address) order: the metrics then see the same track order in
     # every process.
     reported = [track for track in in_track_order(all_tracks) if len(track)]
-    if job.static_distractors:
-        reported = drop_distractor_states(reported, run, times)
-    truths = list(run.truth_by_id.values())  # by id, not set (address) order
-    hota = metrics.hota(truths, reported, times)
-    gospa = metrics.gospa(truths, reported, times)
+    score = score_run(run, reported, job.static_distractors)
     kept = []
     if job.keep_tracks:
-        epoch = times[0]
+        epoch = run.radar_times[0]
         for track in reported:
             kept.append(([(s.timestamp - epoch).total_seconds() for s in track.states],
                          [[float(s.state_vector[0]), float(s.state_vector[2])]
                           for s in track.states]))
-    return JobResult(job, hota, gospa, seconds, scans, len(reported), kept,
-                     tracks_digest(reported))
+    return JobResult(job, score.hota, score.gospa, seconds, scans, score.track_count, kept,
+                     tracks_digest(reported), score.tracks_per_time, score.truths_per_time)
 
 
-def tracks_digest(tracks) -> str:
-    """SHA-256 over the tracks' states (timestamp, state vector, covariance bytes) in the
-    given order."""
-    digest = hashlib.sha256()
-    for track in tracks:
-        digest.update(b"track")
-        for state in track.states:
-            digest.update(str(state.timestamp).encode())
-            digest.update(np.ascontiguousarray(state.state_vector, dtype=np.float64).tobytes())
-            covar = getattr(state, "covar", None)
-            if covar is not None:
-                digest.update(np.ascontiguousarray(covar, dtype=np.float64).tobytes())
-    return digest.hexdigest()
+@functools.lru_cache(maxsize=2)
+def simulated_run(scenario: str, seed: int, duration, radar, lidar):
+    """The simulated scenario of a job. A worker runs every tracker of a (scenario, seed) in
+    turn (see :func:`run_experiment`'s job order), so it simulates each once. Trackers only
+    read the run (the results are the same with one worker or several: tested)."""
+    return make_scenario(scenario, seed, duration, radar=radar, lidar=lidar)
+
+
+#: The full study: every scenario for its whole length (480 s), on this many seeds.
+FULL_SEEDS = 10
+#: ``--quick``: a smoke run of the same study, for trying things.
+QUICK_SEEDS, QUICK_DURATION = 3, 60.0
 
 
 @dataclass
 class ExperimentConfig:
+    """The study to run. The defaults are the full study: every tracker (the paper's five,
+    the context-aware JPDA, and line of sight on the islands), every scenario for its whole
+    length, :data:`FULL_SEEDS` seeds."""
     scenarios: Sequence[str] = ("mixed-range", "formation", "islands")
     trackers: Sequence[str] | None = None  # None: trackers.DEFAULT_TRACKERS
-    seeds: Sequence[int] = (0, 1)
-    duration: float | None = 60.0
+    seeds: Sequence[int] = tuple(range(FULL_SEEDS))
+    duration: float | None = None  # None: each scenario's full length
     stock: bool = False
     workers: int | None = None
     plot_seed: int | None = 0
@@ -223,125 +170,28 @@ class ExperimentConfig:
                 for seed in self.seeds]
 
 
-def simulation_changes(radar: RadarConfig | None, lidar: LidarConfig | None) -> str:
-    """The simulated-sensor settings that differ from the defaults, as ``name=value`` text
-    (empty when none do), so a results table always says what it was simulated with."""
-    parts = []
-    for prefix, config, default in (("radar", radar, RadarConfig()), ("lidar", lidar, LidarConfig())):
-        if config is None:
-            continue
-        for name, value in asdict(config).items():
-            if value != getattr(default, name):
-                parts.append(f"{prefix}.{name}={value:g}" if isinstance(value, float)
-                             else f"{prefix}.{name}={value}")
-    return ", ".join(parts)
+def job_cost(job: Job) -> float:
+    """Rough CPU seconds of a job (tracker cost scaled by the simulated duration, plus
+    simulation and scoring): orders the jobs and weights the progress estimate."""
+    from .trackers import TRACKERS
+    duration = job.duration or _default_duration(job.scenario)
+    return (TRACKERS[job.tracker].cost + 1.0) * duration / 480.0
 
 
-def _interval(values: Sequence[float]) -> tuple[float, float]:
-    """Mean and half-width of the 95 % Student-t interval over seeds."""
-    values = np.asarray(values, dtype=float)
-    mean = float(np.mean(values))
-    if len(values) < 2:
-        return mean, float("nan")
-    from scipy.stats import t
-    half = float(t.ppf(0.975, len(values) - 1) * np.std(values, ddof=1) / math.sqrt(len(values)))
-    return mean, half
+@functools.lru_cache(maxsize=None)
+def _default_duration(scenario: str) -> float:
+    return SCENARIOS[scenario].layout().default_duration
 
 
-@dataclass
-class ExperimentResults:
-    config: ExperimentConfig
-    results: list[JobResult]
-    wall_seconds: float
-
-    def scores(self) -> list[dict]:
-        """One row per tracker: per scenario and combined, HOTA (%) and RMS GOSPA (m) as
-        mean and 95 % half-width over seeds."""
-        from .trackers import TRACKERS
-        by_key: dict[tuple[str, str, int], JobResult] = {
-            (r.job.tracker, r.job.scenario, r.job.seed): r for r in self.results}
-        trackers = [t for t in (self.config.trackers or TRACKERS) if
-                    any(r.job.tracker == t for r in self.results)]
-        rows = []
-        for tracker in trackers:
-            row = {"tracker": tracker, "label": TRACKERS[tracker].label}
-            seeds = sorted({r.job.seed for r in self.results if r.job.tracker == tracker})
-            scenario_names = [s for s in self.config.scenarios
-                              if any(r.job.tracker == tracker and r.job.scenario == s
-                                     for r in self.results)]
-            for scenario in scenario_names:
-                per_seed = [by_key[(tracker, scenario, s)] for s in seeds
-                            if (tracker, scenario, s) in by_key]
-                row[scenario] = {
-                    "hota": _interval([100 * r.hota.hota for r in per_seed]),
-                    "gospa": _interval([r.gospa.rms for r in per_seed]),
-                }
-            combined_scenarios = [s for s in scenario_names if s in ("mixed-range", "formation")]
-            combined_h, combined_g = [], []
-            for seed in seeds:
-                parts = [by_key[(tracker, s, seed)] for s in combined_scenarios
-                         if (tracker, s, seed) in by_key]
-                if parts:
-                    combined_h.append(100 * metrics.combine_hota([p.hota for p in parts]).hota)
-                    combined_g.append(metrics.combine_gospa([p.gospa for p in parts]).rms)
-            if combined_h:
-                row["combined"] = {"hota": _interval(combined_h), "gospa": _interval(combined_g)}
-            row["seconds"] = float(np.mean([r.seconds for r in self.results if r.job.tracker == tracker]))
-            rows.append(row)
-        return rows
-
-    def table_markdown(self) -> str:
-        """The results table in the layout of the paper's Table II (plus Scenario 3)."""
-        rows = self.scores()
-        columns = ["combined"] + [s for s in self.config.scenarios]
-        names = {"combined": "Combined (S1+S2)", **SCENARIO_LABELS}
-        header = "| Method | " + " | ".join(
-            f"{names.get(c, c)} HOTA (%) ↑ | {names.get(c, c)} GOSPA ↓" for c in columns) + " |"
-        lines = [header, "|" + "---|" * (1 + 2 * len(columns))]
-
-        def cell(row, column, metric):
-            if column not in row:
-                return "—"
-            mean, half = row[column][metric]
-            return f"{mean:.1f}" if math.isnan(half) else f"{mean:.1f} ± {half:.1f}"
-
-        for row in rows:
-            lines.append(f"| {row['label']} | " + " | ".join(
-                f"{cell(row, c, 'hota')} | {cell(row, c, 'gospa')}" for c in columns) + " |")
-        seeds = ", ".join(map(str, self.config.seeds))
-        lines.append("")
-        lines.append(f"Mean ± 95 % interval over seeds [{seeds}]; duration "
-                     f"{self.config.duration or 'default'} s per scenario; "
-                     f"{'component-path' if self.config.stock else 'array'} trackers; "
-                     f"wall time {self.wall_seconds:.0f} s.")
-        changed = simulation_changes(self.config.radar, self.config.lidar)
-        if changed:
-            lines.append(f"Simulated sensors changed from the defaults: {changed}.")
-        return "\n".join(lines)
-
-    def save(self, folder: str | Path) -> dict[str, Path]:
-        """Writes results.md, .csv and .json to ``folder``; each file appears complete or
-        not at all (written beside its final name, then renamed)."""
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
-        paths = {"markdown": folder / "results.md", "csv": folder / "results.csv",
-                 "json": folder / "results.json"}
-        table = io.StringIO(newline="")
-        writer = csv.writer(table)
-        writer.writerow(["tracker", "scenario", "seed", "hota_percent", "deta", "assa",
-                         "gospa_rms", "tracks", "scans", "seconds"])
-        for r in sorted(self.results, key=lambda r: (r.job.tracker, r.job.scenario, r.job.seed)):
-            writer.writerow([r.job.tracker, r.job.scenario, r.job.seed,
-                             f"{100 * r.hota.hota:.4f}", f"{r.hota.deta:.6f}",
-                             f"{r.hota.assa:.6f}", f"{r.gospa.rms:.4f}", r.track_count,
-                             r.scans, f"{r.seconds:.3f}"])
-        summary = {"config": {k: (list(v) if isinstance(v, (list, tuple)) else v)
-                              for k, v in asdict(self.config).items()},
-                   "wall_seconds": self.wall_seconds, "scores": self.scores()}
-        write_atomic(paths["markdown"], self.table_markdown() + "\n")
-        write_atomic(paths["csv"], table.getvalue())
-        write_atomic(paths["json"], json.dumps(summary, indent=2, default=float))
-        return paths
+def submission_order(jobs: list[Job]) -> list[Job]:
+    """Jobs grouped by simulated run (scenario, seed, sensors), the costliest group first and
+    within a group the costliest job first: a worker then simulates a run once for all its
+    trackers (:func:`simulated_run` keeps the last two), and the pool ends on short jobs."""
+    groups: dict = {}
+    for job in jobs:
+        groups.setdefault((job.scenario, job.seed, job.duration, job.radar, job.lidar), []).append(job)
+    ordered = sorted(groups.values(), key=lambda g: -sum(job_cost(j) for j in g))
+    return [job for group in ordered for job in sorted(group, key=lambda j: -job_cost(j))]
 
 
 def run_experiment(config: ExperimentConfig,
@@ -363,17 +213,16 @@ def run_experiment(config: ExperimentConfig,
                     if workers > 1 else InlineExecutor())
     results = []
     futures = []
-    bar = _progress(len(jobs), progress)
+    bar = _Progress(jobs, progress)
     try:
-        # Longest jobs first keeps the pool busy to the end.
-        order = sorted(jobs, key=lambda j: (j.tracker.startswith("jpda"), j.duration or 0), reverse=True)
+        order = submission_order(jobs)
         # Workers are forked while submitting: SIGINT stays blocked until each has set
         # its own handler, so a Ctrl-C in that window cannot raise inside a new worker.
         with sigint_blocked(own and isinstance(executor, concurrent.futures.ProcessPoolExecutor)):
             futures = [executor.submit(run_job, job) for job in order]
         for future in concurrent.futures.as_completed(futures):
             results.append(future.result())
-            bar.update(1)
+            bar.done(results[-1].job)
     except BaseException:
         # Without this, shutdown() below would first run every queued job.
         if own:
@@ -388,15 +237,27 @@ def run_experiment(config: ExperimentConfig,
     return ExperimentResults(config, results, time.perf_counter() - started)
 
 
-def _progress(total: int, enabled: bool):
-    try:
-        from tqdm import tqdm
-        return tqdm(total=total, disable=not enabled, desc="runs", unit="run")
-    except ImportError:  # tqdm is an optional extra
-        class _Silent:
-            def update(self, n):
-                pass
+class _Progress:
+    """A progress bar over the jobs' estimated cost (:func:`job_cost`), so its time estimate
+    holds from the first finished job although a JPDA run costs twenty radar-only runs."""
 
-            def close(self):
-                pass
-        return _Silent()
+    def __init__(self, jobs: list[Job], enabled: bool):
+        self._total, self._done = len(jobs), 0
+        self._bar = None
+        try:
+            from tqdm import tqdm
+        except ImportError:  # tqdm is an optional extra
+            return
+        self._bar = tqdm(total=round(sum(job_cost(j) for j in jobs), 1), disable=not enabled,
+                         unit="cpu-s", bar_format="{l_bar}{bar}| {postfix} [{elapsed}<{remaining}]")
+        self._bar.set_postfix_str(f"0/{self._total} runs")
+
+    def done(self, job: Job) -> None:
+        self._done += 1
+        if self._bar is not None:
+            self._bar.set_postfix_str(f"{self._done}/{self._total} runs", refresh=False)
+            self._bar.update(round(job_cost(job), 1))
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
