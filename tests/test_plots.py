@@ -7,7 +7,7 @@ import pytest
 
 pytest.importorskip("matplotlib")
 
-from ctxmodels.experiment import plots  # noqa: E402
+from ctxmodels.experiment import plots, summary_plots  # noqa: E402
 from ctxmodels.experiment.plots import Polyline, classify_tracks, inlier_mask  # noqa: E402
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -185,3 +185,101 @@ def test_plot_coverage_writes_png(tmp_path):
     plots.plot_coverage(path, {"lidar": paper_sensor_models()["lidar"]}, (5.0, 5.0, 0.0),
                         extents=(100.0,), resolution=30)
     assert_png(path)
+
+
+# --- plot_summary ----------------------------------------------------------------------
+
+NAN3 = [np.nan] * 3
+
+
+def summary_inputs():
+    return dict(tracker_labels=["JPDA", "GM-PHD context", "GM-PHD sight"],
+                hota=np.array([[40, 37, 43], [63, 61, 65], NAN3]),
+                gospa=np.array([[120, 110, 130], [72, 69, 76], NAN3]),
+                finding_labels=["context − P_D-aware", "radar+lidar − radar", "n/a one"],
+                hota_diff=np.array([[5, 3, 7], [1, -2, 4], NAN3]),
+                gospa_diff=np.array([[-8, -11, -5], [np.nan, np.nan, np.nan], NAN3]),
+                verdicts=["reproduced", "inconclusive", "not reproduced"])
+
+
+def test_summary_panels_units_directions_and_verdict_legend():
+    fig = summary_plots._figure_summary(**summary_inputs(), title="islands")
+    hota, gospa, d_hota, d_gospa = fig.axes
+    assert "(%)" in hota.get_xlabel() and "(m)" in gospa.get_xlabel()
+    assert "percentage points" in d_hota.get_xlabel() and "(m)" in d_gospa.get_xlabel()
+    assert "higher is better" in hota.get_title() and "lower is better" in gospa.get_title()
+    assert "A better" in d_hota.get_title() and "A better" in d_gospa.get_title()
+    texts = legend_texts(fig)
+    for verdict in ("reproduced", "not reproduced", "inconclusive", "95 % interval"):
+        assert verdict in texts
+    # NaN rows are skipped (no point drawn) and said to be n/a.
+    points = [len(ax.containers) for ax in (hota, gospa, d_hota, d_gospa)]  # errorbars
+    assert points == [2, 2, 2, 1]
+    assert sum("n/a" in t.get_text() for t in d_gospa.texts) == 2
+    assert any(abs(x) < 1e-12 for line in d_hota.lines for x in line.get_xdata()[:1]
+               if len(line.get_xdata()) == 2)  # the zero line
+
+
+def test_summary_all_nan_and_shape_errors(tmp_path):
+    inputs = summary_inputs()
+    for key in ("hota", "gospa", "hota_diff", "gospa_diff"):
+        inputs[key] = np.full((3, 3), np.nan)
+    path = tmp_path / "summary.png"
+    summary_plots.plot_summary(path, **inputs)
+    assert_png(path)
+    with pytest.raises(ValueError, match="hota"):
+        summary_plots.plot_summary(path, **{**inputs, "hota": np.zeros((2, 3))})
+    with pytest.raises(ValueError, match="verdicts"):
+        summary_plots.plot_summary(path, **{**inputs, "verdicts": ["reproduced"]})
+
+
+# --- plot_sensitivity ------------------------------------------------------------------
+
+
+def marked_cells(fig):
+    return {patch.get_gid(): patch.get_linestyle() for ax in fig.axes for patch in ax.patches
+            if (patch.get_gid() or "").startswith("excludes-zero:")}
+
+
+def test_sensitivity_marks_exactly_the_cells_whose_interval_excludes_zero():
+    diff = np.array([[0.5, 2.0, -3.0], [np.nan, 1.0, 0.0]])
+    low = np.array([[-0.5, 1.0, -4.0], [np.nan, 0.0, -1.0]])  # 0.0: touches 0, not excluded
+    high = np.array([[1.5, 3.0, -2.0], [np.nan, 2.0, 1.0]])
+    fig = summary_plots._figure_sensitivity("A − B", "clutter", [1, 2, 4], "bearing std (°)",
+                                            [0.5, 1.0], diff, low, high, "HOTA (pp)")
+    cells = marked_cells(fig)
+    assert set(cells) == {"excludes-zero:0,1", "excludes-zero:0,2"}
+    assert cells["excludes-zero:0,1"] == "-"  # favours (higher is better)
+    assert cells["excludes-zero:0,2"] != "-"  # against: dashed
+    ax = fig.axes[0]
+    assert sum(t.get_text() == "n/a" for t in ax.texts) == 1
+    bold = [t.get_text().split("\n")[0] for t in ax.texts if t.get_fontweight() == "bold"]
+    assert sorted(bold) == ["+2", "-3"]
+    assert ax.get_xlabel() == "clutter" and ax.get_ylabel() == "bearing std (°)"
+    colourbar = fig.axes[1]
+    assert colourbar.get_ylabel() == "HOTA (pp) difference"
+    vmin, vmax = ax.images[0].get_clim()
+    assert vmin == -vmax  # centred at 0
+    texts = legend_texts(fig)
+    assert "excludes 0" in texts and "n/a" in texts
+
+
+def test_sensitivity_lower_is_better_flips_what_favours():
+    fig = summary_plots._figure_sensitivity("A − B", "clutter", [1, 2], "", [0],
+                                            [-2.0, 2.0], [-3.0, 1.0], [-1.0, 3.0], "GOSPA (m)",
+                                            better="lower")
+    cells = marked_cells(fig)
+    assert cells["excludes-zero:0,0"] == "-" and cells["excludes-zero:0,1"] != "-"
+    assert fig.axes[0].get_yticks().size == 0  # one row, no y setting to name
+
+
+def test_plot_sensitivity_writes_png_and_checks_shapes(tmp_path):
+    path = tmp_path / "sensitivity.png"
+    grid = np.full((1, 3), np.nan)
+    summary_plots.plot_sensitivity(path, "A − B", "x", [1, 2, 3], "y", [7], grid, grid, grid,
+                                   "HOTA (pp)")
+    assert_png(path)
+    with pytest.raises(ValueError, match="diff"):
+        summary_plots.plot_sensitivity(path, "A − B", "x", [1, 2], "y", [7], grid, grid, grid,
+                                       "HOTA (pp)")
+    assert plots.plot_sensitivity is summary_plots.plot_sensitivity

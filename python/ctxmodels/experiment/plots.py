@@ -1,5 +1,8 @@
 """Figures: tracking output like the paper's Fig. 4, and P_D coverage maps.
 
+Statistics figures (per-tracker scores, paired differences, sensitivity grids) are in
+:mod:`ctxmodels.experiment.summary_plots` and re-exported here.
+
 Figures are built on :class:`matplotlib.figure.Figure` directly, not through pyplot: no
 global figure registry, no backend switch for the caller, and headless machines work.
 Each ``plot_*`` saves the figure that a ``_figure_*`` twin returns, so tests can inspect
@@ -12,6 +15,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
+
+from .summary_plots import plot_sensitivity, plot_summary  # noqa: F401 (re-exported)
 
 #: A track is an *inlier* when at least half of its states lie within this distance (m) of
 #: some ground-truth vessel at the same time; otherwise it is a clutter track.
