@@ -1,0 +1,285 @@
+"""The experiment's figures: what each one says (legends, labels, markings) is checked on
+the matplotlib Figure before saving; that each writes a PNG, on small synthetic inputs."""
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib")
+
+from ctxmodels.experiment import plots, summary_plots  # noqa: E402
+from ctxmodels.experiment.plots import Polyline, classify_tracks, inlier_mask  # noqa: E402
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def legend_texts(fig) -> str:
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+    return " | ".join(t.get_text() for legend in legends for t in legend.get_texts()).lower()
+
+
+def assert_png(path):
+    data = path.read_bytes()
+    assert data.startswith(PNG) and len(data) > 1000
+
+
+def line(times, start, velocity):
+    times = np.asarray(times, dtype=float)
+    return Polyline(times, np.asarray(start) + np.outer(times, velocity))
+
+
+@pytest.fixture
+def scene():
+    times = np.arange(0.0, 20.0, 1.0)
+    truths = [line(times, (0, 0), (5, 0)), line(times, (0, 200), (0, -5))]
+    inlier = line(times, (3, 4), (5, 0))  # 5 m off the first truth all along
+    rng = np.random.default_rng(0)
+    clutter = [Polyline(times[:8], rng.uniform(-500, 500, 2) + rng.normal(0, 4, (8, 2)).cumsum(0))
+               for _ in range(300)]
+    clutter.append(Polyline([3.0], [[5000.0, 5000.0]]))  # one state, far outside the view
+    ego = line(times, (-50, -50), (1, 1))
+    return dict(truths=truths, tracks=[inlier, *clutter], ego=ego,
+                static=np.array([[40.0, 60.0], [-30.0, 20.0]]),
+                land=[np.array([[100.0, 100.0], [150.0, 100.0], [150.0, 150.0]])])
+
+
+# --- classify_tracks -------------------------------------------------------------------
+
+
+def test_classify_on_truth_is_inlier_and_far_is_clutter():
+    times = np.arange(10.0)
+    truth = line(times, (0, 0), (10, 0))
+    on = line(times, (0, 0), (10, 0))
+    far = line(times, (0, 1000), (10, 0))
+    inliers, clutter = classify_tracks([far, on], [truth])
+    assert inliers == [on] and clutter == [far]
+
+
+def test_classify_half_near_is_an_inlier_and_less_is_clutter():
+    times = np.arange(10.0)
+    truth = line(times, (0, 0), (10, 0))
+    half = Polyline(times, truth.xy + np.where(times[:, None] < 5, 0.0, 100.0))
+    fewer = Polyline(times, truth.xy + np.where(times[:, None] < 4, 0.0, 100.0))
+    assert list(inlier_mask([half, fewer], [truth])) == [True, False]
+
+
+def test_classify_needs_truth_at_the_same_time_and_respects_distance():
+    truth = Polyline([0.0, 1.0], [[0, 0], [10, 0]])
+    shifted = Polyline([0.5, 1.5], [[0, 0], [10, 0]])  # same place, no truth at its times
+    edge = Polyline([0.0, 1.0], [[0, 30.0], [10, 30.0]])
+    assert list(inlier_mask([shifted, edge], [truth], distance=30.0)) == [False, True]
+    assert list(inlier_mask([edge], [truth], distance=29.9)) == [False]
+    assert classify_tracks([], [truth]) == ([], [])
+    assert list(inlier_mask([edge], [])) == [False]
+
+
+def reference_mask(tracks, truths, distance=plots.INLIER_DISTANCE):
+    """The rule as a plain loop over states, to check the vectorised one against."""
+    truth_at = {}
+    for truth in truths:
+        for t, p in zip(truth.times, truth.xy):
+            truth_at.setdefault(round(float(t), 6), []).append(p)
+    out = []
+    for track in tracks:
+        near = 0
+        for t, p in zip(track.times, track.xy):
+            points = truth_at.get(round(float(t), 6))
+            if points:
+                near += bool(np.min(np.hypot(*(np.asarray(points) - p).T)) <= distance)
+        out.append(near >= len(track.times) / 2)
+    return out
+
+
+def test_classify_matches_the_per_state_rule_on_random_tracks():
+    rng = np.random.default_rng(7)
+    grid = np.arange(0.0, 30.0, 0.5)
+    truths = [Polyline(grid[a:b], rng.uniform(-60, 60, (b - a, 2)))
+              for a, b in [(0, 60), (10, 40), (20, 60), (0, 5)]]
+    tracks = []
+    for _ in range(400):
+        n = int(rng.integers(0, 12))
+        times = np.sort(rng.choice(np.arange(0.0, 32.0, 0.25), n, replace=False))
+        tracks.append(Polyline(times, rng.uniform(-80, 80, (n, 2))))
+    assert list(inlier_mask(tracks, truths)) == reference_mask(tracks, truths)
+
+
+# --- plot_tracks -----------------------------------------------------------------------
+
+
+def test_track_figure_legend_and_labels(scene):
+    fig = plots._figure_tracks("islands: jpda", scene["tracks"], scene["truths"], scene["ego"],
+                               math.pi / 4, land=scene["land"], static_positions=scene["static"])
+    ax = fig.axes[0]
+    texts = legend_texts(fig)
+    for word in ("truth", "inlier tracks (1)", "clutter tracks (301)", "static objects",
+                 "ego path", "ego final pose", "land"):
+        assert word in texts, (word, texts)
+    assert ax.get_xlabel() == "x (m)" and ax.get_ylabel() == "y (m)"
+    assert "beyond this view" in ax.get_title()  # the far single-state clutter track
+    # Zoomed to the truths and the ego, not the far clutter.
+    assert ax.get_xlim()[1] < 1000 and ax.get_ylim()[1] < 1000
+    # The clutter is one LineCollection (plus dots for one-state tracks), beneath the inliers.
+    from matplotlib.collections import LineCollection
+    collections = [c for c in ax.collections if isinstance(c, LineCollection)]
+    assert len(collections) == 2
+    clutter, inliers = sorted(collections, key=lambda c: c.get_zorder())
+    assert len(clutter.get_segments()) == 300 and len(inliers.get_segments()) == 1
+    assert clutter.get_alpha() < 0.5
+
+
+def test_static_objects_differ_from_clutter_in_marker_and_colour(scene):
+    fig = plots._figure_tracks("", scene["tracks"], scene["truths"], scene["ego"], 0.0,
+                               static_positions=scene["static"])
+    legend = fig.axes[0].get_legend()
+    handles = dict(zip([t.get_text() for t in legend.get_texts()], legend.legend_handles))
+    static = next(h for text, h in handles.items() if text.startswith("static"))
+    clutter = next(h for text, h in handles.items() if text.startswith("clutter"))
+    assert static.get_marker() == "D" and clutter.get_marker() in ("None", None, "")
+    assert static.get_markeredgecolor() != clutter.get_color()
+
+
+def test_plot_tracks_writes_png_with_old_call(scene, tmp_path):
+    path = tmp_path / "tracks.png"
+    plots.plot_tracks(path, "t", scene["tracks"], scene["truths"], scene["ego"], 0.3,
+                      scene["land"], scene["static"], 400.0)
+    assert_png(path)
+    fig = plots._figure_tracks("t", scene["tracks"], scene["truths"], scene["ego"], 0.3,
+                               extent=400.0)
+    end = scene["ego"].xy[-1]
+    assert fig.axes[0].get_xlim() == pytest.approx((end[0] - 400, end[0] + 400))
+
+
+def test_plot_tracks_without_truth_tracks_or_zoom(tmp_path):
+    ego = Polyline([0.0, 1.0], [[0, 0], [1, 1]])
+    path = tmp_path / "empty.png"
+    plots.plot_tracks(path, "nothing", [], [], ego, 0.0, zoom=False)
+    assert_png(path)
+
+
+# --- plot_coverage ---------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def coverage_figure():
+    from ctxmodels.experiment.sensors import paper_sensor_models
+    land = [np.array([[300.0, 300.0], [500.0, 300.0], [500.0, 500.0]])]
+    return plots._figure_coverage(paper_sensor_models(land=land), (0.0, 0.0, math.pi / 2),
+                                  land=land, resolution=40, title="coverage")
+
+
+def test_coverage_labels_colour_bar_and_heading_legend(coverage_figure):
+    maps = [ax for ax in coverage_figure.axes if ax.images]
+    assert len(maps) == 6  # two extents × (radar, lidar, any sensor)
+    for ax in maps:
+        assert ax.get_xlabel() == "x (m)" and ax.get_ylabel() == "y (m)"
+        assert "±" in ax.get_title() and "m" in ax.get_title()
+    bars = [ax for ax in coverage_figure.axes if not ax.images]
+    assert len(bars) == 1 and bars[0].get_ylabel().startswith("P_D")
+    texts = legend_texts(coverage_figure)
+    assert "ego heading" in texts and "land" in texts
+
+
+def test_plot_coverage_writes_png(tmp_path):
+    from ctxmodels.experiment.sensors import paper_sensor_models
+    path = tmp_path / "coverage.png"
+    plots.plot_coverage(path, {"lidar": paper_sensor_models()["lidar"]}, (5.0, 5.0, 0.0),
+                        extents=(100.0,), resolution=30)
+    assert_png(path)
+
+
+# --- plot_summary ----------------------------------------------------------------------
+
+NAN3 = [np.nan] * 3
+
+
+def summary_inputs():
+    return dict(tracker_labels=["JPDA", "GM-PHD context", "GM-PHD sight"],
+                hota=np.array([[40, 37, 43], [63, 61, 65], NAN3]),
+                gospa=np.array([[120, 110, 130], [72, 69, 76], NAN3]),
+                finding_labels=["context − P_D-aware", "radar+lidar − radar", "n/a one"],
+                hota_diff=np.array([[5, 3, 7], [1, -2, 4], NAN3]),
+                gospa_diff=np.array([[-8, -11, -5], [np.nan, np.nan, np.nan], NAN3]),
+                verdicts=["reproduced", "inconclusive", "not reproduced"])
+
+
+def test_summary_panels_units_directions_and_verdict_legend():
+    fig = summary_plots._figure_summary(**summary_inputs(), title="islands")
+    hota, gospa, d_hota, d_gospa = fig.axes
+    assert "(%)" in hota.get_xlabel() and "(m)" in gospa.get_xlabel()
+    assert "percentage points" in d_hota.get_xlabel() and "(m)" in d_gospa.get_xlabel()
+    assert "higher is better" in hota.get_title() and "lower is better" in gospa.get_title()
+    assert "A better" in d_hota.get_title() and "A better" in d_gospa.get_title()
+    texts = legend_texts(fig)
+    for verdict in ("reproduced", "not reproduced", "inconclusive", "95 % interval"):
+        assert verdict in texts
+    # NaN rows are skipped (no point drawn) and said to be n/a.
+    points = [len(ax.containers) for ax in (hota, gospa, d_hota, d_gospa)]  # errorbars
+    assert points == [2, 2, 2, 1]
+    assert sum("n/a" in t.get_text() for t in d_gospa.texts) == 2
+    assert any(abs(x) < 1e-12 for line in d_hota.lines for x in line.get_xdata()[:1]
+               if len(line.get_xdata()) == 2)  # the zero line
+
+
+def test_summary_all_nan_and_shape_errors(tmp_path):
+    inputs = summary_inputs()
+    for key in ("hota", "gospa", "hota_diff", "gospa_diff"):
+        inputs[key] = np.full((3, 3), np.nan)
+    path = tmp_path / "summary.png"
+    summary_plots.plot_summary(path, **inputs)
+    assert_png(path)
+    with pytest.raises(ValueError, match="hota"):
+        summary_plots.plot_summary(path, **{**inputs, "hota": np.zeros((2, 3))})
+    with pytest.raises(ValueError, match="verdicts"):
+        summary_plots.plot_summary(path, **{**inputs, "verdicts": ["reproduced"]})
+
+
+# --- plot_sensitivity ------------------------------------------------------------------
+
+
+def marked_cells(fig):
+    return {patch.get_gid(): patch.get_linestyle() for ax in fig.axes for patch in ax.patches
+            if (patch.get_gid() or "").startswith("excludes-zero:")}
+
+
+def test_sensitivity_marks_exactly_the_cells_whose_interval_excludes_zero():
+    diff = np.array([[0.5, 2.0, -3.0], [np.nan, 1.0, 0.0]])
+    low = np.array([[-0.5, 1.0, -4.0], [np.nan, 0.0, -1.0]])  # 0.0: touches 0, not excluded
+    high = np.array([[1.5, 3.0, -2.0], [np.nan, 2.0, 1.0]])
+    fig = summary_plots._figure_sensitivity("A − B", "clutter", [1, 2, 4], "bearing std (°)",
+                                            [0.5, 1.0], diff, low, high, "HOTA (pp)")
+    cells = marked_cells(fig)
+    assert set(cells) == {"excludes-zero:0,1", "excludes-zero:0,2"}
+    assert cells["excludes-zero:0,1"] == "-"  # favours (higher is better)
+    assert cells["excludes-zero:0,2"] != "-"  # against: dashed
+    ax = fig.axes[0]
+    assert sum(t.get_text() == "n/a" for t in ax.texts) == 1
+    bold = [t.get_text().split("\n")[0] for t in ax.texts if t.get_fontweight() == "bold"]
+    assert sorted(bold) == ["+2", "-3"]
+    assert ax.get_xlabel() == "clutter" and ax.get_ylabel() == "bearing std (°)"
+    colourbar = fig.axes[1]
+    assert colourbar.get_ylabel() == "HOTA (pp) difference"
+    vmin, vmax = ax.images[0].get_clim()
+    assert vmin == -vmax  # centred at 0
+    texts = legend_texts(fig)
+    assert "excludes 0" in texts and "n/a" in texts
+
+
+def test_sensitivity_lower_is_better_flips_what_favours():
+    fig = summary_plots._figure_sensitivity("A − B", "clutter", [1, 2], "", [0],
+                                            [-2.0, 2.0], [-3.0, 1.0], [-1.0, 3.0], "GOSPA (m)",
+                                            better="lower")
+    cells = marked_cells(fig)
+    assert cells["excludes-zero:0,0"] == "-" and cells["excludes-zero:0,1"] != "-"
+    assert fig.axes[0].get_yticks().size == 0  # one row, no y setting to name
+
+
+def test_plot_sensitivity_writes_png_and_checks_shapes(tmp_path):
+    path = tmp_path / "sensitivity.png"
+    grid = np.full((1, 3), np.nan)
+    summary_plots.plot_sensitivity(path, "A − B", "x", [1, 2, 3], "y", [7], grid, grid, grid,
+                                   "HOTA (pp)")
+    assert_png(path)
+    with pytest.raises(ValueError, match="diff"):
+        summary_plots.plot_sensitivity(path, "A − B", "x", [1, 2], "y", [7], grid, grid, grid,
+                                       "HOTA (pp)")
+    assert plots.plot_sensitivity is summary_plots.plot_sensitivity
