@@ -17,14 +17,6 @@ from .cli_validation import (MAX_BEARING_STD_DEG, MAX_COORDINATE, MAX_LIDAR_CLUT
                              UsageError, check_coverage, check_experiment,
                              check_writable_folder, integer, number)
 
-#: Figures the experiment draws for its plot seed: scenario → trackers (paper Fig. 4).
-FIGURES = {
-    "mixed-range": ("jpda", "gmphd-uniform", "gmphd-context"),
-    "formation": ("jpda", "gmphd-uniform", "gmphd-context"),
-    "islands": ("gmphd-context", "gmphd-sight"),
-}
-
-
 def _experiment(args) -> int:
     folder = args.folder
     try:
@@ -60,7 +52,8 @@ def _run_experiment(args, folder) -> int:
             with folder.staging() as stage:
                 staged = results.save(stage)
                 if not args.no_plots:
-                    staged.update(_draw(results, stage))
+                    from .experiment.figures import draw_experiment_figures
+                    staged.update(draw_experiment_figures(results, stage))
                 folder.commit(stage)
         except OSError as err:  # e.g. a full disk: the previous outputs stay as they were
             folder.discard()
@@ -143,7 +136,7 @@ def _output_names() -> list[str]:
     """Every file name ``ctxmodels experiment`` writes."""
     from .experiment.scenarios import SCENARIOS
     from .experiment.trackers import TRACKERS
-    names = ["results.md", "results.csv", "results.json"]
+    names = ["results.md", "results.csv", "results.json"]  # (no findings before manifests)
     for scenario in SCENARIOS:
         names += [f"coverage_{scenario}.png"] + [f"tracks_{scenario}_{t}.png" for t in TRACKERS]
     return names
@@ -170,39 +163,6 @@ def _simulated_sensors(args):
     radar = dataclasses.replace(RadarConfig(), **radar_changes) if radar_changes else None
     lidar = dataclasses.replace(LidarConfig(), **lidar_changes) if lidar_changes else None
     return radar, lidar
-
-
-def _draw(results, folder: Path) -> dict:
-    from .experiment.plots import Polyline, plot_coverage, plot_tracks
-    from .experiment.scenarios import make_scenario
-    from .experiment.sensors import paper_sensor_models
-    from .experiment.trackers import TRACKERS
-    written = {}
-    config = results.config
-    for scenario in config.scenarios:
-        run = make_scenario(scenario, config.plot_seed, config.duration)
-        epoch = run.radar_times[0]
-        truths = [Polyline.from_states(t.states, epoch, label=t.id)
-                  for t in sorted(run.truths, key=lambda t: t.id)]
-        ego = Polyline([(t - epoch).total_seconds() for t in run.ego.timestamps],
-                       run.ego.positions)
-        for result in results.results:
-            job = result.job
-            if job.scenario != scenario or job.seed != config.plot_seed or \
-                    job.tracker not in FIGURES.get(scenario, ()):
-                continue
-            tracks = [Polyline(times, xy) for times, xy in result.tracks]
-            path = folder / f"tracks_{scenario}_{job.tracker}.png"
-            plot_tracks(path, f"{scenario}: {TRACKERS[job.tracker].label} (seed {job.seed})",
-                        tracks, truths, ego, float(run.ego.headings[-1]), land=run.land,
-                        static_positions=run.static_positions)
-            written[path.stem] = path
-        pose = run.ego.pose_at(run.radar_times[0])
-        path = folder / f"coverage_{scenario}.png"
-        plot_coverage(path, paper_sensor_models(land=run.land), tuple(pose), land=run.land,
-                      title=f"P_D of the context-aware models, {scenario}, first radar scan")
-        written[path.stem] = path
-    return written
 
 
 def _coverage(args) -> int:

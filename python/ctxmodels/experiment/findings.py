@@ -31,6 +31,7 @@ class Finding:
     better: tuple[str, ...]
     worse: tuple[str, ...]
     scope: str  # a scenario name or COMBINED
+    short: str = ""  # "A − B" for figures
 
     @property
     def trackers(self) -> tuple[str, ...]:
@@ -40,21 +41,22 @@ class Finding:
 FINDINGS: tuple[Finding, ...] = (
     Finding("uniform-loses-radar-only-tracks",
             "uniform P_D/λ loses the radar-only tracks: radar-only GM-PHD > uniform (S1)",
-            "paper", ("gmphd-radar-only",), ("gmphd-uniform",), "mixed-range"),
+            "paper", ("gmphd-radar-only",), ("gmphd-uniform",), "mixed-range",
+            "radar-only − uniform (S1)"),
     Finding("uniform-is-worst",
             "the uniform GM-PHD is the worst of the paper's five (margin to the closest)",
             "paper", ("jpda", "gmphd-radar-only", "gmphd-pd-aware", "gmphd-context"),
-            ("gmphd-uniform",), COMBINED),
+            ("gmphd-uniform",), COMBINED, "closest other − uniform"),
     Finding("pd-aware-beats-radar-only", "P_D-aware GM-PHD > radar-only", "paper",
-            ("gmphd-pd-aware",), ("gmphd-radar-only",), COMBINED),
+            ("gmphd-pd-aware",), ("gmphd-radar-only",), COMBINED, "P_D-aware − radar-only"),
     Finding("context-beats-pd-aware", "context-aware GM-PHD ≥ P_D-aware", "paper",
-            ("gmphd-context",), ("gmphd-pd-aware",), COMBINED),
+            ("gmphd-context",), ("gmphd-pd-aware",), COMBINED, "context − P_D-aware"),
     Finding("context-beats-jpda", "context-aware GM-PHD > JPDA", "paper",
-            ("gmphd-context",), ("jpda",), COMBINED),
+            ("gmphd-context",), ("jpda",), COMBINED, "context − JPDA"),
     Finding("context-jpda-beats-jpda", "context-aware JPDA > JPDA", "ours",
-            ("jpda-context",), ("jpda",), COMBINED),
+            ("jpda-context",), ("jpda",), COMBINED, "context JPDA − JPDA"),
     Finding("sight-beats-context", "line-of-sight GM-PHD > context-aware (S3)", "ours",
-            ("gmphd-sight",), ("gmphd-context",), "islands"),
+            ("gmphd-sight",), ("gmphd-context",), "islands", "line of sight − context (S3)"),
 )
 
 

@@ -83,10 +83,10 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
     (ax_h, ax_g), (ax_dh, ax_dg) = fig.subplots(2, 2, gridspec_kw={"height_ratios": heights})
     tracker_style = [dict(color=SCORE_COLOUR, marker="o")] * len(trackers)
     _interval_rows(ax_h, trackers, hota, tracker_style)
-    ax_h.set_title("HOTA per tracker    (higher is better →)", fontsize=10)
+    ax_h.set_title("HOTA per tracker\n(higher is better →)", fontsize=10)
     ax_h.set_xlabel("HOTA (%)")
     _interval_rows(ax_g, trackers, gospa, tracker_style)
-    ax_g.set_title("GOSPA per tracker    (← lower is better)", fontsize=10)
+    ax_g.set_title("GOSPA per tracker\n(← lower is better)", fontsize=10)
     ax_g.set_xlabel("GOSPA (m)")
     for ax, stats, metric, unit, a_better in (
             (ax_dh, hota_diff, "HOTA", "percentage points", "→"),
@@ -94,8 +94,8 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
         ax.axvline(0.0, color="k", lw=1.0, zorder=1)
         _interval_rows(ax, findings, stats, styles)
         side = "A better →" if a_better == "→" else "← A better"
-        ax.set_title(f"Paired {metric} difference A − B    ({side})", fontsize=10)
-        ax.set_xlabel(f"{metric} difference A − B ({unit}); 0 = no difference")
+        ax.set_title(f"Paired {metric} difference A − B\n({side})", fontsize=10)
+        ax.set_xlabel(f"A − B ({unit}); 0 = no difference")
         lo, hi = ax.get_xlim()  # keep the zero line in view even when all are far from it
         ax.set_xlim(min(lo, -0.05 * (hi - lo)), max(hi, 0.05 * (hi - lo)))
     ax_dg.tick_params(labelleft=False)  # same findings as the panel to its left
