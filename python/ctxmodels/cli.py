@@ -202,10 +202,51 @@ def _list(args) -> int:
     return 0
 
 
-def parser() -> argparse.ArgumentParser:
-    from .experiment.runner import FULL_SEEDS, QUICK_DURATION, QUICK_SEEDS
+def study_options(sub, output: str, full_seeds: int, quick_seeds: int,
+                  quick_duration: float) -> None:
+    """The options ``experiment`` and ``sweep`` share: what to run, on how many seeds, where
+    the results go."""
     from .experiment.scenarios import SCENARIOS
     from .experiment.trackers import TRACKERS
+    sub.add_argument("--scenarios", nargs="+", default=list(SCENARIOS), choices=list(SCENARIOS),
+                     metavar="NAME", help=f"scenarios to run (default: all of {list(SCENARIOS)})")
+    sub.add_argument("--trackers", nargs="+", default=None, metavar="NAME",
+                     choices=list(TRACKERS) + ["all"],
+                     help="trackers to compare, or 'all' (default: all; `ctxmodels list` "
+                          "names them). Trackers "
+                          "run only on the scenarios they are made for (gmphd-sight needs the "
+                          "islands' land, the JPDAs run on the paper's two scenarios); a "
+                          "named tracker that fits none of --scenarios is an error")
+    sub.add_argument("--seeds", type=integer(1, MAX_SEEDS), default=None,
+                     help=f"Monte Carlo seeds per scenario, 1–{MAX_SEEDS} (default "
+                          f"{full_seeds}; {quick_seeds} with --quick)")
+    sub.add_argument("--seed-start", type=integer(0), default=0,
+                     help="first seed, ≥ 0 (default 0)")
+    sub.add_argument("--duration", type=number(), default=None,
+                     help=f"seconds of each scenario to simulate, {MIN_DURATION:g} (one tick "
+                          "of the simulation's clock) up to the scenario's length (default: "
+                          f"all of it, 480 s; {quick_duration:g} with --quick); shorter runs "
+                          "cut a window from the start of the same timeline")
+    sub.add_argument("--quick", action="store_true",
+                     help=f"a smoke run for trying things: {quick_seeds} seeds of "
+                          f"{quick_duration:g} s; --seeds and "
+                          "--duration still override it")
+    sub.add_argument("--workers", type=integer(1), default=None,
+                     help="parallel processes, ≥ 1 (default: one per core)")
+    sub.add_argument("--output", default=output,
+                     help=f"output folder, created if needed (default ./{output}). Written only "
+                          "when every run has finished; a run replaces the files the previous "
+                          "run wrote there (listed in its .ctxmodels-outputs.json) and leaves "
+                          "other files alone")
+    sub.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    sub.add_argument("--quiet", action="store_true", help="no progress bar")
+    sub.set_defaults(full_seeds=full_seeds, quick_seeds=quick_seeds, quick_duration=quick_duration)
+
+
+def parser() -> argparse.ArgumentParser:
+    from .cli_sweep import add_sweep_command
+    from .experiment.runner import FULL_SEEDS, QUICK_DURATION, QUICK_SEEDS
+    from .experiment.scenarios import SCENARIOS
     main = argparse.ArgumentParser(
         prog="ctxmodels",
         description="Context-aware sensor models for Stone Soup trackers: run the paper's "
@@ -224,36 +265,7 @@ def parser() -> argparse.ArgumentParser:
                     "paper's findings as paired comparisons with verdicts, and tracks per "
                     "radar scan; writes results.md/.csv/.json, findings.md/.json and PNG "
                     "figures to --output.")
-    exp.add_argument("--scenarios", nargs="+", default=list(SCENARIOS), choices=list(SCENARIOS),
-                     metavar="NAME", help=f"scenarios to run (default: all of {list(SCENARIOS)})")
-    exp.add_argument("--trackers", nargs="+", default=None, metavar="NAME",
-                     choices=list(TRACKERS) + ["all"],
-                     help="trackers to compare, or 'all' (default: all; `ctxmodels list` "
-                          "names them). Trackers "
-                          "run only on the scenarios they are made for (gmphd-sight needs the "
-                          "islands' land, the JPDAs run on the paper's two scenarios); a "
-                          "named tracker that fits none of --scenarios is an error")
-    exp.add_argument("--seeds", type=integer(1, MAX_SEEDS), default=None,
-                     help=f"Monte Carlo seeds per scenario, 1–{MAX_SEEDS} (default "
-                          f"{FULL_SEEDS}; {QUICK_SEEDS} with --quick)")
-    exp.add_argument("--seed-start", type=integer(0), default=0,
-                     help="first seed, ≥ 0 (default 0)")
-    exp.add_argument("--duration", type=number(), default=None,
-                     help=f"seconds of each scenario to simulate, {MIN_DURATION:g} (one tick "
-                          "of the simulation's clock) up to the scenario's length (default: "
-                          f"all of it, 480 s; {QUICK_DURATION:g} with --quick); shorter runs "
-                          "cut a window from the start of the same timeline")
-    exp.add_argument("--quick", action="store_true",
-                     help=f"a smoke run for trying things: {QUICK_SEEDS} seeds of "
-                          f"{QUICK_DURATION:g} s (under a minute on 2 cores); --seeds and "
-                          "--duration still override it")
-    exp.add_argument("--workers", type=integer(1), default=None,
-                     help="parallel processes, ≥ 1 (default: one per core)")
-    exp.add_argument("--output", default="results",
-                     help="output folder, created if needed (default ./results). Written only "
-                          "when every run has finished; a run replaces the files the previous "
-                          "run wrote there (listed in its .ctxmodels-outputs.json) and leaves "
-                          "other files alone")
+    study_options(exp, "results", FULL_SEEDS, QUICK_SEEDS, QUICK_DURATION)
     exp.add_argument("--stock", action="store_true",
                      help="run the trackers' component path (stock Stone Soup components in "
                           "ctxmodels' stock-derived trackers) instead of the array trackers "
@@ -261,8 +273,6 @@ def parser() -> argparse.ArgumentParser:
     exp.add_argument("--static-as-false", action="store_true",
                      help="count tracks on static sea markers and islets as false tracks "
                           "(default: they are distractors, neither hits nor false tracks)")
-    exp.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    exp.add_argument("--quiet", action="store_true", help="no progress bar")
     sim = exp.add_argument_group(
         "simulated sensors (sensitivity studies: these change the simulated truth only, "
         "never the trackers' models)")
@@ -307,6 +317,8 @@ def parser() -> argparse.ArgumentParser:
     cov.add_argument("--output", default="coverage.png",
                      help="PNG file to write (its folder must exist)")
     cov.set_defaults(run=_coverage, check=check_coverage, error=cov.error)
+
+    add_sweep_command(commands)
 
     lst = commands.add_parser("list", help="list the scenarios and trackers")
     lst.set_defaults(run=_list, check=lambda args: None, error=lst.error)

@@ -84,17 +84,16 @@ def check_experiment(args) -> None:
                              f"{', '.join(skipped)}; it runs only on "
                              f"{', '.join(spec.only_scenarios or ())}{why}")
         args.skipped += [(tracker, s) for s in skipped]
-    from .experiment.runner import FULL_SEEDS, QUICK_DURATION, QUICK_SEEDS
     if args.seeds is None:
-        args.seeds = QUICK_SEEDS if args.quick else FULL_SEEDS
+        args.seeds = args.quick_seeds if args.quick else args.full_seeds
     if args.duration is None and args.quick:
-        args.duration = QUICK_DURATION
+        args.duration = args.quick_duration
     length = min(SCENARIOS[s].layout().default_duration for s in args.scenarios)
     if args.duration is not None and not MIN_DURATION <= args.duration <= length:
         raise UsageError(f"argument --duration: expected seconds in [{MIN_DURATION:g}, "
                          f"{length:g}] (the scenarios are {length:g} s long), "
                          f"got {args.duration:g}")
-    if args.radar_clutter is not None and sum(args.radar_clutter) > MAX_RADAR_CLUTTER:
+    if getattr(args, "radar_clutter", None) is not None and sum(args.radar_clutter) > MAX_RADAR_CLUTTER:
         raise UsageError(f"argument --radar-clutter: NEAR + FAR must be ≤ "
                          f"{MAX_RADAR_CLUTTER:g} per scan, got {sum(args.radar_clutter):g}")
 

@@ -202,12 +202,19 @@ def run_experiment(config: ExperimentConfig,
 
     On Ctrl-C (KeyboardInterrupt) or a failed job, the queued jobs are cancelled and, with
     the default pool, the worker processes are stopped at once; the exception propagates."""
-    jobs = config.jobs()
     started = time.perf_counter()
+    results = run_jobs(config.jobs(), config.workers, executor, progress)
+    return ExperimentResults(config, results, time.perf_counter() - started)
+
+
+def run_jobs(jobs: list[Job], workers: int | None = None,
+             executor: concurrent.futures.Executor | None = None,
+             progress: bool = True) -> list[JobResult]:
+    """Runs ``jobs`` (see :func:`run_experiment`); results in completion order."""
     own = executor is None
     if own:
         # More processes than jobs would only sit idle.
-        workers = min(config.workers or os.cpu_count() or 1, max(len(jobs), 1))
+        workers = min(workers or os.cpu_count() or 1, max(len(jobs), 1))
         executor = (concurrent.futures.ProcessPoolExecutor(max_workers=workers,
                                                            initializer=worker_ignores_sigint)
                     if workers > 1 else InlineExecutor())
@@ -234,7 +241,7 @@ def run_experiment(config: ExperimentConfig,
         bar.close()
         if own:
             executor.shutdown()
-    return ExperimentResults(config, results, time.perf_counter() - started)
+    return results
 
 
 class _Progress:
