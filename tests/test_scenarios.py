@@ -564,8 +564,9 @@ def test_formation_and_weave_velocities_are_derivatives_of_positions():
         finite_difference = np.diff(sample.positions, axis=0) / 0.05
         mean_velocity = 0.5 * (sample.velocities[1:] + sample.velocities[:-1])
         errors = np.nan_to_num(np.abs(finite_difference - mean_velocity))
-        # Velocity only jumps where the route's curvature jumps (two instants here).
-        assert np.mean(errors.max(axis=1) < 0.01) > 0.99
+        # The turn rate ramps at the route's two curvature jumps, so nowhere does the
+        # velocity jump (sailing the designed route exactly, it did at those instants).
+        assert errors.max() < 0.01
     formation = FormationMotion(leader, (-6.0, -29.4)).sample(times)
     np.testing.assert_allclose(
         np.hypot(*(formation.positions - leader.sample(times).positions).T), math.hypot(6.0, 29.4)

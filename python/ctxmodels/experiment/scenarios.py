@@ -51,9 +51,10 @@ epoch: the sensors never share a timestamp), P_D 0.95 below 50 m and 0.2 to 80 m
 centroids with σ 0.5 m and a segment ``area``, Poisson(3) small clutter segments per
 scan. Static objects (markers, islets) are detected but are not ground truth; land
 occludes both sensors. Scenarios: ``"mixed-range"`` (1), ``"formation"`` (2),
-``"islands"`` (3, ours), 480 s each. Truth trajectories are fixed per scenario; the seed
-only drives detection, noise and clutter draws, from independent radar and lidar
-streams.
+``"islands"`` (3, ours), 480 s each. Truth trajectories are fixed per scenario: legs and
+turns, with the turn rate ramping over 4 s into and out of each turn so that truth
+velocities are continuous (``simulation.motion`` says why). The seed only drives
+detection, noise and clutter draws, from independent radar and lidar streams.
 
 Public API
 ----------

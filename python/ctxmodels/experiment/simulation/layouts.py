@@ -124,8 +124,9 @@ def _formation_layout() -> SceneLayout:
     cooperating = FormationMotion(ego, body_offset=(-6.0, -29.4))  # 30 m, starboard quarter
 
     # Follows the ego's route 250–300 m behind, weaving ±170 m across it: in and out of
-    # the blind sector on straight legs. The weave period puts zero lateral offset near
-    # the route's curvature jumps, where WeaveMotion's speed would otherwise jump.
+    # the blind sector on straight legs. (The weave period was chosen to put zero lateral
+    # offset near the route's curvature jumps, from before turn rates ramped; it stays
+    # so the scenario stays the same.)
     follower = WeaveMotion(route, speed=3.1, amplitude=170.0, period=226.0, start_time=-120.0)
 
     # Crosses astern of the ego from north to south, then runs east and north: in the

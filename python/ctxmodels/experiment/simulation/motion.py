@@ -1,20 +1,45 @@
 """How the simulated vessels (and the ego) move.
 
 Truth trajectories are fixed per scenario: waypoints joined by constant-rate turns
-(:mod:`.paths`), constant speed per vessel, i.e. nearly-constant-velocity /
-coordinated-turn motion. Every motion maps a batch of times (s after the epoch) to a
-:class:`MotionSample` in one vectorised call:
+(:mod:`.paths`) that the turn rate ramps into and out of (below), constant speed per
+vessel, i.e. nearly-constant-velocity / coordinated-turn motion. Every motion maps a
+batch of times (s after the epoch) to a :class:`MotionSample` in one vectorised call:
 
 * :class:`PathMotion`: constant speed along a path;
 * :class:`FormationMotion`: a rigid offset in a leader's body frame;
 * :class:`WeaveMotion`: progress along a path while weaving sinusoidally across it;
 * :class:`DriftMotion`: station keeping (slow drift, heading oscillating about a mean).
+
+Turn rates ramp
+---------------
+A vessel cannot change its turn rate instantaneously. The rudder (or outboard) slews over
+a second or two, and the hull's yaw rate then follows with a lag: in Nomoto's
+first-order steering model the time constant T is of order 1–3 s for a small craft (tens
+of seconds for a ship). A designed path of legs and circular arcs is only C¹: its
+curvature κ, and so the turn rate ω = speed·κ, steps at every join. Sailing one exactly
+keeps the vessel's own velocity continuous (constant speed along a continuous tangent),
+but not anything derived from its turn: a formation partner rigidly offset by ``o`` moves
+at v + ω·J·R(h)·o, and a vessel weaving at an offset d from a path progresses at
+speed·(1 − d·κ). In the formation scenario their truth velocities jumped at the joins,
+by up to 0.36 and 0.76 m/s between consecutive 10 Hz states.
+
+So every path is sailed with its turn rate ramped linearly over
+:data:`TURN_RATE_RAMP_TIME` = 4 s centred on each join. A linear ramp of duration τ lags
+a step by τ/2, as a first-order response with T = τ/2 does: τ = 4 s is T = 2 s, mid-range
+for small craft. The value is set from that physical argument alone, not from any
+tracking result. In arc length the ramp is speed·τ long, a clothoid transition
+(:meth:`~.paths.Path.with_turn_transitions`): the heading outside the ramps is exactly as
+designed, and the routes move by less than a metre in the three scenarios (waypoints are
+passed within that). Velocities are then continuous and accelerations bounded (they
+still step where a ramp starts or ends). ``turn_rate_ramp=0`` sails the designed path
+itself.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
@@ -22,7 +47,17 @@ import numpy as np
 from .geometry import TWO_PI, wrap_angle
 from .paths import Path
 
-__all__ = ["DriftMotion", "FormationMotion", "MotionSample", "PathMotion", "WeaveMotion"]
+__all__ = [
+    "TURN_RATE_RAMP_TIME",
+    "DriftMotion",
+    "FormationMotion",
+    "MotionSample",
+    "PathMotion",
+    "WeaveMotion",
+]
+
+TURN_RATE_RAMP_TIME = 4.0
+"""Seconds over which a vessel's turn rate ramps from one constant value to the next."""
 
 
 class MotionSample(NamedTuple):
@@ -37,17 +72,25 @@ class MotionSample(NamedTuple):
 @dataclass(frozen=True)
 class PathMotion:
     """Constant speed along a :class:`Path`, starting at ``start_time`` (s after the
-    epoch; negative = already under way); exists only while on the path."""
+    epoch; negative = already under way); exists only while on the path. The turn rate
+    ramps over ``turn_rate_ramp`` s at each join (:attr:`sailed_path`)."""
 
     path: Path
     speed: float
     start_time: float = 0.0
+    turn_rate_ramp: float = TURN_RATE_RAMP_TIME
+
+    @cached_property
+    def sailed_path(self) -> Path:
+        """:attr:`path` as sailed: with clothoid transitions ``speed · turn_rate_ramp``
+        long."""
+        return self.path.with_turn_transitions(self.speed * self.turn_rate_ramp)
 
     def sample(self, times) -> MotionSample:
         times = np.asarray(times, dtype=float)
         arc_length = self.speed * (times - self.start_time)
         exists = (arc_length >= 0.0) & (arc_length <= self.path.length)
-        positions, tangents, _ = self.path.sample(arc_length)
+        positions, tangents, _ = self.sailed_path.sample(arc_length)
         positions[~exists] = np.nan
         velocities = self.speed * tangents
         velocities[~exists] = np.nan
@@ -57,14 +100,15 @@ class PathMotion:
 
     def turn_rates(self, times) -> np.ndarray:
         times = np.asarray(times, dtype=float)
-        _, _, curvatures = self.path.sample(self.speed * (times - self.start_time))
+        _, _, curvatures = self.sailed_path.sample(self.speed * (times - self.start_time))
         return self.speed * curvatures
 
 
 @dataclass(frozen=True)
 class FormationMotion:
     """Rigid formation: a fixed offset in the leader's body frame (x ahead, y to port);
-    heading equal to the leader's."""
+    heading equal to the leader's. Its velocity is continuous because the leader's turn
+    rate is."""
 
     leader: PathMotion
     body_offset: tuple[float, float]
@@ -90,20 +134,29 @@ class FormationMotion:
 @dataclass(frozen=True)
 class WeaveMotion:
     """Constant progress along a :class:`Path` while weaving sinusoidally across it:
-    lateral offset ``amplitude · sin(2π (t − start_time) / period)`` (positive to port)."""
+    lateral offset ``amplitude · sin(2π (t − start_time) / period)`` (positive to port).
+    The path's turn rate ramps over ``turn_rate_ramp`` s at each join, as
+    :class:`PathMotion`'s does, so the progress speed ``speed · (1 − offset · κ)`` is
+    continuous."""
 
     path: Path
     speed: float
     amplitude: float
     period: float
     start_time: float = 0.0
+    turn_rate_ramp: float = TURN_RATE_RAMP_TIME
+
+    @cached_property
+    def sailed_path(self) -> Path:
+        """:attr:`path` with clothoid transitions ``speed · turn_rate_ramp`` long."""
+        return self.path.with_turn_transitions(self.speed * self.turn_rate_ramp)
 
     def sample(self, times) -> MotionSample:
         times = np.asarray(times, dtype=float)
         elapsed = times - self.start_time
         arc_length = self.speed * elapsed
         exists = (arc_length >= 0.0) & (arc_length <= self.path.length)
-        centres, tangents, curvatures = self.path.sample(arc_length)
+        centres, tangents, curvatures = self.sailed_path.sample(arc_length)
         normals = np.column_stack([-tangents[:, 1], tangents[:, 0]])
         phase = TWO_PI * elapsed / self.period
         offset = self.amplitude * np.sin(phase)

@@ -1,9 +1,18 @@
-"""Paths of the simulated vessels: straight legs joined by constant-radius turns.
+"""Paths of the simulated vessels: straight legs joined by constant-radius turns, and
+the same paths as a vessel sails them, with clothoid transitions into and out of turns.
 
-A :class:`Path` is a C¹ curve (position and tangent continuous) parameterised by arc
-length; :class:`PathBuilder` lays one out turtle-style (``straight``, ``turn``,
-``head_to`` a waypoint) and :func:`tangent_point` finds where a leg meets a circle
-tangentially. How a vessel moves along a path is :mod:`.motion`'s business.
+A :class:`Path` is parameterised by arc length. :class:`PathBuilder` lays one out
+turtle-style (``straight``, ``turn``, ``head_to`` a waypoint) and :func:`tangent_point`
+finds where a leg meets a circle tangentially. Such a designed path is C¹ (position and
+tangent continuous), but its curvature steps at every join of a leg and a turn.
+
+:meth:`Path.with_turn_transitions` makes it C²: the curvature ramps linearly over a given
+length centred on each join where it steps (an Euler spiral, or clothoid, the transition
+curve of road and railway design). :mod:`.motion` sails every path that way and says why.
+A transition is the box average of the designed curvature, so outside the transitions
+the heading is exactly as designed; inside one the vessel starts turning half a
+transition early and turns more gently, which moves the rest of the path sideways by
+about Δκ·L²/24 (Δκ the curvature step, L the transition length) per join.
 """
 
 from __future__ import annotations
@@ -17,6 +26,12 @@ import numpy as np
 from .geometry import TWO_PI, wrap_angle
 
 __all__ = ["Path", "PathBuilder", "tangent_point"]
+
+# Gauss–Legendre quadrature of a clothoid's position: with 16 nodes it is exact to
+# rounding while the heading turns by less than about a radian over the piece, so
+# longer transition pieces are split.
+_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(16)
+_MAX_PIECE_TURN = 1.0
 
 
 class _Line(NamedTuple):
@@ -33,10 +48,55 @@ class _Arc(NamedTuple):
     length: float
 
 
-class Path:
-    """A C¹ curve of straight legs and circular arcs, parameterised by arc length."""
+class _Clothoid(NamedTuple):
+    start: np.ndarray
+    heading: float  # at the start
+    curvature: float  # signed, at the start
+    curvature_rate: float  # d curvature / d arc length
+    length: float
 
-    def __init__(self, segments: Sequence[_Line | _Arc]):
+
+def _evaluate(segment, along: np.ndarray):
+    """Positions (M, 2), unit tangents (M, 2) and signed curvatures (M,) at ``along``
+    (M,) metres into one segment."""
+    if isinstance(segment, _Line):
+        positions = segment.start + along[:, None] * segment.direction
+        tangents = np.broadcast_to(segment.direction, positions.shape)
+        return positions, tangents, np.zeros(along.size)
+    if isinstance(segment, _Arc):
+        angle = segment.start_angle + segment.turn_sign * along / segment.radius
+        cos, sin = np.cos(angle), np.sin(angle)
+        positions = segment.centre + segment.radius * np.column_stack([cos, sin])
+        tangents = segment.turn_sign * np.column_stack([-sin, cos])
+        return positions, tangents, np.full(along.size, segment.turn_sign / segment.radius)
+
+    def heading(u):  # quadratic in arc length
+        return segment.heading + u * (segment.curvature + 0.5 * segment.curvature_rate * u)
+
+    # Position = start + ∫ (cos, sin)(heading) du, by quadrature on [0, along].
+    headings = heading(along[:, None] * (0.5 * (_NODES + 1.0)))
+    tangent_sums = np.column_stack([np.cos(headings) @ _WEIGHTS, np.sin(headings) @ _WEIGHTS])
+    positions = segment.start + (0.5 * along)[:, None] * tangent_sums
+    end_heading = heading(along)
+    tangents = np.column_stack([np.cos(end_heading), np.sin(end_heading)])
+    return positions, tangents, segment.curvature + segment.curvature_rate * along
+
+
+def _line_or_arc(start, heading: float, curvature: float, length: float):
+    """The line (curvature 0) or arc starting at ``start`` with this heading."""
+    direction = np.array([math.cos(heading), math.sin(heading)])
+    if curvature == 0.0:
+        return _Line(start, direction, length)
+    sign = 1.0 if curvature > 0 else -1.0
+    radius = 1.0 / abs(curvature)
+    centre = start + sign * radius * np.array([-direction[1], direction[0]])
+    return _Arc(centre, radius, math.atan2(*(start - centre)[::-1]), sign, length)
+
+
+class Path:
+    """A curve of straight legs, circular arcs and clothoids, parameterised by arc length."""
+
+    def __init__(self, segments: Sequence[_Line | _Arc | _Clothoid]):
         if not segments:
             raise ValueError("a path needs at least one segment")
         self._segments = tuple(segments)
@@ -58,19 +118,63 @@ class Path:
         )
         for index, seg in enumerate(self._segments):
             mask = segment_index == index
-            if not mask.any():
-                continue
-            along = s[mask] - self._starts[index]
-            if isinstance(seg, _Line):
-                positions[mask] = seg.start + along[:, None] * seg.direction
-                tangents[mask] = seg.direction
-            else:
-                angle = seg.start_angle + seg.turn_sign * along / seg.radius
-                cos, sin = np.cos(angle), np.sin(angle)
-                positions[mask] = seg.centre + seg.radius * np.column_stack([cos, sin])
-                tangents[mask] = seg.turn_sign * np.column_stack([-sin, cos])
-                curvatures[mask] = seg.turn_sign / seg.radius
+            if mask.any():
+                positions[mask], tangents[mask], curvatures[mask] = _evaluate(
+                    seg, s[mask] - self._starts[index]
+                )
         return positions, tangents, curvatures
+
+    def with_turn_transitions(self, length: float) -> Path:
+        """This path with its curvature ramped linearly over ``length`` metres centred on
+        each join where it steps (shorter where a join lies closer than ``length / 2`` to
+        an end of the path, so the path still starts where and as it did). Overlapping
+        ramps add up. ``length`` 0 returns the path itself."""
+        if length < 0:
+            raise ValueError("the transition length must be non-negative")
+        if any(isinstance(seg, _Clothoid) for seg in self._segments):
+            raise ValueError("the path already has transitions")
+        curvatures = np.array(
+            [0.0 if isinstance(seg, _Line) else seg.turn_sign / seg.radius
+             for seg in self._segments]
+        )
+        joins, steps = self._starts[1:-1], np.diff(curvatures)
+        joins, steps = joins[steps != 0.0], steps[steps != 0.0]
+        if length == 0 or joins.size == 0:
+            return self
+        half = np.minimum(0.5 * length, np.minimum(joins, self.length - joins))
+        bounds = np.unique(np.concatenate([[0.0, self.length], joins - half, joins + half]))
+
+        def ramped_curvature(s):  # the box average of the designed curvature
+            ramps = np.clip((s - joins + half) / (2 * half), 0.0, 1.0)
+            return curvatures[0] + float(np.sum(steps * ramps))
+
+        # (length, curvature at its start, curvature rate or None where as designed)
+        pieces = []
+        for lo, hi in zip(bounds[:-1], bounds[1:]):
+            ramps = np.abs(0.5 * (lo + hi) - joins) < half
+            if not ramps.any():
+                index = int(np.searchsorted(self._starts, 0.5 * (lo + hi), side="right") - 1)
+                pieces.append((hi - lo, float(curvatures[index]), None))
+                continue
+            rate = float(np.sum(steps[ramps] / (2 * half[ramps])))
+            start = ramped_curvature(lo)
+            turn = max(abs(start), abs(start + rate * (hi - lo))) * (hi - lo)
+            count = max(1, math.ceil(turn / _MAX_PIECE_TURN))
+            piece = (hi - lo) / count
+            pieces += [(piece, start + rate * i * piece, rate) for i in range(count)]
+
+        position, tangent, _ = _evaluate(self._segments[0], np.zeros(1))
+        position, heading = position[0], math.atan2(tangent[0, 1], tangent[0, 0])
+        segments = []
+        for piece, curvature, rate in pieces:
+            # Transition pieces stay clothoids even where overlapping ramps cancel: an
+            # arc of rounding-error curvature would put its centre at 1e16 m.
+            segment = (_line_or_arc(position, heading, curvature, piece) if rate is None
+                       else _Clothoid(position, heading, curvature, rate, piece))
+            segments.append(segment)
+            position = _evaluate(segment, np.array([piece]))[0][0]
+            heading += piece * (curvature + 0.5 * (rate or 0.0) * piece)
+        return Path(segments)
 
 
 class PathBuilder:
