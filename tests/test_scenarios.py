@@ -564,8 +564,9 @@ def test_formation_and_weave_velocities_are_derivatives_of_positions():
         finite_difference = np.diff(sample.positions, axis=0) / 0.05
         mean_velocity = 0.5 * (sample.velocities[1:] + sample.velocities[:-1])
         errors = np.nan_to_num(np.abs(finite_difference - mean_velocity))
-        # Velocity only jumps where the route's curvature jumps (two instants here).
-        assert np.mean(errors.max(axis=1) < 0.01) > 0.99
+        # The turn rate ramps at the route's two curvature jumps, so nowhere does the
+        # velocity jump (sailing the designed route exactly, it did at those instants).
+        assert errors.max() < 0.01
     formation = FormationMotion(leader, (-6.0, -29.4)).sample(times)
     np.testing.assert_allclose(
         np.hypot(*(formation.positions - leader.sample(times).positions).T), math.hypot(6.0, 29.4)
@@ -587,3 +588,40 @@ def test_static_object_positions_and_custom_layouts():
         d.metadata == {"source": "static", "static_id": "buoy", "area": d.metadata["area"]}
         for d in hits
     )
+
+
+# ---------------------------------------------------------------- independence
+
+
+def test_the_simulator_imports_nothing_it_is_used_to_judge():
+    # The truth must not share code with the context models or the Rust core; the only
+    # ctxmodels import allowed outside the simulation package is the radar's Stone Soup
+    # measurement model (its exact Jacobian).
+    import ast
+    import pathlib
+
+    import ctxmodels.experiment.simulation as simulation
+
+    allowed = {"ctxmodels.stonesoup.measurement"}
+    package = pathlib.Path(simulation.__file__).parent
+    modules = sorted(package.glob("*.py")) + [package.parent / "scenarios.py"]
+    assert len(modules) > 5
+    for module in modules:
+        inside = "ctxmodels.experiment.simulation" if module.parent == package else (
+            "ctxmodels.experiment")
+        for node in ast.walk(ast.parse(module.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = inside.rsplit(".", node.level - 1)[0] if node.level > 1 else inside
+                    name = f"{base}.{node.module}" if node.module else base
+                else:
+                    name = node.module
+                names = [name]
+            elif isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            else:
+                continue
+            for name in names:
+                if name.startswith("ctxmodels"):
+                    assert name.startswith("ctxmodels.experiment.simulation") or name in allowed, (
+                        module.name, name)
