@@ -7,7 +7,7 @@ import pytest
 from ctxmodels.cli import main
 from ctxmodels.experiment.runner import ExperimentConfig, submission_order
 from ctxmodels.experiment.sweep import SweepConfig, run_sweep
-from ctxmodels.experiment.trackers import TRACKERS, applicable
+from ctxmodels.experiment.trackers import DEFAULT_TRACKERS, applicable
 
 
 def test_quick_run_end_to_end(tmp_path, capsys):
@@ -21,10 +21,10 @@ def test_quick_run_end_to_end(tmp_path, capsys):
     assert {f["verdict"] for f in findings} <= {"reproduced", "not reproduced", "inconclusive"}
     assert all(len(f["seeds"]) == 3 for f in findings)
     summary = json.loads((out / "results.json").read_text())
-    assert {row["tracker"] for row in summary["scores"]} == set(TRACKERS)
+    assert {row["tracker"] for row in summary["scores"]} == set(DEFAULT_TRACKERS)
     # One track plot per tracker and scenario, a coverage map per scenario, summaries.
     for scenario in ("mixed-range", "formation", "islands"):
-        for tracker in TRACKERS:
+        for tracker in DEFAULT_TRACKERS:
             if applicable(tracker, scenario):
                 assert (out / f"tracks_{scenario}_{tracker}.png").stat().st_size > 0
         assert (out / f"coverage_{scenario}.png").stat().st_size > 0
