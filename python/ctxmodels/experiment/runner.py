@@ -255,8 +255,10 @@ class _Progress:
             from tqdm import tqdm
         except ImportError:  # tqdm is an optional extra
             return
+        # The mean rate since the start (smoothing 0), not a moving average: the jobs finish
+        # in bursts (a group's short jobs together), which would make the estimate swing.
         self._bar = tqdm(total=round(sum(job_cost(j) for j in jobs), 1), disable=not enabled,
-                         unit="cpu-s", bar_format="{l_bar}{bar}| {postfix} [{elapsed}<{remaining}]")
+                         unit="cpu-s", smoothing=0, bar_format="{l_bar}{bar}| {postfix} [{elapsed}<{remaining}]")
         self._bar.set_postfix_str(f"0/{self._total} runs")
 
     def done(self, job: Job) -> None:
