@@ -123,8 +123,9 @@ class ExperimentResults:
         seeds = self.config.seeds
         lines.append("")
         lines.append(f"Mean [95 % percentile-bootstrap interval] over {len(seeds)} seeds "
-                     f"({seeds[0]}–{seeds[-1]}); {self.config.duration or 'the full'} "
-                     f"{'s ' if self.config.duration else ''}of each scenario; "
+                     f"({seeds[0]}–{seeds[-1]}); "
+                     f"{f'{self.config.duration:g} s' if self.config.duration else 'the whole'} "
+                     f"of each scenario; "
                      f"{'component-path' if self.config.stock else 'array'} trackers.")
         changed = simulation_changes(self.config.radar, self.config.lidar)
         if changed:
