@@ -116,6 +116,21 @@ class SweepResults:
                     values[:, i, j] = (interval.mean, interval.low, interval.high)
         return xs, ys, values[0], values[1], values[2]
 
+    def tracker_scores(self) -> list[dict]:
+        """Per cell and tracker: HOTA, GOSPA (mean over seeds, combined scope where the
+        tracker ran on Scenarios 1 and 2, else its scenario) and tracks per radar scan."""
+        rows = []
+        for cell, results in self.cells.items():
+            counts = {}
+            for row in results.track_counts():
+                counts.setdefault(row["tracker"], []).append(row["mean"])
+            for row in results.scores():
+                scope = next(s for s in results.scopes() if s in row)
+                rows.append({**dataclasses.asdict(cell), "tracker": row["tracker"], "scope": scope,
+                             "hota": row[scope]["hota"].mean, "gospa": row[scope]["gospa"].mean,
+                             "tracks_per_scan": float(np.mean(counts[row["tracker"]]))})
+        return rows
+
     def markdown(self) -> str:
         lines = [f"Sensitivity sweep: {len(self.cells)} simulated-sensor settings × "
                  f"{len(self.config.base.seeds)} seeds; paired differences (positive supports "
@@ -131,6 +146,14 @@ class SweepResults:
                     f"| {finding.short} | {cell.far_clutter:g} | {cell.bearing_std_deg:g} | "
                     f"{cell.lidar_clutter:g} | {_cell(result.hota)} | {_cell(result.gospa)} | "
                     f"{result.verdict} |")
+        lines += ["", "Scores per setting (mean over seeds; S1+S2 combined where the tracker "
+                  "ran there) and tracks per radar scan (mean over scenarios):", "",
+                  "| far clutter /scan | bearing σ (°) | lidar clutter /scan | tracker | scope | "
+                  "HOTA (%) | GOSPA (m) | tracks per scan |", "|---|---|---|---|---|---|---|---|"]
+        for row in self.tracker_scores():
+            lines.append(f"| {row['far_clutter']:g} | {row['bearing_std_deg']:g} | "
+                         f"{row['lidar_clutter']:g} | {row['tracker']} | {row['scope']} | "
+                         f"{row['hota']:.1f} | {row['gospa']:.1f} | {row['tracks_per_scan']:.1f} |")
         return "\n".join(lines)
 
     def save(self, folder: str | Path, plots: bool = True) -> dict[str, Path]:
@@ -144,7 +167,7 @@ class SweepResults:
         write_atomic(paths["markdown"], self.markdown() + "\n")
         write_atomic(paths["json"], json.dumps(
             {"seeds": list(self.config.base.seeds), "duration": self.config.base.duration,
-             "cells": rows}, indent=2, default=float))
+             "cells": rows, "scores": self.tracker_scores()}, indent=2, default=float))
         if plots:
             paths.update(self._plot(folder))
         return paths
