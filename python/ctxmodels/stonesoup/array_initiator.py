@@ -55,8 +55,8 @@ from .fast_association import (
     _copied_properties,
     _measurement_prediction,
     _weaken_prior_chain,
-    screen_pairs,
 )
+from .initiator_arrays import screen
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator
 from .ordering import OrderedDetections, in_stable_order, in_track_order
@@ -85,12 +85,6 @@ def _inverse_bearing_range(model, detections) -> list:
         vectors.append(res)
     return vectors
 
-
-def _screen(batch, dets, missed_distance: float, squared: bool) -> np.ndarray:
-    """:func:`~ctxmodels.stonesoup.fast_association.screen_pairs` with LU inverses of the
-    innovation covariances (cheaper than pseudo-inverses; the 1e-6 relative margin covers
-    the difference many times over)."""
-    return screen_pairs(batch, dets, missed_distance, squared, invert=np.linalg.inv)
 
 #: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
 _UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(
@@ -436,7 +430,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 if hypothesiser.include_all:
                     candidates = np.ones((n, len(members)), dtype=bool)
                 else:
-                    candidates = _screen(batch, group_dets, float(missed_distance), squared)
+                    candidates = screen(batch, group_dets, float(missed_distance), squared)
                 rows, cols = np.nonzero(candidates)
                 if not rows.size:
                     continue

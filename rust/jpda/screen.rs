@@ -1,0 +1,181 @@
+//! Conservative gate screening of track × detection pairs for the M-of-N initiator
+//! (`ctxmodels.stonesoup.array_initiator`): which pairs *may* pass a Mahalanobis gate.
+//!
+//! For predicted measurements `ẑ_n` with innovation covariances `S_n` and detections `z_k`,
+//! the pair `(n, k)` is kept unless `d² − margin·Σ|terms| > threshold`, where `δ = −(z_k − ẑ_n)`
+//! (a row marked in `wrap` is wrapped to `[−π, π)` by Stone Soup's `mod_bearing` after the
+//! difference and again after the negation, as `Bearing` arithmetic wraps it),
+//! `terms_ij = δ_i (S_n⁻¹)_ij δ_j` and `d² = Σ terms`. The exact distances are computed
+//! afterwards by the caller for the kept pairs only; the relative `margin` covers the
+//! rounding difference between this inverse (LU with partial pivoting) and the caller's. A
+//! singular `S_n` keeps the whole row, and NaN never excludes a pair (the caller decides).
+//!
+//! The result does not depend on anything but the inputs (one thread, index order).
+
+use super::measurement::mod_bearing;
+use super::{too_large, try_filled};
+use crate::error::{ModelError, Result};
+use nalgebra::DMatrix;
+
+/// One screening problem (row-major slices): `N = means.len() / m` predicted measurements,
+/// `K = detections.len() / m` detections.
+#[derive(Debug, Clone, Copy)]
+pub struct ScreenInput<'a> {
+    /// Measurement dimension m.
+    pub ndim_meas: usize,
+    /// Predicted measurements, N×m.
+    pub means: &'a [f64],
+    /// Innovation covariances, N×m×m.
+    pub covars: &'a [f64],
+    /// Detections, K×m.
+    pub detections: &'a [f64],
+    /// K×m: whether element `(k, i)` of `z_k − ẑ_n` is a bearing (wrapped).
+    pub wrap: &'a [bool],
+    /// The gate on the squared distance.
+    pub threshold: f64,
+    /// Relative margin on `Σ|terms|`.
+    pub margin: f64,
+}
+
+/// The `N×K` mask (row-major) of the pairs that may pass the gate.
+pub fn screen_pairs(input: &ScreenInput) -> Result<Vec<bool>> {
+    let m = input.ndim_meas;
+    if m == 0 {
+        return Err(ModelError::shape("means", "measurements must have at least one dimension"));
+    }
+    if !input.means.len().is_multiple_of(m) || !input.detections.len().is_multiple_of(m) {
+        return Err(ModelError::shape("means", format!("means and detections must have {m} columns")));
+    }
+    let n = input.means.len() / m;
+    let k = input.detections.len() / m;
+    if input.covars.len() != n * m * m {
+        return Err(ModelError::shape("covars", format!("must be ({n}, {m}, {m}), got {} values", input.covars.len())));
+    }
+    if input.wrap.len() != k * m {
+        return Err(ModelError::shape("wrap", format!("must be ({k}, {m}), got {} values", input.wrap.len())));
+    }
+    let mut out = try_filled(n.checked_mul(k), true).ok_or_else(|| too_large(n, k))?;
+    let mut delta = vec![0.0; m];
+    for row in 0..n {
+        let s = DMatrix::from_row_slice(m, m, &input.covars[row * m * m..(row + 1) * m * m]);
+        let Some(inverse) = s.lu().try_inverse() else {
+            continue; // singular: every pair of the row stays a candidate
+        };
+        let zhat = &input.means[row * m..(row + 1) * m];
+        for col in 0..k {
+            let z = &input.detections[col * m..(col + 1) * m];
+            let wrap = &input.wrap[col * m..(col + 1) * m];
+            for i in 0..m {
+                let mut d = z[i] - zhat[i];
+                if wrap[i] {
+                    d = mod_bearing(d);
+                }
+                d = -d;
+                if wrap[i] {
+                    d = mod_bearing(d);
+                }
+                delta[i] = d;
+            }
+            let (mut d2, mut magnitude) = (0.0, 0.0);
+            for i in 0..m {
+                for j in 0..m {
+                    let term = delta[i] * inverse[(i, j)] * delta[j];
+                    d2 += term;
+                    magnitude += term.abs();
+                }
+            }
+            // NaN compares false: the pair stays a candidate
+            out[row * k + col] = !(d2 - input.margin * magnitude > input.threshold);
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    fn input<'a>(means: &'a [f64], covars: &'a [f64], dets: &'a [f64], wrap: &'a [bool], threshold: f64) -> ScreenInput<'a> {
+        ScreenInput { ndim_meas: 2, means, covars, detections: dets, wrap, threshold, margin: 1e-6 }
+    }
+
+    #[test]
+    fn keeps_the_pairs_within_the_gate() {
+        // S = diag(1, 4): d² of (1, 2) is 1 + 1 = 2
+        let means = [0.0, 0.0, 10.0, 10.0];
+        let covars = [1.0, 0.0, 0.0, 4.0, 1.0, 0.0, 0.0, 4.0];
+        let dets = [1.0, 2.0, 10.0, 10.0, 3.0, 0.0];
+        let wrap = [false; 6];
+        let out = screen_pairs(&input(&means, &covars, &dets, &wrap, 2.5)).unwrap();
+        assert_eq!(out, vec![true, false, false, false, true, false]);
+        // exactly at the gate: the margin keeps it
+        let out = screen_pairs(&input(&means, &covars, &dets, &wrap, 2.0 - 1e-9)).unwrap();
+        assert!(out[0]);
+    }
+
+    #[test]
+    fn equals_an_exact_evaluation_away_from_the_margin() {
+        let (n, k) = (7usize, 5usize);
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64) / ((1u64 << 53) as f64)
+        };
+        let means: Vec<f64> = (0..n * 2).map(|_| next() * 6.0 - 3.0).collect();
+        let mut covars = Vec::new();
+        for _ in 0..n {
+            let (a, b, c) = (next() + 0.1, next() - 0.5, next() + 0.1);
+            // S = L Lᵀ with L = [[a, 0], [b, c]]
+            covars.extend([a * a, a * b, a * b, b * b + c * c]);
+        }
+        let dets: Vec<f64> = (0..k * 2).map(|_| next() * 6.0 - 3.0).collect();
+        let wrap: Vec<bool> = (0..k * 2).map(|i| i % 2 == 0).collect();
+        let out = screen_pairs(&input(&means, &covars, &dets, &wrap, 9.0)).unwrap();
+        for row in 0..n {
+            let s = &covars[row * 4..row * 4 + 4];
+            let det = s[0] * s[3] - s[1] * s[2];
+            for col in 0..k {
+                let mut d = [dets[col * 2] - means[row * 2], dets[col * 2 + 1] - means[row * 2 + 1]];
+                d[0] = mod_bearing(-mod_bearing(d[0]));
+                d[1] = -d[1];
+                let d2 = (d[0] * d[0] * s[3] - 2.0 * d[0] * d[1] * s[1] + d[1] * d[1] * s[0]) / det;
+                if (d2 - 9.0).abs() > 1e-6 * (1.0 + d2) {
+                    assert_eq!(out[row * k + col], d2 <= 9.0, "pair ({row}, {col}): d² = {d2}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn wraps_bearings() {
+        // bearing difference 2π − 0.2 wraps to −0.2: within the gate
+        let means = [PI - 0.1, 5.0];
+        let covars = [1.0, 0.0, 0.0, 1.0];
+        let dets = [-PI + 0.1, 5.0];
+        let out = screen_pairs(&input(&means, &covars, &dets, &[true, false], 1.0)).unwrap();
+        assert_eq!(out, vec![true]);
+        let out = screen_pairs(&input(&means, &covars, &dets, &[false, false], 1.0)).unwrap();
+        assert_eq!(out, vec![false]);
+    }
+
+    #[test]
+    fn singular_rows_and_nan_stay_candidates() {
+        let means = [0.0, 0.0, 0.0, 0.0, f64::NAN, 0.0];
+        let covars = [1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0];
+        let dets = [100.0, 100.0];
+        let out = screen_pairs(&input(&means, &covars, &dets, &[false, false], 1.0)).unwrap();
+        assert_eq!(out, vec![true, false, true]);
+    }
+
+    #[test]
+    fn bad_shapes_are_errors_and_empty_inputs_are_fine() {
+        assert!(screen_pairs(&input(&[0.0, 0.0], &[1.0], &[], &[], 1.0)).is_err());
+        assert!(screen_pairs(&input(&[0.0, 0.0], &[1.0, 0.0, 0.0, 1.0], &[0.0, 0.0], &[false], 1.0)).is_err());
+        assert!(screen_pairs(&input(&[0.0], &[1.0, 0.0, 0.0, 1.0], &[], &[], 1.0)).is_err());
+        let bad = ScreenInput { ndim_meas: 0, means: &[], covars: &[], detections: &[], wrap: &[], threshold: 1.0, margin: 0.0 };
+        assert!(screen_pairs(&bad).is_err());
+        assert_eq!(screen_pairs(&input(&[], &[], &[0.0, 0.0], &[false, false], 1.0)).unwrap(), Vec::<bool>::new());
+        assert_eq!(screen_pairs(&input(&[0.0, 0.0], &[1.0, 0.0, 0.0, 1.0], &[], &[], 1.0)).unwrap(), Vec::<bool>::new());
+    }
+}

@@ -1,0 +1,101 @@
+"""The array helpers of the M-of-N initiator (``ctxmodels.stonesoup.initiator_arrays``)
+against their reference computations: the core's gate screen against the NumPy screen
+(``fast_association.screen_pairs``) and the exact stock distances; its input errors."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from stonesoup.measures import Mahalanobis, SquaredMahalanobis
+from stonesoup.models.measurement.linear import LinearGaussian
+from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
+from stonesoup.types.detection import Detection
+from stonesoup.types.array import CovarianceMatrix, StateVector
+from stonesoup.types.angle import Bearing
+from stonesoup.updater.kalman import ExtendedKalmanUpdater
+
+from ctxmodels import _core
+from ctxmodels.stonesoup import initiator_arrays
+from ctxmodels.stonesoup.fast import measurement_batch
+from ctxmodels.stonesoup.fast_association import SCREEN_MARGIN, screen_pairs
+
+LIDAR = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.diag([4.0, 9.0]))
+RADAR = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.diag([1e-3, 4.0]),
+                                translation_offset=StateVector([10.0, -5.0]))
+
+
+def _states(rng, count):
+    means = rng.normal(0.0, 50.0, size=(count, 4, 1))
+    a = rng.normal(size=(count, 4, 4)) * rng.lognormal(0.0, 1.5, size=(count, 1, 1))
+    covars = a @ a.transpose(0, 2, 1) + np.eye(4)
+    return means, covars
+
+
+def _detections(rng, model, count):
+    if model is RADAR:
+        return [Detection(StateVector([Bearing(rng.uniform(-np.pi, np.pi)),
+                                       rng.uniform(1.0, 120.0)]), measurement_model=model)
+                for _ in range(count)]
+    return [Detection(StateVector(rng.normal(0.0, 60.0, size=(2, 1))), measurement_model=model)
+            for _ in range(count)]
+
+
+@pytest.mark.parametrize("model", [LIDAR, RADAR])
+@pytest.mark.parametrize("squared", [False, True])
+def test_screen_equals_the_numpy_screen_and_keeps_every_passing_pair(model, squared):
+    rng = np.random.default_rng(3)
+    updater = ExtendedKalmanUpdater(None)
+    for _ in range(20):
+        means, covars = _states(rng, 30)
+        batch = measurement_batch(updater, model, means, covars)
+        dets = _detections(rng, model, 12)
+        gate = float(rng.uniform(1.0, 40.0))
+        ours = initiator_arrays.screen(batch, dets, gate, squared)
+        numpy_screen = screen_pairs(batch, dets, gate, squared, invert=np.linalg.inv)
+        assert np.array_equal(ours, numpy_screen)
+        measure = SquaredMahalanobis() if squared else Mahalanobis()
+        passing = 0
+        for n in range(len(means)):
+            mp = batch.measurement_prediction(n, None)
+            for k, det in enumerate(dets):
+                if measure(mp, det) < gate:  # the stock gate
+                    assert ours[n, k]
+                    passing += 1
+        assert passing <= ours.sum()
+
+
+def test_screen_corner_cases():
+    rng = np.random.default_rng(4)
+    means, covars = _states(rng, 3)
+    batch = measurement_batch(ExtendedKalmanUpdater(None), LIDAR, means, covars)
+    dets = _detections(rng, LIDAR, 4) + [Detection(StateVector([np.nan, 0.0]),
+                                                   measurement_model=LIDAR)]
+    screen = initiator_arrays.screen(batch, dets, 1e-3, False)
+    assert screen[:, -1].all() and not screen[:, :-1].any()
+    for gate in (0.0, -1.0, float("nan")):
+        assert not initiator_arrays.screen(batch, dets, gate, False).any()
+    assert initiator_arrays.screen(batch, dets, 1e12, True).all()
+    assert initiator_arrays.screen(batch, [], 10.0, False).shape == (3, 0)
+
+
+def test_jpda_screen_input_errors():
+    means, covars = np.zeros((2, 2)), np.stack([np.eye(2)] * 2)
+    z, wrap = np.zeros((3, 2)), np.zeros((3, 2), dtype=bool)
+    assert _core.jpda_screen(means, covars, z, wrap, 1.0, SCREEN_MARGIN).all()
+    for args, argument in [
+        ((means, np.zeros((2, 2, 3)), z, wrap, 1.0, 0.0), "covars"),
+        ((means, covars, np.zeros((3, 3)), wrap, 1.0, 0.0), "detections"),
+        ((means, covars, z, np.zeros((2, 2), dtype=bool), 1.0, 0.0), "wrap"),
+        ((means, covars, z, wrap, 1.0, -1.0), "margin"),
+        ((means, covars, z, wrap, 1.0, float("nan")), "margin"),
+        ((np.asfortranarray(np.zeros((2, 3)))[:, :2], covars, z, wrap, 1.0, 0.0), "means"),
+    ]:
+        with pytest.raises(ValueError, match=f"^{argument}"):
+            _core.jpda_screen(*args)
+    with pytest.raises(TypeError):
+        _core.jpda_screen(means, covars, z, wrap.astype(np.int64), 1.0, 0.0)
+    # a singular innovation covariance keeps its row; NaN stays a candidate
+    singular = np.stack([np.ones((2, 2)), np.eye(2)])
+    far = np.full((1, 2), 1e6)
+    out = _core.jpda_screen(np.array([[0.0, 0.0], [np.nan, 0.0]]), singular, far,
+                            np.zeros((1, 2), dtype=bool), 1.0, SCREEN_MARGIN)
+    assert out.tolist() == [[True], [True]]
