@@ -3,6 +3,8 @@ against their reference computations: the core's gate screen against the NumPy s
 (``fast_association.screen_pairs``) and the exact stock distances; its input errors."""
 from __future__ import annotations
 
+import datetime
+
 import numpy as np
 import pytest
 from stonesoup.measures import Mahalanobis, SquaredMahalanobis
@@ -11,6 +13,12 @@ from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.detection import Detection
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.angle import Bearing
+from stonesoup.models.transition.linear import (CombinedLinearGaussianTransitionModel,
+                                                ConstantVelocity)
+from stonesoup.predictor.kalman import KalmanPredictor
+from stonesoup.types.hypothesis import SingleHypothesis
+from stonesoup.types.prediction import GaussianStatePrediction
+from stonesoup.types.state import GaussianState
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from ctxmodels import _core
@@ -18,6 +26,7 @@ from ctxmodels.stonesoup import initiator_arrays
 from ctxmodels.stonesoup.fast import measurement_batch
 from ctxmodels.stonesoup.fast_association import SCREEN_MARGIN, screen_pairs
 
+START = datetime.datetime(2024, 1, 1)
 LIDAR = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.diag([4.0, 9.0]))
 RADAR = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.diag([1e-3, 4.0]),
                                 translation_offset=StateVector([10.0, -5.0]))
@@ -99,3 +108,50 @@ def test_jpda_screen_input_errors():
     out = _core.jpda_screen(np.array([[0.0, 0.0], [np.nan, 0.0]]), singular, far,
                             np.zeros((1, 2), dtype=bool), 1.0, SCREEN_MARGIN)
     assert out.tolist() == [[True], [True]]
+
+
+def _prior(rng, seconds):
+    means, covars = _states(rng, 1)
+    return GaussianState(StateVector(means[0]), CovarianceMatrix(covars[0]),
+                         timestamp=START + datetime.timedelta(seconds=seconds))
+
+
+def test_predict_rows_equals_the_stock_predictor_bit_for_bit():
+    rng = np.random.default_rng(5)
+    model = CombinedLinearGaussianTransitionModel([ConstantVelocity(0.5), ConstantVelocity(0.5)])
+    predictor = KalmanPredictor(model)
+    terms = initiator_arrays.ControlTerms()
+    now = START + datetime.timedelta(seconds=3)
+    for times in ([1.0] * 6, [1.0, 2.5, 1.0, 0.5, 2.5, 2.9]):
+        priors = [_prior(rng, t) for t in times]
+        means = np.array([p.state_vector for p in priors])
+        covars = np.array([p.covar for p in priors])
+        for _ in range(2):  # the second time from the control terms' cache
+            pred_means, pred_covars = initiator_arrays.predict_rows(
+                predictor, terms, priors.__getitem__, means, covars,
+                [p.timestamp for p in priors], now)
+            for prior, mean, covar in zip(priors, pred_means, pred_covars):
+                stock = predictor.predict(prior, timestamp=now)
+                assert np.asarray(stock.state_vector).tobytes() == mean.tobytes()
+                assert np.asarray(stock.covar).tobytes() == covar.tobytes()
+
+
+@pytest.mark.parametrize("symmetric", [False, True])
+def test_kalman_updates_equal_the_stock_updater_bit_for_bit(symmetric):
+    rng = np.random.default_rng(6)
+    updater = ExtendedKalmanUpdater(LIDAR, force_symmetric_covariance=symmetric)
+    hypotheses = []
+    for _ in range(9):
+        prior = _prior(rng, 0.0)
+        prediction = GaussianStatePrediction(prior.state_vector, prior.covar,
+                                             timestamp=prior.timestamp)
+        mp = updater.predict_measurement(prediction, LIDAR)
+        detection, = _detections(rng, LIDAR, 1)
+        hypotheses.append(SingleHypothesis(prediction, detection, mp))
+    means, covars = initiator_arrays.kalman_updates(
+        [h.prediction for h in hypotheses], [h.measurement_prediction for h in hypotheses],
+        [h.measurement for h in hypotheses], symmetric)
+    for hypothesis, mean, covar in zip(hypotheses, means, covars):
+        stock = updater.update(hypothesis)
+        assert np.asarray(stock.state_vector).tobytes() == mean.tobytes()
+        assert np.asarray(stock.covar).tobytes() == covar.tobytes()

@@ -56,7 +56,7 @@ from .fast_association import (
     _measurement_prediction,
     _weaken_prior_chain,
 )
-from .initiator_arrays import screen
+from .initiator_arrays import ControlTerms, kalman_updates, predict_rows, screen
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator
 from .ordering import OrderedDetections, in_stable_order, in_track_order
@@ -85,6 +85,10 @@ def _inverse_bearing_range(model, detections) -> list:
         vectors.append(res)
     return vectors
 
+
+#: A hypothesis as the distance hypothesiser builds it.
+_DISTANCE_HYPOTHESIS = ObjectFactory(SingleDistanceHypothesis, dict(
+    prediction=None, measurement=None, distance=0.0, measurement_prediction=None))
 
 #: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
 _UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(
@@ -138,6 +142,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._blocks: dict[int, _Block] = {}
         self._next_block = 0
         self._linear_cache: dict = {}
+        self._control_terms = ControlTerms()
         self.array_calls = 0
         self.component_calls = 0
 
@@ -367,27 +372,6 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 tracks.add(Track([state]))
         return tracks
 
-    def _update(self, hypothesis):
-        """``self.updater.update(hypothesis)``: for float vectors under a Kalman updater
-        without covariance options, the same NumPy expressions without the updater's
-        per-call machinery (the same numbers, bit for bit)."""
-        updater = self.updater
-        mp, measurement = hypothesis.measurement_prediction, hypothesis.measurement
-        if (type(updater) not in KALMAN_UPDATERS or updater.use_joseph_cov
-                or updater.force_positive_definite_covariance
-                or mp.state_vector.dtype != np.float64
-                or measurement.state_vector.dtype != np.float64):
-            return updater.update(hypothesis)
-        prediction = hypothesis.prediction
-        gain = mp.cross_covar @ np.linalg.inv(mp.covar)
-        covar = prediction.covar - gain @ mp.covar @ gain.T
-        if updater.force_symmetric_covariance:  # (P + Pᵀ)/2 on the plain array: the same
-            plain = np.asarray(covar)              # numbers, without the ufunc wrapper
-            covar = (plain + plain.T) / 2
-        mean = prediction.state_vector + gain @ (measurement.state_vector - mp.state_vector)
-        return _UPDATE_STATE(state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
-                             hypothesis=hypothesis, timestamp=measurement.timestamp)
-
     def _associate(self, detections, timestamp):
         """Per holding row: the assigned (detection index, distance, measurement prediction,
         predicted mean, predicted covariance), the string 'missed', or None (no state), as
@@ -397,25 +381,9 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         missed_distance = hypothesiser.missed_distance
         records = self._records
         n = len(records)
-        pred_means = np.empty_like(self._means)
-        pred_covars = np.empty_like(self._covars)
-        groups: dict = {}
-        for k, last in enumerate(self._last_times):
-            groups.setdefault(timestamp - last, []).append(k)
-        model = predictor.transition_model
-        control = predictor.control_model
-        for interval, members in groups.items():
-            idx = np.asarray(members) if len(members) < n else slice(None)
-            prior = records[members[0]].track.state
-            matrix = np.asarray(model.matrix(time_interval=interval), dtype=np.float64)
-            offset = control.function(None, prior=prior, time_interval=interval)
-            pred_means[idx] = (matrix[np.newaxis] @ self._means[idx]) \
-                + np.asarray(offset, dtype=np.float64)
-            process = np.asarray(model.covar(time_interval=interval), dtype=np.float64)
-            ctrl = control.matrix(control_input=None, prior=prior, time_interval=interval)
-            ctrl_noise = ctrl @ control.control_noise @ ctrl.T
-            pred_covars[idx] = ((matrix[np.newaxis] @ self._covars[idx]) @ matrix.T[np.newaxis]
-                                + process) + ctrl_noise
+        pred_means, pred_covars = predict_rows(
+            predictor, self._control_terms, lambda k: records[k].track.state, self._means,
+            self._covars, self._last_times, timestamp)
 
         hypotheses: dict[int, list] = {}  # row -> [(column, distance, batch)]
         if detections:
@@ -500,6 +468,11 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                                count=len(records))
         appended = np.ones(len(records), dtype=bool)
         updated = np.zeros(len(records), dtype=bool)
+        updater = self.updater
+        batched = (type(updater) in KALMAN_UPDATERS and not updater.use_joseph_cov
+                   and not updater.force_positive_definite_covariance)
+        pending = []  # float hypotheses, updated together below
+        transition = hypothesiser.predictor.transition_model
         for k, choice in enumerate(assigned):
             if choice is None:  # no hypothesis from the assignment: stock appends nothing
                 block.skipped.add(id(records[k]))
@@ -511,16 +484,32 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 prediction = _PRIOR_PREDICTION(
                     state_vector=pred_means[k].view(StateVector),
                     covar=pred_covars[k].view(CovarianceMatrix), timestamp=timestamp,
-                    transition_model=hypothesiser.predictor.transition_model, prior=None,
+                    transition_model=transition, prior=None,
                     **{name: getattr(record.track.state, name)
                        for name in _copied_properties(type(record.track.state))})
-                state = self._update(SingleDistanceHypothesis(
-                    prediction, detections[column], distance, mp))
-                block.updates[id(record)] = state
-                associated.add(id(detections[column]))
+                detection = detections[column]
+                hypothesis = _DISTANCE_HYPOTHESIS(prediction=prediction, measurement=detection,
+                                                  distance=distance, measurement_prediction=mp)
+                associated.add(id(detection))
                 updated[k] = True
+                if batched and mp.state_vector.dtype == np.float64 \
+                        and detection.state_vector.dtype == np.float64:
+                    pending.append((k, hypothesis))
+                    continue
+                state = updater.update(hypothesis)
+                block.updates[id(record)] = state
                 means[k] = np.asarray(state.state_vector, dtype=np.float64)
                 covars[k] = np.asarray(state.covar, dtype=np.float64)
+        if pending:
+            hypotheses = [h for _, h in pending]
+            new_means, new_covars = kalman_updates(
+                [h.prediction for h in hypotheses], [h.measurement_prediction for h in hypotheses],
+                [h.measurement for h in hypotheses], bool(updater.force_symmetric_covariance))
+            for (k, hypothesis), mean, covar in zip(pending, new_means, new_covars):
+                block.updates[id(records[k])] = _UPDATE_STATE(
+                    state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
+                    hypothesis=hypothesis, timestamp=hypothesis.measurement.timestamp)
+                means[k], covars[k] = mean, covar
         # points: updates (and predictions unless updates_only); the deleter's count of
         # distinct times: reset by a detection, one more for each new time
         self._counted += updated if self.updates_only else appended

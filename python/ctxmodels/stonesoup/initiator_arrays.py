@@ -5,6 +5,7 @@ Stone Soup computations they replace.
 from __future__ import annotations
 
 import numpy as np
+from stonesoup.models.control.linear import LinearControlModel
 from stonesoup.types.angle import Bearing
 
 from .. import _core
@@ -41,3 +42,79 @@ def screen(batch, dets, missed_distance: float, squared: bool) -> np.ndarray:
         wrap[mask, row] = True
     return _core.jpda_screen(np.ascontiguousarray(batch.means), np.ascontiguousarray(batch.covars),
                              np.ascontiguousarray(z), wrap, float(threshold), SCREEN_MARGIN)
+
+
+class ControlTerms:
+    """The control model's contribution to a Kalman prediction (the offset
+    ``control.function(None, …)`` and the noise ``B Q_u Bᵀ``), as the predictor computes
+    them, memoised per time interval for the stock :class:`LinearControlModel` (whose
+    matrix and noise do not depend on the prior; the models are immutable, as the cached
+    transition model assumes); any other control model is called every time."""
+
+    def __init__(self):
+        self._cache: dict = {}
+
+    def __call__(self, control, prior, interval):
+        cacheable = type(control) is LinearControlModel
+        if cacheable:
+            key = (id(control), id(control.control_matrix), id(control.control_noise), interval)
+            found = self._cache.get(key)
+            if found is not None and found[0] is control:
+                return found[1], found[2]
+        offset = control.function(None, prior=prior, time_interval=interval)
+        ctrl = control.matrix(control_input=None, prior=prior, time_interval=interval)
+        noise = ctrl @ control.control_noise @ ctrl.T
+        if cacheable:
+            if len(self._cache) >= 256:
+                self._cache.clear()
+            self._cache[key] = (control, offset, noise)
+        return offset, noise
+
+
+def predict_rows(predictor, control_terms, priors, means, covars, last_times, timestamp):
+    """Kalman prediction of the rows ``means`` (H, D, 1) / ``covars`` (H, D, D), last
+    updated at ``last_times``, to ``timestamp``: per distinct interval, the predictor's
+    ``(F x) + B u`` and ``((F P) Fᵀ + Q) + B Q_u Bᵀ`` (row by row the stock products).
+    ``priors(k)`` is row k's last state (the control model's ``prior``)."""
+    n = len(last_times)
+    pred_means = np.empty_like(means)
+    pred_covars = np.empty_like(covars)
+    if n and last_times.count(last_times[0]) == n:  # one interval (the usual case)
+        groups = {timestamp - last_times[0]: None}
+    else:
+        groups = {}
+        for k, last in enumerate(last_times):
+            groups.setdefault(timestamp - last, []).append(k)
+    model = predictor.transition_model
+    control = predictor.control_model
+    for interval, members in groups.items():
+        if members is None or len(members) == n:
+            idx, first = slice(None), 0
+        else:
+            idx, first = np.asarray(members), members[0]
+        matrix = np.asarray(model.matrix(time_interval=interval), dtype=np.float64)
+        offset, ctrl_noise = control_terms(control, priors(first), interval)
+        pred_means[idx] = (matrix[np.newaxis] @ means[idx]) + np.asarray(offset, dtype=np.float64)
+        process = np.asarray(model.covar(time_interval=interval), dtype=np.float64)
+        pred_covars[idx] = ((matrix[np.newaxis] @ covars[idx]) @ matrix.T[np.newaxis]
+                            + process) + ctrl_noise
+    return pred_means, pred_covars
+
+
+def kalman_updates(predictions, measurement_predictions, measurements, symmetric: bool):
+    """The Kalman updater's posterior ``(means (U, D, 1), covars (U, D, D))`` of U float
+    hypotheses at once: row by row the stock expressions ``K = C S⁻¹``,
+    ``P − (K S) Kᵀ`` (then ``(P + Pᵀ)/2`` if ``symmetric``) and ``x + K (z − ẑ)`` (stacked
+    products and inverses compute each matrix as the single ones do)."""
+    cross = np.array([mp.cross_covar for mp in measurement_predictions], dtype=np.float64)
+    innov = np.array([mp.covar for mp in measurement_predictions], dtype=np.float64)
+    zhat = np.array([mp.state_vector for mp in measurement_predictions], dtype=np.float64)
+    z = np.array([m.state_vector for m in measurements], dtype=np.float64)
+    prior_covars = np.array([p.covar for p in predictions], dtype=np.float64)
+    prior_means = np.array([p.state_vector for p in predictions], dtype=np.float64)
+    gain = cross @ np.linalg.inv(innov)
+    covars = prior_covars - (gain @ innov) @ gain.transpose(0, 2, 1)
+    if symmetric:
+        covars = (covars + covars.transpose(0, 2, 1)) / 2
+    means = prior_means + gain @ (z - zhat)
+    return means, covars
