@@ -150,8 +150,55 @@ def test_kalman_updates_equal_the_stock_updater_bit_for_bit(symmetric):
         hypotheses.append(SingleHypothesis(prediction, detection, mp))
     means, covars = initiator_arrays.kalman_updates(
         [h.prediction for h in hypotheses], [h.measurement_prediction for h in hypotheses],
-        [h.measurement for h in hypotheses], symmetric)
+        [h.measurement for h in hypotheses], [(False, False)] * len(hypotheses), symmetric)
     for hypothesis, mean, covar in zip(hypotheses, means, covars):
         stock = updater.update(hypothesis)
         assert np.asarray(stock.state_vector).tobytes() == mean.tobytes()
         assert np.asarray(stock.covar).tobytes() == covar.tobytes()
+
+
+@pytest.mark.parametrize("analytic", [False, True])
+def test_bearing_range_updates_equal_the_stock_updater_bit_for_bit(analytic):
+    """Typed (Bearing) detections and predicted measurements: the wrapped innovation, as
+    the stock ``z − ẑ`` computes it, near and across ±π."""
+    from ctxmodels.stonesoup.fast import measurement_batch
+    from ctxmodels.stonesoup.measurement import AnalyticCartesianToBearingRange
+    model = RADAR if not analytic else AnalyticCartesianToBearingRange(
+        ndim_state=4, mapping=(0, 2), noise_covar=np.diag([1e-3, 4.0]),
+        translation_offset=StateVector([10.0, -5.0]))
+    rng = np.random.default_rng(7)
+    updater = ExtendedKalmanUpdater(None, force_symmetric_covariance=True)
+    means, covars = _states(rng, 40)
+    means[:20, 0, 0] = -rng.uniform(1.0, 50.0, 20)  # behind the sensor: bearings near ±π
+    means[:20, 2, 0] = -5.0 + rng.normal(0.0, 1e-3, 20)
+    batch = measurement_batch(updater, model, means, covars)
+    hypotheses, wraps = [], []
+    for n in range(len(means)):
+        prediction = GaussianStatePrediction(StateVector(means[n]), CovarianceMatrix(covars[n]),
+                                             timestamp=START)
+        mp = batch.measurement_prediction(n, START)
+        bearing = float(mp.state_vector[0, 0]) + rng.normal(0.0, 0.05)
+        detection = Detection(StateVector([Bearing(bearing), float(mp.state_vector[1, 0]) + 1.0]),
+                              timestamp=START, measurement_model=model)
+        wrap = initiator_arrays.angle_wrap(detection.state_vector, mp.state_vector)
+        assert wrap == (True, False)
+        hypotheses.append(SingleHypothesis(prediction, detection, mp))
+        wraps.append(wrap)
+    means, covars = initiator_arrays.kalman_updates(
+        [h.prediction for h in hypotheses], [h.measurement_prediction for h in hypotheses],
+        [h.measurement for h in hypotheses], wraps, True)
+    for hypothesis, mean, covar in zip(hypotheses, means, covars):
+        stock = updater.update(hypothesis)
+        assert np.asarray(stock.state_vector, dtype=np.float64).tobytes() == mean.tobytes()
+        assert np.asarray(stock.covar).tobytes() == covar.tobytes()
+
+
+def test_angle_wrap_declines_other_typed_arithmetic():
+    from stonesoup.types.angle import Elevation
+    floats = StateVector([1.0, 2.0])
+    assert initiator_arrays.angle_wrap(floats, floats) == (False, False)
+    typed = StateVector([Bearing(1.0), 2.0])
+    assert initiator_arrays.angle_wrap(typed, typed) == (True, False)
+    assert initiator_arrays.angle_wrap(floats, typed) is None  # float − Bearing: __rsub__
+    assert initiator_arrays.angle_wrap(StateVector([Elevation(0.1), 2.0]), typed) is None
+    assert initiator_arrays.angle_wrap(typed, StateVector([Bearing(1.0), 2.0, 3.0])) is None

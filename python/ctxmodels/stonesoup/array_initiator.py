@@ -56,7 +56,7 @@ from .fast_association import (
     _measurement_prediction,
     _weaken_prior_chain,
 )
-from .initiator_arrays import ControlTerms, kalman_updates, predict_rows, screen
+from .initiator_arrays import ControlTerms, angle_wrap, kalman_updates, predict_rows, screen
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator
 from .ordering import OrderedDetections, in_stable_order, in_track_order
@@ -492,20 +492,21 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                                                   distance=distance, measurement_prediction=mp)
                 associated.add(id(detection))
                 updated[k] = True
-                if batched and mp.state_vector.dtype == np.float64 \
-                        and detection.state_vector.dtype == np.float64:
-                    pending.append((k, hypothesis))
+                wrap = angle_wrap(detection.state_vector, mp.state_vector) if batched else None
+                if wrap is not None:
+                    pending.append((k, hypothesis, wrap))
                     continue
                 state = updater.update(hypothesis)
                 block.updates[id(record)] = state
                 means[k] = np.asarray(state.state_vector, dtype=np.float64)
                 covars[k] = np.asarray(state.covar, dtype=np.float64)
         if pending:
-            hypotheses = [h for _, h in pending]
+            hypotheses = [h for _, h, _ in pending]
             new_means, new_covars = kalman_updates(
                 [h.prediction for h in hypotheses], [h.measurement_prediction for h in hypotheses],
-                [h.measurement for h in hypotheses], bool(updater.force_symmetric_covariance))
-            for (k, hypothesis), mean, covar in zip(pending, new_means, new_covars):
+                [h.measurement for h in hypotheses], [w for _, _, w in pending],
+                bool(updater.force_symmetric_covariance))
+            for (k, hypothesis, _), mean, covar in zip(pending, new_means, new_covars):
                 block.updates[id(records[k])] = _UPDATE_STATE(
                     state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
                     hypothesis=hypothesis, timestamp=hypothesis.measurement.timestamp)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 from stonesoup.models.control.linear import LinearControlModel
+from stonesoup.functions import mod_bearing
 from stonesoup.types.angle import Bearing
 
 from .. import _core
@@ -101,11 +102,39 @@ def predict_rows(predictor, control_terms, priors, means, covars, last_times, ti
     return pred_means, pred_covars
 
 
-def kalman_updates(predictions, measurement_predictions, measurements, symmetric: bool):
-    """The Kalman updater's posterior ``(means (U, D, 1), covars (U, D, D))`` of U float
+def angle_wrap(measurement_vector, predicted_vector):
+    """How the stock ``z − ẑ`` of two measurement vectors computes each row, as a tuple of
+    bools (True: a :class:`Bearing` difference, wrapped by ``mod_bearing``; False: a float
+    difference), or None when the typed arithmetic is anything else (the stock updater then
+    runs)."""
+    if measurement_vector.dtype == np.float64 and predicted_vector.dtype == np.float64:
+        return (False,) * len(measurement_vector)
+    if measurement_vector.shape != predicted_vector.shape or measurement_vector.ndim != 2 \
+            or measurement_vector.shape[1] != 1:
+        return None
+    wrap = []
+    for z, zhat in zip(measurement_vector[:, 0].tolist(), predicted_vector[:, 0].tolist()):
+        kinds = (type(z), type(zhat))
+        if kinds == (Bearing, Bearing):
+            wrap.append(True)
+        elif kinds[0] in _FLOATS and kinds[1] in _FLOATS:
+            wrap.append(False)
+        else:
+            return None
+    return tuple(wrap)
+
+
+_FLOATS = (float, np.float64)
+
+
+def kalman_updates(predictions, measurement_predictions, measurements, wraps, symmetric: bool):
+    """The Kalman updater's posterior ``(means (U, D, 1), covars (U, D, D))`` of U
     hypotheses at once: row by row the stock expressions ``K = C S⁻¹``,
     ``P − (K S) Kᵀ`` (then ``(P + Pᵀ)/2`` if ``symmetric``) and ``x + K (z − ẑ)`` (stacked
-    products and inverses compute each matrix as the single ones do)."""
+    products and inverses compute each matrix as the single ones do), where the rows of
+    ``z − ẑ`` marked in ``wraps`` (U tuples from :func:`angle_wrap`) are the wrapped
+    difference of two :class:`Bearing` values, ``mod_bearing(z − ẑ)``, which the stock
+    product then casts to float."""
     cross = np.array([mp.cross_covar for mp in measurement_predictions], dtype=np.float64)
     innov = np.array([mp.covar for mp in measurement_predictions], dtype=np.float64)
     zhat = np.array([mp.state_vector for mp in measurement_predictions], dtype=np.float64)
@@ -116,5 +145,9 @@ def kalman_updates(predictions, measurement_predictions, measurements, symmetric
     covars = prior_covars - (gain @ innov) @ gain.transpose(0, 2, 1)
     if symmetric:
         covars = (covars + covars.transpose(0, 2, 1)) / 2
-    means = prior_means + gain @ (z - zhat)
+    innovation = z - zhat
+    wrap = np.array(wraps, dtype=bool).reshape(innovation.shape)
+    if wrap.any():
+        innovation[wrap] = mod_bearing(innovation[wrap])
+    means = prior_means + gain @ innovation
     return means, covars
