@@ -202,3 +202,29 @@ def test_angle_wrap_declines_other_typed_arithmetic():
     assert initiator_arrays.angle_wrap(floats, typed) is None  # float − Bearing: __rsub__
     assert initiator_arrays.angle_wrap(StateVector([Elevation(0.1), 2.0]), typed) is None
     assert initiator_arrays.angle_wrap(typed, StateVector([Bearing(1.0), 2.0, 3.0])) is None
+
+
+def test_typed_distances_equal_the_stock_measure_bit_for_bit():
+    """Bearing-typed pairs, bearings near and across ±π: the value and the type the stock
+    Mahalanobis measure returns."""
+    rng = np.random.default_rng(9)
+    means, covars = _states(rng, 25)
+    means[:12, 0, 0] = -rng.uniform(1.0, 50.0, 12)  # behind the sensor: bearings near ±π
+    means[:12, 2, 0] = -5.0 + rng.normal(0.0, 1e-3, 12)
+    batch = measurement_batch(ExtendedKalmanUpdater(None), RADAR, means, covars)
+    kinds = (Bearing, float)
+    rows, dets, wraps = [], [], []
+    for n in range(len(means)):
+        for det in _detections(rng, RADAR, 3) + [Detection(StateVector(
+                [Bearing(batch.means[n, 0] + rng.normal(0.0, 0.1)), batch.means[n, 1]]),
+                measurement_model=RADAR)]:
+            rows.append(n)
+            dets.append(det)
+            wraps.append(initiator_arrays.wrap_rows(det.state_vector, kinds))
+    assert all(w == (True, False) for w in wraps)
+    ours = initiator_arrays.typed_distances(batch, rows, dets, wraps)
+    measure = Mahalanobis()
+    for n, det, distance in zip(rows, dets, ours):
+        stock = measure(batch.measurement_prediction(n, None), det)
+        assert type(stock) is type(distance)
+        assert np.float64(stock).tobytes() == np.float64(distance).tobytes()

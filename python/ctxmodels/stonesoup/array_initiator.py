@@ -35,6 +35,7 @@ from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeSte
 from stonesoup.hypothesiser.distance import DistanceHypothesiser
 from stonesoup.measures import Mahalanobis, SquaredMahalanobis
 from stonesoup.models.base import LinearModel, ReversibleModel
+from stonesoup.types.angle import Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.initiator.simple import SimpleMeasurementInitiator
 from stonesoup.models.measurement.linear import LinearGaussian
@@ -56,7 +57,8 @@ from .fast_association import (
     _measurement_prediction,
     _weaken_prior_chain,
 )
-from .initiator_arrays import ControlTerms, angle_wrap, kalman_updates, predict_rows, screen
+from .initiator_arrays import (ControlTerms, angle_wrap, kalman_updates, predict_rows, screen,
+                               typed_distances, wrap_rows)
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator
 from .ordering import OrderedDetections, in_stable_order, in_track_order
@@ -404,11 +406,23 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                     continue
                 plain = not batch.angle_rows and all(
                     group_dets[c].state_vector.dtype == np.float64 for c in set(cols.tolist()))
+                typed: dict = {}  # pair -> distance, the typed (Bearing) pairs computed at once
                 if plain:
                     # the stock measure's arithmetic on float vectors: pinv of each S (one
                     # stacked call, matrix by matrix), then its einsum per pair
                     unique = sorted(set(rows.tolist()))
                     inverses = dict(zip(unique, np.linalg.pinv(batch.covars[unique])))
+                elif not squared and batch.objects is None and batch.angle_rows \
+                        and all(cls is Bearing for cls in batch.angle_rows.values()):
+                    kinds = tuple(batch.angle_rows.get(i, float) for i in range(batch.means.shape[1]))
+                    wraps = {c: wrap_rows(group_dets[c].state_vector, kinds)
+                             for c in set(cols.tolist())}
+                    pairs = [(r, c) for r, c in zip(rows.tolist(), cols.tolist())
+                             if wraps[c] is not None]
+                    if pairs:
+                        typed = dict(zip(pairs, typed_distances(
+                            batch, [r for r, _ in pairs], [group_dets[c] for _, c in pairs],
+                            [wraps[c] for _, c in pairs])))
                 cache: dict = {}
                 for row, col in zip(rows.tolist(), cols.tolist()):
                     det = group_dets[col]
@@ -418,6 +432,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                                              delta).squeeze()[()]
                         if not squared:
                             distance = np.sqrt(distance)
+                    elif (row, col) in typed:
+                        distance = typed[row, col]
                     else:
                         mp = cache.get(row)
                         if mp is None:

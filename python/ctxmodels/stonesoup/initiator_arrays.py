@@ -105,23 +105,61 @@ def predict_rows(predictor, control_terms, priors, means, covars, last_times, ti
 def angle_wrap(measurement_vector, predicted_vector):
     """How the stock ``z − ẑ`` of two measurement vectors computes each row, as a tuple of
     bools (True: a :class:`Bearing` difference, wrapped by ``mod_bearing``; False: a float
-    difference), or None when the typed arithmetic is anything else (the stock updater then
+    difference), or None when the typed arithmetic is anything else (the stock code then
     runs)."""
     if measurement_vector.dtype == np.float64 and predicted_vector.dtype == np.float64:
+        if measurement_vector.shape != predicted_vector.shape:
+            return None
         return (False,) * len(measurement_vector)
-    if measurement_vector.shape != predicted_vector.shape or measurement_vector.ndim != 2 \
-            or measurement_vector.shape[1] != 1:
+    if predicted_vector.ndim != 2 or predicted_vector.shape[1] != 1:
+        return None
+    return wrap_rows(measurement_vector, tuple(map(type, predicted_vector[:, 0].tolist())))
+
+
+def wrap_rows(measurement_vector, predicted_kinds: tuple):
+    """:func:`angle_wrap` against a predicted vector whose rows have the types
+    ``predicted_kinds``."""
+    if measurement_vector.ndim != 2 or measurement_vector.shape != (len(predicted_kinds), 1):
         return None
     wrap = []
-    for z, zhat in zip(measurement_vector[:, 0].tolist(), predicted_vector[:, 0].tolist()):
-        kinds = (type(z), type(zhat))
-        if kinds == (Bearing, Bearing):
+    for z, kind in zip(measurement_vector[:, 0].tolist(), predicted_kinds):
+        if type(z) is Bearing and kind is Bearing:
             wrap.append(True)
-        elif kinds[0] in _FLOATS and kinds[1] in _FLOATS:
+        elif type(z) in _FLOATS and kind in _FLOATS:
             wrap.append(False)
         else:
             return None
     return tuple(wrap)
+
+
+def typed_distances(batch, rows, dets, wraps) -> list:
+    """The stock Mahalanobis distance of predicted measurement ``rows[p]`` of
+    ``batch`` (its typed vector: :class:`Bearing` rows where ``batch.angle_rows`` says, all
+    of them Bearing) and detection ``dets[p]``, whose rows are typed as ``wraps[p]`` says
+    (:func:`wrap_rows`). The stock measure computes ``δ = −(z − ẑ)`` on the typed values
+    (a Bearing wraps after the difference and after the negation), ``pinv(S)``, and sums
+    ``(δ_j S⁻¹_jk) δ_k`` in an object ``einsum``: Python floats, j then k, in order. The
+    same operations on float arrays give the same bits, and the square root makes them the
+    NumPy float the stock measure returns. (The squared measure returns the object sum
+    itself, a Python or NumPy float depending on its operands: not computed here.)"""
+    rows = np.asarray(rows)
+    unique, index = np.unique(rows, return_inverse=True)
+    inverses = np.linalg.pinv(batch.covars[unique])[index]
+    zhat = batch.means[rows]
+    for row in batch.angle_rows:  # the typed vector: Bearing(value)
+        zhat[:, row] = mod_bearing(zhat[:, row])
+    z = np.array([d.state_vector for d in dets], dtype=np.float64)[:, :, 0]
+    wrap = np.array(wraps, dtype=bool).reshape(z.shape)
+    delta = z - zhat
+    delta[wrap] = mod_bearing(delta[wrap])
+    delta = -delta
+    delta[wrap] = mod_bearing(delta[wrap])
+    total = np.zeros(len(rows))
+    m = z.shape[1]
+    for j in range(m):
+        for k in range(m):
+            total = ((delta[:, j] * inverses[:, j, k]) * delta[:, k]) + total
+    return list(np.sqrt(total))
 
 
 _FLOATS = (float, np.float64)
