@@ -37,29 +37,22 @@ from stonesoup.measures import Mahalanobis, SquaredMahalanobis
 from stonesoup.models.base import LinearModel, ReversibleModel
 from stonesoup.types.angle import Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
-from stonesoup.initiator.simple import SimpleMeasurementInitiator
-from stonesoup.models.measurement.linear import LinearGaussian
-from stonesoup.models.measurement import nonlinear as _nonlinear
-from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
-from stonesoup.types.hypothesis import SingleDistanceHypothesis, SingleHypothesis
-from stonesoup.types.track import Track
+from stonesoup.types.hypothesis import SingleDistanceHypothesis
 from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.state import GaussianState
-from stonesoup.types.update import GaussianStateUpdate, Update
+from stonesoup.types.update import Update
 
 from .deleter import UpdateTimeStepsDeleter
-from .fast import (KALMAN_UPDATERS, ObjectFactory, _analytic_bearing_range_batch,
-                   _bearing_range_batch, measurement_batch,
-                   supports_predictor)
+from .fast import KALMAN_UPDATERS, ObjectFactory, measurement_batch, supports_predictor
 from .fast_association import (
     FastGNNWith2DAssignment,
     _copied_properties,
     _measurement_prediction,
     _weaken_prior_chain,
 )
+from .initiator_births import UPDATE_STATE, Births
 from .initiator_arrays import (ControlTerms, angle_wrap, kalman_updates, predict_rows, screen,
                                typed_distances, wrap_rows)
-from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator
 from .ordering import OrderedDetections, in_stable_order, in_track_order
 
@@ -69,33 +62,9 @@ _PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
     transition_model=None, prior=None))
 
 
-def _inverse_bearing_range(model, detections) -> list:
-    """``model.inverse_function(det)`` for each detection, with the same operations (the
-    inverse rotation, a deterministic function of the model, computed once)."""
-    if not (model.rotation_offset[0] == 0 and model.rotation_offset[1] == 0):
-        return [model.inverse_function(det) for det in detections]  # the stock error
-    inverse_rotation = _nonlinear.inv(model.rotation_matrix)
-    offset = model.translation_offset[:2, :]
-    mapping = model.mapping[:2]
-    vectors = []
-    for det in detections:
-        vector = det.state_vector
-        x, y = _nonlinear.pol2cart(vector[1, :], vector[0, :])
-        xyz = inverse_rotation @ np.array([x, y, np.zeros(vector.shape[1])])
-        res = np.zeros((model.ndim_state, vector.shape[1])).view(StateVector)
-        res[mapping, :] = xyz[0:2] + offset
-        vectors.append(res)
-    return vectors
-
-
 #: A hypothesis as the distance hypothesiser builds it.
 _DISTANCE_HYPOTHESIS = ObjectFactory(SingleDistanceHypothesis, dict(
     prediction=None, measurement=None, distance=0.0, measurement_prediction=None))
-
-#: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
-_UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(
-    state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]),
-    hypothesis=SingleHypothesis(None, None), timestamp=None))
 
 
 class _Holding:
@@ -143,7 +112,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._last_times: list = []
         self._blocks: dict[int, _Block] = {}
         self._next_block = 0
-        self._linear_cache: dict = {}
+        self._births = Births()
         self._control_terms = ControlTerms()
         self.array_calls = 0
         self.component_calls = 0
@@ -300,79 +269,9 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
 
     # --- new holding tracks ----------------------------------------------------------------------
     def _new_tracks(self, detections, timestamp):
-        """What the inner initiator returns for ``detections``. The default
-        :class:`~stonesoup.initiator.simple.SimpleMeasurementInitiator` is computed per
-        measurement model: a linear model's pseudo-inverse and initial covariance once, a
-        bearing–range model's Jacobians (finite difference or closed form), pseudo-inverses and covariances as
-        stacked arrays (the stock expressions, matrix by matrix); other initiators and models
-        run their own code."""
-        inner = self.initiator
-        if type(inner) is not SimpleMeasurementInitiator:
-            return inner.initiate(set(detections), timestamp)
-        groups: dict = {}
-        other = []
-        for det in detections:
-            model = det.measurement_model if det.measurement_model is not None \
-                else inner.measurement_model
-            kind = type(model)
-            if kind is LinearGaussian or (kind in (CartesianToBearingRange,
-                                                   AnalyticCartesianToBearingRange)
-                                          and len(model.mapping) == 2):
-                groups.setdefault(id(model), (model, []))[1].append(det)
-            else:
-                other.append(det)
-        tracks = inner.initiate(set(other), timestamp) if other else set()
-        prior = inner.prior_state
-        load = np.diag(np.array([inner.diag_load] * len(prior.state_vector)))
-        for model, dets in groups.values():
-            prior_vector = prior.state_vector.copy()
-            prior_covar = prior.covar.copy()
-            mapped = model.mapping
-            prior_vector[mapped, :] = 0
-            for dim in mapped:
-                prior_covar[dim, :] = prior_covar[:, dim] = 0
-            noise = model.covar()
-            if type(model) is LinearGaussian:
-                matrix = model.matrix()
-                # the pseudo-inverse and covariance of a model, while its numbers are the same
-                key = (matrix.tobytes(), np.asarray(noise).tobytes(), prior_covar.tobytes(),
-                       load.tobytes())
-                cached = self._linear_cache.get(id(model))
-                if cached is None or cached[0] is not model or cached[1] != key:
-                    inverse = np.linalg.pinv(matrix)
-                    covar = inverse @ noise @ inverse.T
-                    covar = covar + prior_covar + load
-                    cached = self._linear_cache[id(model)] = (model, key, inverse, covar)
-                    if len(self._linear_cache) > 16:
-                        self._linear_cache = {id(model): cached}
-                _, _, inverse, covar = cached
-                vectors = [inverse @ det.state_vector for det in dets]
-                covars = [covar.copy() for _ in dets]  # one array per state, as stock
-            else:
-                vectors = _inverse_bearing_range(model, dets)
-                means = np.array(vectors, dtype=np.float64)
-                zeros = np.zeros((len(dets),) + (means.shape[1],) * 2)
-                # the model's own Jacobian, state by state, bit for bit
-                if type(model) is AnalyticCartesianToBearingRange:
-                    _, _, _, jacobians = _analytic_bearing_range_batch(model, means, zeros, None)
-                else:
-                    _, _, _, jacobians = _bearing_range_batch(model, means, zeros)
-                inverses = np.linalg.pinv(jacobians)
-                stacked = (inverses @ np.asarray(noise)[np.newaxis]) @ inverses.transpose(0, 2, 1)
-                covars = [c.view(CovarianceMatrix) + prior_covar + load for c in stacked]
-            plain = type(prior) is GaussianState
-            for det, vector, covar in zip(dets, vectors, covars):
-                if plain:  # what Update.from_state builds from a plain GaussianState
-                    state = _UPDATE_STATE(
-                        state_vector=(prior_vector + vector).view(StateVector),
-                        covar=covar.view(CovarianceMatrix),
-                        hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)
-                else:
-                    state = Update.from_state(
-                        prior, state_vector=prior_vector + vector, covar=covar,
-                        hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)
-                tracks.add(Track([state]))
-        return tracks
+        """What the inner initiator returns for ``detections`` (see
+        :mod:`~ctxmodels.stonesoup.initiator_births`)."""
+        return self._births(self.initiator, detections, timestamp)
 
     def _associate(self, detections, timestamp):
         """Per holding row: the assigned (detection index, distance, measurement prediction,
@@ -523,7 +422,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 [h.measurement for h in hypotheses], [w for _, _, w in pending],
                 bool(updater.force_symmetric_covariance))
             for (k, hypothesis, _), mean, covar in zip(pending, new_means, new_covars):
-                block.updates[id(records[k])] = _UPDATE_STATE(
+                block.updates[id(records[k])] = UPDATE_STATE(
                     state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
                     hypothesis=hypothesis, timestamp=hypothesis.measurement.timestamp)
                 means[k], covars[k] = mean, covar
