@@ -38,7 +38,6 @@ from stonesoup.models.base import LinearModel, ReversibleModel
 from stonesoup.types.angle import Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.hypothesis import SingleDistanceHypothesis
-from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.state import GaussianState
 from stonesoup.types.update import Update
 
@@ -48,53 +47,17 @@ from .fast_association import (
     FastGNNWith2DAssignment,
     _copied_properties,
     _measurement_prediction,
-    _weaken_prior_chain,
 )
 from .initiator_births import UPDATE_STATE, Births
+from .initiator_blocks import PRIOR_PREDICTION, Block, Holding, materialise
 from .initiator_arrays import (ControlTerms, angle_wrap, kalman_updates, predict_rows, screen,
                                typed_distances, wrap_rows)
 from .mixture_tracker import MultiMeasurementInitiator
 from .ordering import OrderedDetections, in_stable_order, in_track_order
 
-#: A prediction as ``Prediction.from_state`` builds it (transition model and prior).
-_PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
-    state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
-    transition_model=None, prior=None))
-
-
 #: A hypothesis as the distance hypothesiser builds it.
 _DISTANCE_HYPOTHESIS = ObjectFactory(SingleDistanceHypothesis, dict(
     prediction=None, measurement=None, distance=0.0, measurement_prediction=None))
-
-
-class _Holding:
-    """A holding track: its Track (states up to the last materialisation) and the first
-    scan block whose states it does not hold yet."""
-
-    __slots__ = ("track", "pending_from")
-
-    def __init__(self, track, pending_from):
-        self.track = track
-        self.pending_from = pending_from
-
-
-class _Block:
-    """One scan of the holding tracks: their predictions (rows in ``records`` order), the
-    scan time, the updates of the rows that were updated, the rows given no state."""
-
-    __slots__ = ("means", "covars", "timestamp", "records", "updates", "skipped", "_rows")
-
-    def __init__(self, means, covars, timestamp, records):
-        self.means, self.covars, self.timestamp = means, covars, timestamp
-        self.records = records
-        self.updates: dict = {}  # id(record) -> update state (its prediction's prior unset)
-        self.skipped: set = set()
-        self._rows = None
-
-    def row(self, record) -> int:
-        if self._rows is None:
-            self._rows = {id(r): k for k, r in enumerate(self.records)}
-        return self._rows[id(record)]
 
 
 class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
@@ -104,13 +67,15 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._records: list[_Holding] = []
+        self._records: list[Holding] = []
+        self._serials: list = []  # the records' serials (ascending)
+        self._next_serial = 0
         self._means = None  # (H, D, 1): each holding track's last state, aligned with _records
         self._covars = None  # (H, D, D)
         self._since = np.empty(0, dtype=np.int64)  # distinct times since the last detection
         self._counted = np.empty(0, dtype=np.int64)  # points towards release
         self._last_times: list = []
-        self._blocks: dict[int, _Block] = {}
+        self._blocks: dict[int, Block] = {}
         self._next_block = 0
         self._births = Births()
         self._control_terms = ControlTerms()
@@ -137,38 +102,17 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 and not deleter.delete_last_pred)
 
     # --- pending states ------------------------------------------------------------------------
-    def _materialise(self, record: _Holding) -> None:
+    def _materialise(self, record: Holding) -> None:
         """Append the states the component path would have appended since the record's last
-        materialisation: predictions (transition model, previous state as prior) and updates
-        (their prediction's prior set to the previous state), in scan order."""
-        if record.pending_from >= self._next_block:
-            return
-        track = record.track
-        transition = self.data_associator.hypothesiser.predictor.transition_model
-        key = id(record)
-        for b in range(record.pending_from, self._next_block):
-            block = self._blocks[b]
-            if key in block.skipped:
-                continue
-            prior = track.state
-            _weaken_prior_chain(prior)
-            update = block.updates.get(key)
-            if update is not None:
-                update.hypothesis.prediction.prior = prior
-                track.append(update)
-                continue
-            row = block.row(record)
-            track.append(_PRIOR_PREDICTION(
-                state_vector=block.means[row].view(StateVector),
-                covar=block.covars[row].view(CovarianceMatrix), timestamp=block.timestamp,
-                transition_model=transition, prior=prior,
-                **{name: getattr(prior, name) for name in _copied_properties(type(prior))}))
-        record.pending_from = self._next_block
+        materialisation (see :func:`~ctxmodels.stonesoup.initiator_blocks.materialise`)."""
+        materialise(record, self._blocks, self._next_block,
+                    self.data_associator.hypothesiser.predictor.transition_model)
 
     def _materialise_all(self) -> None:
         for record in self._records:
             self._materialise(record)
         self._records = []
+        self._serials = []
         self._means = self._covars = None
         self._since = np.empty(0, dtype=np.int64)
         self._counted = np.empty(0, dtype=np.int64)
@@ -182,9 +126,10 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             del self._blocks[b]
 
     def _read_track(self, track, ndim):
-        """(points, distinct times since the last detection) of a track joining the holding
-        set, or None if its last state cannot be held as arrays."""
-        state = track.state if len(track) else None
+        """(last state, points, distinct times since the last detection) of a track joining
+        the holding set, or None if its last state cannot be held as arrays."""
+        states = track.states
+        state = states[-1] if len(states) else None
         vector, covar = getattr(state, "state_vector", None), getattr(state, "covar", None)
         if not (isinstance(state, GaussianState) and _copied_properties(type(state)) is not None
                 and isinstance(vector, np.ndarray) and vector.dtype == np.float64
@@ -192,13 +137,15 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 and covar.dtype == np.float64 and covar.shape == (ndim, ndim)
                 and state.timestamp is not None):
             return None
-        points = sum(1 for s in track.states if self._counts(s))
+        if len(states) == 1:  # a new track: one state, one time
+            return state, (1 if self._counts(state) else 0), 1
+        points = sum(1 for s in states if self._counts(s))
         since = set()
-        for s in reversed(track.states):
+        for s in reversed(states):
             since.add(s.timestamp)
             if isinstance(s, Update) and s.hypothesis:
                 break
-        return points, len(since)
+        return state, points, len(since)
 
     def _sync(self, ndim) -> bool:
         """Aligns the records with :attr:`holding_tracks` (tracks removed or added from
@@ -213,6 +160,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         added = in_track_order(t for t in live if id(t) not in present)
         if len(keep) < len(records):
             self._records = [records[k] for k in keep]
+            self._serials = [self._serials[k] for k in keep]
             if self._means is not None:
                 self._means, self._covars = self._means[keep], self._covars[keep]
             self._counted, self._since = self._counted[keep], self._since[keep]
@@ -227,16 +175,20 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         if any(r is None for r in read):
             return False
         empty = self._means is None
-        self._records = self._records + [_Holding(t, self._next_block) for t in added]
+        first = self._next_serial
+        self._next_serial += len(added)
+        self._records = self._records + [Holding(t, self._next_block, first + k)
+                                         for k, t in enumerate(added)]
+        self._serials = self._serials + list(range(first, first + len(added)))
         self._means = np.concatenate(
             [np.empty((0, ndim, 1)) if empty else self._means]
-            + [t.state.state_vector[np.newaxis] for t in added])
+            + [state.state_vector[np.newaxis] for state, _, _ in read])
         self._covars = np.concatenate(
             [np.empty((0, ndim, ndim)) if empty else self._covars]
-            + [t.state.covar[np.newaxis] for t in added])
-        self._counted = np.concatenate([self._counted, [p for p, _ in read]]).astype(np.int64)
-        self._since = np.concatenate([self._since, [n for _, n in read]]).astype(np.int64)
-        self._last_times = self._last_times + [t.state.timestamp for t in added]
+            + [state.covar[np.newaxis] for state, _, _ in read])
+        self._counted = np.concatenate([self._counted, [p for _, p, _ in read]]).astype(np.int64)
+        self._since = np.concatenate([self._since, [n for _, _, n in read]]).astype(np.int64)
+        self._last_times = self._last_times + [state.timestamp for state, _, _ in read]
         return True
 
     # --- a scan ---------------------------------------------------------------------------------
@@ -374,7 +326,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         pred_means, pred_covars = self._pred
         del self._pred
         records = self._records
-        block = _Block(pred_means, pred_covars, timestamp, records)
+        block = Block(pred_means, pred_covars, timestamp, self._serials)
         index = self._next_block
         self._blocks[index] = block
         self._next_block += 1
@@ -390,13 +342,13 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         transition = hypothesiser.predictor.transition_model
         for k, choice in enumerate(assigned):
             if choice is None:  # no hypothesis from the assignment: stock appends nothing
-                block.skipped.add(id(records[k]))
+                block.skipped.add(records[k].serial)
                 means[k], covars[k] = self._means[k], self._covars[k]
                 appended[k] = False
             elif choice != "missed":
                 column, distance, mp = choice
                 record = records[k]
-                prediction = _PRIOR_PREDICTION(
+                prediction = PRIOR_PREDICTION(
                     state_vector=pred_means[k].view(StateVector),
                     covar=pred_covars[k].view(CovarianceMatrix), timestamp=timestamp,
                     transition_model=transition, prior=None,
@@ -412,7 +364,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                     pending.append((k, hypothesis, wrap))
                     continue
                 state = updater.update(hypothesis)
-                block.updates[id(record)] = state
+                block.updates[record.serial] = state
                 means[k] = np.asarray(state.state_vector, dtype=np.float64)
                 covars[k] = np.asarray(state.covar, dtype=np.float64)
         if pending:
@@ -422,7 +374,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 [h.measurement for h in hypotheses], [w for _, _, w in pending],
                 bool(updater.force_symmetric_covariance))
             for (k, hypothesis, _), mean, covar in zip(pending, new_means, new_covars):
-                block.updates[id(records[k])] = UPDATE_STATE(
+                block.updates[records[k].serial] = UPDATE_STATE(
                     state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
                     hypothesis=hypothesis, timestamp=hypothesis.measurement.timestamp)
                 means[k], covars[k] = mean, covar
@@ -444,8 +396,10 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             self.holding_tracks.discard(records[k].track)
             keep[k] = False
         if not keep.all():
-            self._records = [r for r, kept in zip(records, keep.tolist()) if kept]
-            self._last_times = [t for t, kept in zip(self._last_times, keep.tolist()) if kept]
+            kept = keep.tolist()
+            self._records = [r for r, k in zip(records, kept) if k]
+            self._serials = [r for r, k in zip(self._serials, kept) if k]
+            self._last_times = [t for t, k in zip(self._last_times, kept) if k]
             means, covars = means[keep], covars[keep]
             self._counted, self._since = self._counted[keep], self._since[keep]
         self._means, self._covars = means, covars

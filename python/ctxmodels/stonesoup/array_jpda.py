@@ -87,7 +87,8 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from .. import _core
 from ..context import DetectorContext
-from .array_initiator import _PRIOR_PREDICTION, ArrayMultiMeasurementInitiator
+from .array_initiator import ArrayMultiMeasurementInitiator
+from .initiator_blocks import PRIOR_PREDICTION as _PRIOR_PREDICTION
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast import KALMAN_UPDATERS, ObjectFactory, supports_predictor
 from .fast_association import _copied_properties
