@@ -228,3 +228,61 @@ def test_typed_distances_equal_the_stock_measure_bit_for_bit():
         stock = measure(batch.measurement_prediction(n, None), det)
         assert type(stock) is type(distance)
         assert np.float64(stock).tobytes() == np.float64(distance).tobytes()
+
+
+@pytest.mark.parametrize("model", [LIDAR, RADAR])
+def test_screen_states_keeps_every_passing_pair(model):
+    """Screening the predicted states (the core forms ẑ and S) keeps every pair the stock
+    gate passes, and agrees with the screen of the stock measurement predictions."""
+    from ctxmodels.stonesoup.array_jpda import _core_model
+    core, bearing_row = _core_model(ExtendedKalmanUpdater, model)
+    angle_rows = {} if bearing_row is None else {bearing_row: Bearing}
+    rng = np.random.default_rng(13)
+    updater = ExtendedKalmanUpdater(None)
+    measure = Mahalanobis()
+    passing = 0
+    for _ in range(10):
+        means, covars = _states(rng, 30)
+        dets = _detections(rng, model, 12)
+        gate = float(rng.uniform(1.0, 40.0))
+        ours = initiator_arrays.screen_states((core, angle_rows), means, covars, dets, gate, False)
+        batch = measurement_batch(updater, model, means, covars)
+        assert np.array_equal(ours, initiator_arrays.screen(batch, dets, gate, False))
+        distances = initiator_arrays.pair_distances(
+            batch, [n for n in range(30) for _ in dets], [k for _ in range(30) for k in range(12)],
+            dets, measure, False, None)
+        for p, distance in enumerate(distances):
+            n, k = divmod(p, 12)
+            stock = measure(batch.measurement_prediction(n, None), dets[k])
+            assert np.float64(stock).tobytes() == np.float64(distance).tobytes()
+            if stock < gate:
+                assert ours[n, k]
+                passing += 1
+    assert passing > 0
+    for gate in (0.0, -1.0, float("nan")):
+        assert not initiator_arrays.screen_states((core, angle_rows), means, covars, dets, gate,
+                                                  False).any()
+    assert initiator_arrays.screen_states(None, means, covars, dets, 1.0, False) is None
+
+
+def test_jpda_screen_states_input_errors():
+    model = _core.JPDAMeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
+                                              np.eye(2))
+    means, covars = np.zeros((3, 4)), np.stack([np.eye(4)] * 3)
+    z, wrap = np.zeros((2, 2)), np.zeros((2, 2), dtype=bool)
+    assert _core.jpda_screen_states(model, means, covars, z, wrap, 1.0, SCREEN_MARGIN).all()
+    for args, argument in [
+        ((model, means, np.zeros((3, 4, 3)), z, wrap, 1.0, 0.0), "covars"),
+        ((model, means, covars, np.zeros((2, 3)), wrap, 1.0, 0.0), "detections"),
+        ((model, means, covars, z, np.zeros((1, 2), dtype=bool), 1.0, 0.0), "wrap"),
+        ((model, means, covars, z, wrap, 1.0, -1.0), "margin"),
+        ((model, np.zeros((3, 3)), np.stack([np.eye(3)] * 3), z, wrap, 1.0, 0.0), "model"),
+    ]:
+        with pytest.raises(ValueError, match=f"^{argument}"):
+            _core.jpda_screen_states(*args)
+    # a state with NaN keeps its pairs
+    means[1, 0] = np.nan
+    far = np.full((2, 2), 1e6)
+    assert _core.jpda_screen_states(model, means, covars, far, wrap, 1.0,
+                                    SCREEN_MARGIN).tolist() == [[False, False], [True, True],
+                                                                [False, False]]

@@ -28,6 +28,7 @@ __all__ = [
     "jpda_predict",
     "jpda_scan",
     "jpda_screen",
+    "jpda_screen_states",
     "mount",
     "rule_points",
 ]
@@ -342,5 +343,17 @@ def jpda_screen(
     covariances `covars` (N, m, m) and `detections` (K, m) that may pass the gate
     `threshold` on the squared Mahalanobis distance (relative `margin`; `wrap` (K, m): the
     bearing elements)."""
+
+def jpda_screen_states(
+    model: JPDAMeasurementModel,
+    means: _Floats,
+    covars: _Floats,
+    detections: _Floats,
+    wrap: _Bools,
+    threshold: float,
+    margin: float,
+) -> _Bools:
+    """`jpda_screen` of predicted states `means` (N, D) / `covars` (N, D, D) under `model`
+    (the core forms their predicted measurements and innovation covariances)."""
 
 # --- end of whole-scan JPDA -------------------------------------------------------------------

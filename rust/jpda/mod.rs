@@ -38,7 +38,7 @@ mod tests;
 
 pub use marginals::{brute_force_marginals, joint_marginals, MAX_TREE_EDGES, MAX_TREE_NODES};
 pub use measurement::{mod_bearing, Jacobian, MeasurementModel};
-pub use screen::{screen_pairs, ScreenInput};
+pub use screen::{screen_pairs, screen_states, ScreenInput};
 
 use crate::error::{ModelError, Result};
 use nalgebra::{DMatrix, DVector};

@@ -10,12 +10,23 @@
 //! rounding difference between this inverse (LU with partial pivoting) and the caller's. A
 //! singular `S_n` keeps the whole row, and NaN never excludes a pair (the caller decides).
 //!
+//! A bearing element of `δ` within 1e-6 of ±π also keeps the pair: there a rounding
+//! difference in `ẑ` could move the wrap to the other side.
+//!
+//! [`screen_states`] screens predicted *states* instead: it forms `ẑ_n` and `S_n = H P Hᵀ + R`
+//! with the core's measurement model (the caller then computes the exact measurement
+//! prediction of the rows that kept a pair only).
+//!
 //! The result does not depend on anything but the inputs (one thread, index order).
 
-use super::measurement::mod_bearing;
+use super::measurement::{mod_bearing, MeasurementModel};
 use super::{too_large, try_filled};
 use crate::error::{ModelError, Result};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
+use std::f64::consts::PI;
+
+/// How close to ±π a wrapped element keeps its pair.
+const WRAP_GUARD: f64 = 1e-6;
 
 /// One screening problem (row-major slices): `N = means.len() / m` predicted measurements,
 /// `K = detections.len() / m` detections.
@@ -76,6 +87,9 @@ pub fn screen_pairs(input: &ScreenInput) -> Result<Vec<bool>> {
                 }
                 delta[i] = d;
             }
+            if (0..m).any(|i| wrap[i] && delta[i].abs() > PI - WRAP_GUARD) {
+                continue; // at the wrap: a candidate
+            }
             let (mut d2, mut magnitude) = (0.0, 0.0);
             for i in 0..m {
                 for j in 0..m {
@@ -89,6 +103,42 @@ pub fn screen_pairs(input: &ScreenInput) -> Result<Vec<bool>> {
         }
     }
     Ok(out)
+}
+
+/// [`screen_pairs`] of `N` predicted states `means` (N×D) / `covars` (N×D×D)
+/// under `model`: `ẑ_n = h(x_n)`, `S_n = H_n P_n H_nᵀ + R`. (`input.means`/`input.covars`
+/// are ignored.) A state with NaN or infinity keeps all its pairs.
+pub fn screen_states(model: &MeasurementModel, dim: usize, means: &[f64], covars: &[f64], input: &ScreenInput) -> Result<Vec<bool>> {
+    let m = model.ndim_meas();
+    if input.ndim_meas != m {
+        return Err(ModelError::shape("detections", format!("must have {m} columns (the model's measurement size), got {}", input.ndim_meas)));
+    }
+    if dim == 0 || !means.len().is_multiple_of(dim) {
+        return Err(ModelError::shape("means", format!("must be (N, {dim}) with {dim} > 0, got {} values", means.len())));
+    }
+    let n = means.len() / dim;
+    if covars.len() != n * dim * dim {
+        return Err(ModelError::shape("covars", format!("must be ({n}, {dim}, {dim}), got {} values", covars.len())));
+    }
+    model.check_dim(dim)?;
+    let mut zhat = try_filled(n.checked_mul(m), f64::NAN).ok_or_else(|| too_large(n, 1))?;
+    let mut innovation = try_filled(n.checked_mul(m * m), f64::NAN).ok_or_else(|| too_large(n, 1))?;
+    for row in 0..n {
+        let x = &means[row * dim..(row + 1) * dim];
+        let p = &covars[row * dim * dim..(row + 1) * dim * dim];
+        if x.iter().chain(p).any(|v| !v.is_finite()) {
+            continue; // NaN: every pair stays a candidate
+        }
+        let (z, h) = model.linearise(&DVector::from_row_slice(x));
+        let s = &h * DMatrix::from_row_slice(dim, dim, p) * h.transpose() + model.noise();
+        zhat[row * m..(row + 1) * m].copy_from_slice(z.as_slice());
+        for i in 0..m {
+            for j in 0..m {
+                innovation[(row * m + i) * m + j] = s[(i, j)];
+            }
+        }
+    }
+    screen_pairs(&ScreenInput { means: &zhat, covars: &innovation, ..*input })
 }
 
 #[cfg(test)]
@@ -145,6 +195,41 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn states_screen_as_their_measurement_predictions() {
+        // linear model H = [[1, 0, 0, 0], [0, 0, 1, 0]], R = I: ẑ = (x0, x2), S = diag(P00 + 1, P22 + 1)
+        let model = MeasurementModel::linear(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], 2, 4, &[1.0, 0.0, 0.0, 1.0]).unwrap();
+        let means = [0.0, 5.0, 0.0, 5.0, 10.0, 0.0, 10.0, 0.0, f64::NAN, 0.0, 0.0, 0.0];
+        let mut covars = vec![0.0; 48];
+        for row in 0..3 {
+            for i in 0..4 {
+                covars[row * 16 + i * 5] = 1.0;
+            }
+        }
+        let dets = [1.0, 1.0, 10.0, 10.0];
+        let wrap = [false; 4];
+        let probe = input(&[], &[], &dets, &wrap, 2.0);
+        let out = screen_states(&model, 4, &means, &covars, &probe).unwrap();
+        // d² of (1, 1) from (0, 0) with S = 2I is 1: kept; from (10, 10): 81
+        assert_eq!(out, vec![true, false, false, true, true, true]);
+        assert!(screen_states(&model, 3, &means[..9], &covars[..27], &probe).is_err());
+        assert!(screen_states(&model, 4, &means, &covars[..20], &probe).is_err());
+        let three = ScreenInput { ndim_meas: 3, ..probe };
+        assert!(screen_states(&model, 4, &means, &covars, &three).is_err());
+    }
+
+    #[test]
+    fn a_bearing_at_the_wrap_stays_a_candidate() {
+        let means = [0.0, 5.0];
+        let covars = [1e-6, 0.0, 0.0, 1e-6];
+        let dets = [PI - 1e-9, 5.0];
+        let out = screen_pairs(&input(&means, &covars, &dets, &[true, false], 1.0)).unwrap();
+        assert_eq!(out, vec![true]);
+        let dets = [PI - 0.1, 5.0];
+        let out = screen_pairs(&input(&means, &covars, &dets, &[true, false], 1.0)).unwrap();
+        assert_eq!(out, vec![false]);
     }
 
     #[test]

@@ -50,8 +50,8 @@ from .fast_association import (
 )
 from .initiator_births import UPDATE_STATE, Births
 from .initiator_blocks import PRIOR_PREDICTION, Block, Holding, materialise
-from .initiator_arrays import (ControlTerms, angle_wrap, kalman_updates, predict_rows, screen,
-                               typed_distances, wrap_rows)
+from .initiator_arrays import (ControlTerms, angle_wrap, kalman_updates, pair_distances,
+                               predict_rows, screen, screen_states)
 from .mixture_tracker import MultiMeasurementInitiator
 from .ordering import OrderedDetections, in_stable_order, in_track_order
 
@@ -79,6 +79,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._next_block = 0
         self._births = Births()
         self._control_terms = ControlTerms()
+        self._core_models: dict = {}
         self.array_calls = 0
         self.component_calls = 0
 
@@ -191,6 +192,20 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._last_times = self._last_times + [state.timestamp for state, _, _ in read]
         return True
 
+    def _core_model(self, updater, model):
+        """(the core's model, its angle rows) for screening predicted states measured by
+        ``model``, or None (then the measurement predictions of all rows screen)."""
+        cached = self._core_models.get(id(model))
+        if cached is None or cached[0] is not model or cached[1] is not type(updater):
+            from .array_jpda import _core_model  # (that module builds on this one)
+            core, bearing_row = _core_model(type(updater), model)
+            entry = None if core is None else (core, {} if bearing_row is None
+                                               else {bearing_row: Bearing})
+            cached = self._core_models[id(model)] = (model, type(updater), entry)
+            if len(self._core_models) > 64:
+                self._core_models = {id(model): cached}
+        return cached[2]
+
     # --- a scan ---------------------------------------------------------------------------------
     def initiate(self, detections, timestamp, **kwargs):
         if type(detections) is not OrderedDetections:  # (already in order: not sorted again)
@@ -238,7 +253,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             predictor, self._control_terms, lambda k: records[k].track.state, self._means,
             self._covars, self._last_times, timestamp)
 
-        hypotheses: dict[int, list] = {}  # row -> [(column, distance, batch)]
+        hypotheses: dict[int, list] = {}  # row -> [(column, distance, batch, batch row)]
         if detections:
             by_model: dict = {}
             for j, det in enumerate(detections):
@@ -246,52 +261,36 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             squared = type(measure) is SquaredMahalanobis
             for raw_model, members in by_model.items():
                 resolved = updater._check_measurement_model(raw_model)
-                batch = measurement_batch(updater, resolved, pred_means, pred_covars)
                 group_dets = [detections[j] for j in members]
-                if hypothesiser.include_all:
-                    candidates = np.ones((n, len(members)), dtype=bool)
+                candidates = None if hypothesiser.include_all else screen_states(
+                    self._core_model(updater, resolved), pred_means, pred_covars, group_dets,
+                    float(missed_distance), squared)
+                if candidates is not None:
+                    # only the rows that kept a pair: their measurement prediction (row by
+                    # row the same numbers as in a batch of all rows)
+                    index = np.flatnonzero(candidates.any(axis=1))
+                    if not index.size:
+                        continue
+                    batch = measurement_batch(updater, resolved, pred_means[index],
+                                              pred_covars[index])
+                    candidates = candidates[index]
                 else:
-                    candidates = screen(batch, group_dets, float(missed_distance), squared)
-                rows, cols = np.nonzero(candidates)
+                    index = None
+                    batch = measurement_batch(updater, resolved, pred_means, pred_covars)
+                    candidates = np.ones((n, len(members)), dtype=bool) \
+                        if hypothesiser.include_all \
+                        else screen(batch, group_dets, float(missed_distance), squared)
+                rows, cols = np.nonzero(candidates)  # batch rows
                 if not rows.size:
                     continue
-                plain = not batch.angle_rows and all(
-                    group_dets[c].state_vector.dtype == np.float64 for c in set(cols.tolist()))
-                typed: dict = {}  # pair -> distance, the typed (Bearing) pairs computed at once
-                if plain:
-                    # the stock measure's arithmetic on float vectors: pinv of each S (one
-                    # stacked call, matrix by matrix), then its einsum per pair
-                    unique = sorted(set(rows.tolist()))
-                    inverses = dict(zip(unique, np.linalg.pinv(batch.covars[unique])))
-                elif not squared and batch.objects is None and batch.angle_rows \
-                        and all(cls is Bearing for cls in batch.angle_rows.values()):
-                    kinds = tuple(batch.angle_rows.get(i, float) for i in range(batch.means.shape[1]))
-                    wraps = {c: wrap_rows(group_dets[c].state_vector, kinds)
-                             for c in set(cols.tolist())}
-                    pairs = [(r, c) for r, c in zip(rows.tolist(), cols.tolist())
-                             if wraps[c] is not None]
-                    if pairs:
-                        typed = dict(zip(pairs, typed_distances(
-                            batch, [r for r, _ in pairs], [group_dets[c] for _, c in pairs],
-                            [wraps[c] for _, c in pairs])))
-                cache: dict = {}
-                for row, col in zip(rows.tolist(), cols.tolist()):
-                    det = group_dets[col]
-                    if plain:
-                        delta = -(det.state_vector.T - batch.means[row])
-                        distance = np.einsum('ij,jk,ik->i', delta, inverses[row],
-                                             delta).squeeze()[()]
-                        if not squared:
-                            distance = np.sqrt(distance)
-                    elif (row, col) in typed:
-                        distance = typed[row, col]
-                    else:
-                        mp = cache.get(row)
-                        if mp is None:
-                            mp = cache[row] = _measurement_prediction(batch, row, timestamp)
-                        distance = measure(mp, det)
+                distances = pair_distances(batch, rows.tolist(), cols.tolist(), group_dets,
+                                           measure, squared, timestamp)
+                holding = rows if index is None else index[rows]
+                for row, brow, col, distance in zip(holding.tolist(), rows.tolist(),
+                                                    cols.tolist(), distances):
                     if hypothesiser.include_all or distance < missed_distance:
-                        hypotheses.setdefault(row, []).append((members[col], distance, batch))
+                        hypotheses.setdefault(row, []).append(
+                            (members[col], distance, batch, brow))
 
         assigned: list = ["missed"] * n
         detected = sorted(hypotheses)
@@ -300,7 +299,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             costs = np.full((len(detected), n_dets + len(detected)), np.inf)
             for i, k in enumerate(detected):
                 costs[i, n_dets + i] = missed_distance
-                for column, distance, _ in hypotheses[k]:
+                for column, distance, _, _ in hypotheses[k]:
                     costs[i, column] = distance
             try:
                 _, col4row = _stock_neighbour.linear_sum_assignment(costs, False)
@@ -312,8 +311,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                     continue
                 chosen = next((h for h in hypotheses[k] if h[0] == column), None)
                 if chosen is not None:
-                    column, distance, batch = chosen
-                    chosen = (column, distance, _measurement_prediction(batch, k, timestamp))
+                    column, distance, batch, brow = chosen
+                    chosen = (column, distance, _measurement_prediction(batch, brow, timestamp))
                 assigned[k] = chosen
         self._pred = (pred_means, pred_covars)
         return assigned

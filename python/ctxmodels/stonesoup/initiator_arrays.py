@@ -11,7 +11,7 @@ from stonesoup.types.angle import Bearing
 
 from .. import _core
 from .fast import detection_vectors, wrap_plan
-from .fast_association import SCREEN_MARGIN, screen_pairs
+from .fast_association import SCREEN_MARGIN, _measurement_prediction, screen_pairs
 
 
 def screen(batch, dets, missed_distance: float, squared: bool) -> np.ndarray:
@@ -21,28 +21,63 @@ def screen(batch, dets, missed_distance: float, squared: bool) -> np.ndarray:
     covers the difference many times over). Angle rows other than :class:`Bearing` run the
     NumPy screen."""
     n = len(batch.means)
+    args = _screen_args(batch.angle_rows, batch.means.shape[1], dets, missed_distance, squared)
+    if args is not None and args[0] is None:  # the arrays cannot be formed
+        return np.ones((n, len(dets)), dtype=bool)
+    if args is None or batch.means.dtype != np.float64 or batch.covars.dtype != np.float64 \
+            or batch.covars.ndim != 3:
+        return screen_pairs(batch, dets, missed_distance, squared, invert=np.linalg.inv)
+    if args[0] is False:
+        return np.zeros((n, len(dets)), dtype=bool)
+    z, wrap, threshold = args
+    return _core.jpda_screen(np.ascontiguousarray(batch.means), np.ascontiguousarray(batch.covars),
+                             z, wrap, threshold, SCREEN_MARGIN)
+
+
+def screen_states(core, means, covars, dets, missed_distance: float, squared: bool):
+    """:func:`screen` of the predicted states ``means`` (N, D, 1) / ``covars`` (N, D, D)
+    themselves: the core forms their predicted measurements and innovation covariances
+    (``_core.jpda_screen_states``; the rounding differs from the stock measurement
+    prediction's far less than the margin, and a bearing at the wrap stays a candidate).
+    ``core`` is (the core's model, its angle rows) or None; None when this cannot screen."""
+    if core is None or means.dtype != np.float64 or covars.dtype != np.float64:
+        return None
+    model, angle_rows = core
+    args = _screen_args(angle_rows, model.ndim_meas, dets, missed_distance, squared)
+    if args is None or args[0] is None:
+        return None
+    if args[0] is False:
+        return np.zeros((len(means), len(dets)), dtype=bool)
+    z, wrap, threshold = args
+    return _core.jpda_screen_states(model, np.ascontiguousarray(means[:, :, 0]),
+                                    np.ascontiguousarray(covars), z, wrap, threshold,
+                                    SCREEN_MARGIN)
+
+
+def _screen_args(angle_rows: dict, ndim_meas: int, dets, missed_distance, squared):
+    """(detections (K, m), wrap (K, m), threshold) for the core's screen; (False,) when no
+    pair can pass; (None,) when the detections' arrays cannot be formed; None when an angle
+    type other than :class:`Bearing` is involved."""
     try:
         z, kinds = detection_vectors(dets)
-        if z.ndim != 2 or z.shape[1] != batch.means.shape[1] or batch.covars.ndim != 3:
-            return np.ones((n, len(dets)), dtype=bool)
-        plan = wrap_plan(batch.angle_rows, kinds, z.shape[1])
+        if z.ndim != 2 or z.shape[1] != ndim_meas:
+            return (None,)
+        plan = wrap_plan(angle_rows, kinds, z.shape[1])
     except (ValueError, TypeError):
-        return np.ones((n, len(dets)), dtype=bool)
-    if any(cls is not Bearing for _, cls, _ in plan) or batch.means.dtype != np.float64 \
-            or batch.covars.dtype != np.float64:
-        return screen_pairs(batch, dets, missed_distance, squared, invert=np.linalg.inv)
+        return (None,)
+    if any(cls is not Bearing for _, cls, _ in plan):
+        return None
     if squared:
         threshold = missed_distance
     elif missed_distance > 0:
         threshold = missed_distance * missed_distance
     else:
         # a square root is never below a non-positive gate (NaN is not below anything)
-        return np.zeros((n, len(dets)), dtype=bool)
+        return (False,)
     wrap = np.zeros(z.shape, dtype=bool)
     for row, _, mask in plan:
         wrap[mask, row] = True
-    return _core.jpda_screen(np.ascontiguousarray(batch.means), np.ascontiguousarray(batch.covars),
-                             np.ascontiguousarray(z), wrap, float(threshold), SCREEN_MARGIN)
+    return np.ascontiguousarray(z), wrap, float(threshold)
 
 
 class ControlTerms:
@@ -130,6 +165,46 @@ def wrap_rows(measurement_vector, predicted_kinds: tuple):
         else:
             return None
     return tuple(wrap)
+
+
+def pair_distances(batch, rows: list, cols: list, dets, measure, squared: bool,
+                   timestamp) -> list:
+    """The stock ``measure`` (a Mahalanobis or squared Mahalanobis measure without mapping)
+    between predicted measurement ``rows[p]`` of ``batch`` and detection ``dets[cols[p]]``,
+    for each pair p: float vectors with the measure's own arithmetic (``pinv`` of each S in
+    one stacked call, then its ``einsum`` per pair), Bearing-typed pairs in stacked arrays
+    (:func:`typed_distances`), anything else by the measure itself."""
+    columns = set(cols)
+    if not batch.angle_rows and all(dets[c].state_vector.dtype == np.float64 for c in columns):
+        unique = sorted(set(rows))
+        inverses = dict(zip(unique, np.linalg.pinv(batch.covars[unique])))
+        out = []
+        for row, col in zip(rows, cols):
+            delta = -(dets[col].state_vector.T - batch.means[row])
+            distance = np.einsum('ij,jk,ik->i', delta, inverses[row], delta).squeeze()[()]
+            out.append(distance if squared else np.sqrt(distance))
+        return out
+    typed: dict = {}
+    if not squared and batch.objects is None and batch.angle_rows \
+            and all(cls is Bearing for cls in batch.angle_rows.values()):
+        kinds = tuple(batch.angle_rows.get(i, float) for i in range(batch.means.shape[1]))
+        wraps = {c: wrap_rows(dets[c].state_vector, kinds) for c in columns}
+        pairs = [(r, c) for r, c in zip(rows, cols) if wraps[c] is not None]
+        if pairs:
+            typed = dict(zip(pairs, typed_distances(
+                batch, [r for r, _ in pairs], [dets[c] for _, c in pairs],
+                [wraps[c] for _, c in pairs])))
+    out = []
+    cache: dict = {}
+    for row, col in zip(rows, cols):
+        distance = typed.get((row, col))
+        if distance is None:
+            mp = cache.get(row)
+            if mp is None:
+                mp = cache[row] = _measurement_prediction(batch, row, timestamp)
+            distance = measure(mp, dets[col])
+        out.append(distance)
+    return out
 
 
 def typed_distances(batch, rows, dets, wraps) -> list:
