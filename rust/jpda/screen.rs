@@ -22,7 +22,7 @@
 use super::measurement::{mod_bearing, MeasurementModel};
 use super::{too_large, try_filled};
 use crate::error::{ModelError, Result};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 use std::f64::consts::PI;
 
 /// How close to ±π a wrapped element keeps its pair.
@@ -67,11 +67,12 @@ pub fn screen_pairs(input: &ScreenInput) -> Result<Vec<bool>> {
     }
     let mut out = try_filled(n.checked_mul(k), true).ok_or_else(|| too_large(n, k))?;
     let mut delta = vec![0.0; m];
+    let mut work = vec![0.0; 2 * m * m];
+    let mut inverse = vec![0.0; m * m];
     for row in 0..n {
-        let s = DMatrix::from_row_slice(m, m, &input.covars[row * m * m..(row + 1) * m * m]);
-        let Some(inverse) = s.lu().try_inverse() else {
-            continue; // singular: every pair of the row stays a candidate
-        };
+        if !invert(&input.covars[row * m * m..(row + 1) * m * m], m, &mut work, &mut inverse) {
+            continue; // singular or not finite: every pair of the row stays a candidate
+        }
         let zhat = &input.means[row * m..(row + 1) * m];
         for col in 0..k {
             let z = &input.detections[col * m..(col + 1) * m];
@@ -93,7 +94,7 @@ pub fn screen_pairs(input: &ScreenInput) -> Result<Vec<bool>> {
             let (mut d2, mut magnitude) = (0.0, 0.0);
             for i in 0..m {
                 for j in 0..m {
-                    let term = delta[i] * inverse[(i, j)] * delta[j];
+                    let term = delta[i] * inverse[i * m + j] * delta[j];
                     d2 += term;
                     magnitude += term.abs();
                 }
@@ -103,6 +104,48 @@ pub fn screen_pairs(input: &ScreenInput) -> Result<Vec<bool>> {
         }
     }
     Ok(out)
+}
+
+/// The inverse of the row-major `m × m` matrix `s` into `out` by Gauss–Jordan elimination
+/// with partial pivoting (`work`: 2m² scratch); false when `s` is singular or not finite.
+fn invert(s: &[f64], m: usize, work: &mut [f64], out: &mut [f64]) -> bool {
+    if s.iter().any(|v| !v.is_finite()) {
+        return false;
+    }
+    let w = 2 * m;
+    for i in 0..m {
+        for j in 0..m {
+            work[i * w + j] = s[i * m + j];
+            work[i * w + m + j] = if i == j { 1.0 } else { 0.0 };
+        }
+    }
+    for col in 0..m {
+        let pivot = (col..m).max_by(|&a, &b| work[a * w + col].abs().total_cmp(&work[b * w + col].abs())).unwrap_or(col);
+        let value = work[pivot * w + col];
+        if value == 0.0 || !value.is_finite() {
+            return false;
+        }
+        if pivot != col {
+            for j in 0..w {
+                work.swap(pivot * w + j, col * w + j);
+            }
+        }
+        for j in 0..w {
+            work[col * w + j] /= value;
+        }
+        for r in 0..m {
+            let factor = work[r * w + col];
+            if r != col && factor != 0.0 {
+                for j in 0..w {
+                    work[r * w + j] -= factor * work[col * w + j];
+                }
+            }
+        }
+    }
+    for i in 0..m {
+        out[i * m..(i + 1) * m].copy_from_slice(&work[i * w + m..(i + 1) * w]);
+    }
+    out.iter().all(|v| v.is_finite())
 }
 
 /// [`screen_pairs`] of `N` predicted states `means` (N×D) / `covars` (N×D×D)
@@ -121,6 +164,7 @@ pub fn screen_states(model: &MeasurementModel, dim: usize, means: &[f64], covars
         return Err(ModelError::shape("covars", format!("must be ({n}, {dim}, {dim}), got {} values", covars.len())));
     }
     model.check_dim(dim)?;
+    let noise = model.noise();
     let mut zhat = try_filled(n.checked_mul(m), f64::NAN).ok_or_else(|| too_large(n, 1))?;
     let mut innovation = try_filled(n.checked_mul(m * m), f64::NAN).ok_or_else(|| too_large(n, 1))?;
     for row in 0..n {
@@ -130,11 +174,22 @@ pub fn screen_states(model: &MeasurementModel, dim: usize, means: &[f64], covars
             continue; // NaN: every pair stays a candidate
         }
         let (z, h) = model.linearise(&DVector::from_row_slice(x));
-        let s = &h * DMatrix::from_row_slice(dim, dim, p) * h.transpose() + model.noise();
         zhat[row * m..(row + 1) * m].copy_from_slice(z.as_slice());
+        // S = H P Hᵀ + R without temporaries (the zero entries of H skipped: finite P)
         for i in 0..m {
             for j in 0..m {
-                innovation[(row * m + i) * m + j] = s[(i, j)];
+                let mut sum = noise[(i, j)];
+                for a in 0..dim {
+                    let hia = h[(i, a)];
+                    if hia == 0.0 {
+                        continue;
+                    }
+                    let pa = &p[a * dim..(a + 1) * dim];
+                    for (b, &pab) in pa.iter().enumerate() {
+                        sum += hia * pab * h[(j, b)];
+                    }
+                }
+                innovation[(row * m + i) * m + j] = sum;
             }
         }
     }
@@ -230,6 +285,27 @@ mod tests {
         let dets = [PI - 0.1, 5.0];
         let out = screen_pairs(&input(&means, &covars, &dets, &[true, false], 1.0)).unwrap();
         assert_eq!(out, vec![false]);
+    }
+
+    #[test]
+    fn inverts_as_lu_does() {
+        let mut work = vec![0.0; 18];
+        let mut out = vec![0.0; 9];
+        let s = [4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0];
+        assert!(invert(&s, 3, &mut work, &mut out));
+        let reference = nalgebra::DMatrix::from_row_slice(3, 3, &s).lu().try_inverse().unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((out[i * 3 + j] - reference[(i, j)]).abs() < 1e-15);
+            }
+        }
+        // a zero first pivot needs the row swap
+        let s = [0.0, 2.0, 3.0, 1.0];
+        assert!(invert(&s, 2, &mut work, &mut out));
+        assert_eq!(&out[..4], &[-1.0 / 6.0, 1.0 / 3.0, 0.5, 0.0]);
+        assert!(!invert(&[1.0, 2.0, 2.0, 4.0], 2, &mut work, &mut out));
+        assert!(!invert(&[f64::NAN, 0.0, 0.0, 1.0], 2, &mut work, &mut out));
+        assert!(!invert(&[1e308, 0.0, 0.0, 1e-320], 2, &mut work, &mut out));
     }
 
     #[test]
