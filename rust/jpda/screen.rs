@@ -23,6 +23,7 @@ use super::measurement::{mod_bearing, MeasurementModel};
 use super::{too_large, try_filled};
 use crate::error::{ModelError, Result};
 use nalgebra::DVector;
+use std::cmp::Ordering;
 use std::f64::consts::PI;
 
 /// How close to ±π a wrapped element keeps its pair.
@@ -99,8 +100,8 @@ pub fn screen_pairs(input: &ScreenInput) -> Result<Vec<bool>> {
                     magnitude += term.abs();
                 }
             }
-            // NaN compares false: the pair stays a candidate
-            out[row * k + col] = !(d2 - input.margin * magnitude > input.threshold);
+            // NaN is unordered: the pair stays a candidate
+            out[row * k + col] = (d2 - input.margin * magnitude).partial_cmp(&input.threshold) != Some(Ordering::Greater);
         }
     }
     Ok(out)
