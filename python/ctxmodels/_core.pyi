@@ -27,6 +27,8 @@ __all__ = [
     "jpda_marginals",
     "jpda_predict",
     "jpda_scan",
+    "jpda_screen",
+    "jpda_screen_states",
     "mount",
     "rule_points",
 ]
@@ -328,5 +330,30 @@ def jpda_scan(
 def jpda_marginals(weights: _Floats, gated: _Bools) -> _Floats:
     """Exact joint association marginals of (T, M+1) weights (column 0: missed detection)
     and the (T, M) gated hypotheses."""
+
+def jpda_screen(
+    means: _Floats,
+    covars: _Floats,
+    detections: _Floats,
+    wrap: _Bools,
+    threshold: float,
+    margin: float,
+) -> _Bools:
+    """(N, K) mask of the pairs of predicted measurements `means` (N, m) / innovation
+    covariances `covars` (N, m, m) and `detections` (K, m) that may pass the gate
+    `threshold` on the squared Mahalanobis distance (relative `margin`; `wrap` (K, m): the
+    bearing elements)."""
+
+def jpda_screen_states(
+    model: JPDAMeasurementModel,
+    means: _Floats,
+    covars: _Floats,
+    detections: _Floats,
+    wrap: _Bools,
+    threshold: float,
+    margin: float,
+) -> _Bools:
+    """`jpda_screen` of predicted states `means` (N, D) / `covars` (N, D, D) under `model`
+    (the core forms their predicted measurements and innovation covariances)."""
 
 # --- end of whole-scan JPDA -------------------------------------------------------------------

@@ -32,11 +32,13 @@
 
 mod marginals;
 mod measurement;
+mod screen;
 #[cfg(test)]
 mod tests;
 
 pub use marginals::{brute_force_marginals, joint_marginals, MAX_TREE_EDGES, MAX_TREE_NODES};
 pub use measurement::{mod_bearing, Jacobian, MeasurementModel};
+pub use screen::{screen_pairs, screen_states, ScreenInput};
 
 use crate::error::{ModelError, Result};
 use nalgebra::{DMatrix, DVector};

@@ -35,97 +35,29 @@ from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeSte
 from stonesoup.hypothesiser.distance import DistanceHypothesiser
 from stonesoup.measures import Mahalanobis, SquaredMahalanobis
 from stonesoup.models.base import LinearModel, ReversibleModel
+from stonesoup.types.angle import Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
-from stonesoup.initiator.simple import SimpleMeasurementInitiator
-from stonesoup.models.measurement.linear import LinearGaussian
-from stonesoup.models.measurement import nonlinear as _nonlinear
-from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
-from stonesoup.types.hypothesis import SingleDistanceHypothesis, SingleHypothesis
-from stonesoup.types.track import Track
-from stonesoup.types.prediction import GaussianStatePrediction
+from stonesoup.types.hypothesis import SingleDistanceHypothesis
 from stonesoup.types.state import GaussianState
-from stonesoup.types.update import GaussianStateUpdate, Update
+from stonesoup.types.update import Update
 
 from .deleter import UpdateTimeStepsDeleter
-from .fast import (KALMAN_UPDATERS, ObjectFactory, _analytic_bearing_range_batch,
-                   _bearing_range_batch, measurement_batch,
-                   supports_predictor)
+from .fast import KALMAN_UPDATERS, ObjectFactory, measurement_batch, supports_predictor
 from .fast_association import (
     FastGNNWith2DAssignment,
     _copied_properties,
     _measurement_prediction,
-    _weaken_prior_chain,
-    screen_pairs,
 )
-from .measurement import AnalyticCartesianToBearingRange
+from .initiator_births import UPDATE_STATE, Births
+from .initiator_blocks import PRIOR_PREDICTION, Block, Holding, materialise
+from .initiator_arrays import (ControlTerms, angle_wrap, kalman_updates, pair_distances,
+                               predict_rows, screen, screen_states)
 from .mixture_tracker import MultiMeasurementInitiator
 from .ordering import OrderedDetections, in_stable_order, in_track_order
 
-#: A prediction as ``Prediction.from_state`` builds it (transition model and prior).
-_PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
-    state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
-    transition_model=None, prior=None))
-
-
-def _inverse_bearing_range(model, detections) -> list:
-    """``model.inverse_function(det)`` for each detection, with the same operations (the
-    inverse rotation, a deterministic function of the model, computed once)."""
-    if not (model.rotation_offset[0] == 0 and model.rotation_offset[1] == 0):
-        return [model.inverse_function(det) for det in detections]  # the stock error
-    inverse_rotation = _nonlinear.inv(model.rotation_matrix)
-    offset = model.translation_offset[:2, :]
-    mapping = model.mapping[:2]
-    vectors = []
-    for det in detections:
-        vector = det.state_vector
-        x, y = _nonlinear.pol2cart(vector[1, :], vector[0, :])
-        xyz = inverse_rotation @ np.array([x, y, np.zeros(vector.shape[1])])
-        res = np.zeros((model.ndim_state, vector.shape[1])).view(StateVector)
-        res[mapping, :] = xyz[0:2] + offset
-        vectors.append(res)
-    return vectors
-
-
-def _screen(batch, dets, missed_distance: float, squared: bool) -> np.ndarray:
-    """:func:`~ctxmodels.stonesoup.fast_association.screen_pairs` with LU inverses of the
-    innovation covariances (cheaper than pseudo-inverses; the 1e-6 relative margin covers
-    the difference many times over)."""
-    return screen_pairs(batch, dets, missed_distance, squared, invert=np.linalg.inv)
-
-#: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
-_UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(
-    state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]),
-    hypothesis=SingleHypothesis(None, None), timestamp=None))
-
-
-class _Holding:
-    """A holding track: its Track (states up to the last materialisation) and the first
-    scan block whose states it does not hold yet."""
-
-    __slots__ = ("track", "pending_from")
-
-    def __init__(self, track, pending_from):
-        self.track = track
-        self.pending_from = pending_from
-
-
-class _Block:
-    """One scan of the holding tracks: their predictions (rows in ``records`` order), the
-    scan time, the updates of the rows that were updated, the rows given no state."""
-
-    __slots__ = ("means", "covars", "timestamp", "records", "updates", "skipped", "_rows")
-
-    def __init__(self, means, covars, timestamp, records):
-        self.means, self.covars, self.timestamp = means, covars, timestamp
-        self.records = records
-        self.updates: dict = {}  # id(record) -> update state (its prediction's prior unset)
-        self.skipped: set = set()
-        self._rows = None
-
-    def row(self, record) -> int:
-        if self._rows is None:
-            self._rows = {id(r): k for k, r in enumerate(self.records)}
-        return self._rows[id(record)]
+#: A hypothesis as the distance hypothesiser builds it.
+_DISTANCE_HYPOTHESIS = ObjectFactory(SingleDistanceHypothesis, dict(
+    prediction=None, measurement=None, distance=0.0, measurement_prediction=None))
 
 
 class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
@@ -135,15 +67,19 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._records: list[_Holding] = []
+        self._records: list[Holding] = []
+        self._serials: list = []  # the records' serials (ascending)
+        self._next_serial = 0
         self._means = None  # (H, D, 1): each holding track's last state, aligned with _records
         self._covars = None  # (H, D, D)
         self._since = np.empty(0, dtype=np.int64)  # distinct times since the last detection
         self._counted = np.empty(0, dtype=np.int64)  # points towards release
         self._last_times: list = []
-        self._blocks: dict[int, _Block] = {}
+        self._blocks: dict[int, Block] = {}
         self._next_block = 0
-        self._linear_cache: dict = {}
+        self._births = Births()
+        self._control_terms = ControlTerms()
+        self._core_models: dict = {}
         self.array_calls = 0
         self.component_calls = 0
 
@@ -167,38 +103,17 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 and not deleter.delete_last_pred)
 
     # --- pending states ------------------------------------------------------------------------
-    def _materialise(self, record: _Holding) -> None:
+    def _materialise(self, record: Holding) -> None:
         """Append the states the component path would have appended since the record's last
-        materialisation: predictions (transition model, previous state as prior) and updates
-        (their prediction's prior set to the previous state), in scan order."""
-        if record.pending_from >= self._next_block:
-            return
-        track = record.track
-        transition = self.data_associator.hypothesiser.predictor.transition_model
-        key = id(record)
-        for b in range(record.pending_from, self._next_block):
-            block = self._blocks[b]
-            if key in block.skipped:
-                continue
-            prior = track.state
-            _weaken_prior_chain(prior)
-            update = block.updates.get(key)
-            if update is not None:
-                update.hypothesis.prediction.prior = prior
-                track.append(update)
-                continue
-            row = block.row(record)
-            track.append(_PRIOR_PREDICTION(
-                state_vector=block.means[row].view(StateVector),
-                covar=block.covars[row].view(CovarianceMatrix), timestamp=block.timestamp,
-                transition_model=transition, prior=prior,
-                **{name: getattr(prior, name) for name in _copied_properties(type(prior))}))
-        record.pending_from = self._next_block
+        materialisation (see :func:`~ctxmodels.stonesoup.initiator_blocks.materialise`)."""
+        materialise(record, self._blocks, self._next_block,
+                    self.data_associator.hypothesiser.predictor.transition_model)
 
     def _materialise_all(self) -> None:
         for record in self._records:
             self._materialise(record)
         self._records = []
+        self._serials = []
         self._means = self._covars = None
         self._since = np.empty(0, dtype=np.int64)
         self._counted = np.empty(0, dtype=np.int64)
@@ -212,9 +127,10 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             del self._blocks[b]
 
     def _read_track(self, track, ndim):
-        """(points, distinct times since the last detection) of a track joining the holding
-        set, or None if its last state cannot be held as arrays."""
-        state = track.state if len(track) else None
+        """(last state, points, distinct times since the last detection) of a track joining
+        the holding set, or None if its last state cannot be held as arrays."""
+        states = track.states
+        state = states[-1] if len(states) else None
         vector, covar = getattr(state, "state_vector", None), getattr(state, "covar", None)
         if not (isinstance(state, GaussianState) and _copied_properties(type(state)) is not None
                 and isinstance(vector, np.ndarray) and vector.dtype == np.float64
@@ -222,13 +138,15 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 and covar.dtype == np.float64 and covar.shape == (ndim, ndim)
                 and state.timestamp is not None):
             return None
-        points = sum(1 for s in track.states if self._counts(s))
+        if len(states) == 1:  # a new track: one state, one time
+            return state, (1 if self._counts(state) else 0), 1
+        points = sum(1 for s in states if self._counts(s))
         since = set()
-        for s in reversed(track.states):
+        for s in reversed(states):
             since.add(s.timestamp)
             if isinstance(s, Update) and s.hypothesis:
                 break
-        return points, len(since)
+        return state, points, len(since)
 
     def _sync(self, ndim) -> bool:
         """Aligns the records with :attr:`holding_tracks` (tracks removed or added from
@@ -243,6 +161,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         added = in_track_order(t for t in live if id(t) not in present)
         if len(keep) < len(records):
             self._records = [records[k] for k in keep]
+            self._serials = [self._serials[k] for k in keep]
             if self._means is not None:
                 self._means, self._covars = self._means[keep], self._covars[keep]
             self._counted, self._since = self._counted[keep], self._since[keep]
@@ -257,17 +176,35 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         if any(r is None for r in read):
             return False
         empty = self._means is None
-        self._records = self._records + [_Holding(t, self._next_block) for t in added]
+        first = self._next_serial
+        self._next_serial += len(added)
+        self._records = self._records + [Holding(t, self._next_block, first + k)
+                                         for k, t in enumerate(added)]
+        self._serials = self._serials + list(range(first, first + len(added)))
         self._means = np.concatenate(
             [np.empty((0, ndim, 1)) if empty else self._means]
-            + [t.state.state_vector[np.newaxis] for t in added])
+            + [state.state_vector[np.newaxis] for state, _, _ in read])
         self._covars = np.concatenate(
             [np.empty((0, ndim, ndim)) if empty else self._covars]
-            + [t.state.covar[np.newaxis] for t in added])
-        self._counted = np.concatenate([self._counted, [p for p, _ in read]]).astype(np.int64)
-        self._since = np.concatenate([self._since, [n for _, n in read]]).astype(np.int64)
-        self._last_times = self._last_times + [t.state.timestamp for t in added]
+            + [state.covar[np.newaxis] for state, _, _ in read])
+        self._counted = np.concatenate([self._counted, [p for _, p, _ in read]]).astype(np.int64)
+        self._since = np.concatenate([self._since, [n for _, _, n in read]]).astype(np.int64)
+        self._last_times = self._last_times + [state.timestamp for state, _, _ in read]
         return True
+
+    def _core_model(self, updater, model):
+        """(the core's model, its angle rows) for screening predicted states measured by
+        ``model``, or None (then the measurement predictions of all rows screen)."""
+        cached = self._core_models.get(id(model))
+        if cached is None or cached[0] is not model or cached[1] is not type(updater):
+            from .array_jpda import _core_model  # (that module builds on this one)
+            core, bearing_row = _core_model(type(updater), model)
+            entry = None if core is None else (core, {} if bearing_row is None
+                                               else {bearing_row: Bearing})
+            cached = self._core_models[id(model)] = (model, type(updater), entry)
+            if len(self._core_models) > 64:
+                self._core_models = {id(model): cached}
+        return cached[2]
 
     # --- a scan ---------------------------------------------------------------------------------
     def initiate(self, detections, timestamp, **kwargs):
@@ -299,100 +236,9 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
 
     # --- new holding tracks ----------------------------------------------------------------------
     def _new_tracks(self, detections, timestamp):
-        """What the inner initiator returns for ``detections``. The default
-        :class:`~stonesoup.initiator.simple.SimpleMeasurementInitiator` is computed per
-        measurement model: a linear model's pseudo-inverse and initial covariance once, a
-        bearing–range model's Jacobians (finite difference or closed form), pseudo-inverses and covariances as
-        stacked arrays (the stock expressions, matrix by matrix); other initiators and models
-        run their own code."""
-        inner = self.initiator
-        if type(inner) is not SimpleMeasurementInitiator:
-            return inner.initiate(set(detections), timestamp)
-        groups: dict = {}
-        other = []
-        for det in detections:
-            model = det.measurement_model if det.measurement_model is not None \
-                else inner.measurement_model
-            kind = type(model)
-            if kind is LinearGaussian or (kind in (CartesianToBearingRange,
-                                                   AnalyticCartesianToBearingRange)
-                                          and len(model.mapping) == 2):
-                groups.setdefault(id(model), (model, []))[1].append(det)
-            else:
-                other.append(det)
-        tracks = inner.initiate(set(other), timestamp) if other else set()
-        prior = inner.prior_state
-        load = np.diag(np.array([inner.diag_load] * len(prior.state_vector)))
-        for model, dets in groups.values():
-            prior_vector = prior.state_vector.copy()
-            prior_covar = prior.covar.copy()
-            mapped = model.mapping
-            prior_vector[mapped, :] = 0
-            for dim in mapped:
-                prior_covar[dim, :] = prior_covar[:, dim] = 0
-            noise = model.covar()
-            if type(model) is LinearGaussian:
-                matrix = model.matrix()
-                # the pseudo-inverse and covariance of a model, while its numbers are the same
-                key = (matrix.tobytes(), np.asarray(noise).tobytes(), prior_covar.tobytes(),
-                       load.tobytes())
-                cached = self._linear_cache.get(id(model))
-                if cached is None or cached[0] is not model or cached[1] != key:
-                    inverse = np.linalg.pinv(matrix)
-                    covar = inverse @ noise @ inverse.T
-                    covar = covar + prior_covar + load
-                    cached = self._linear_cache[id(model)] = (model, key, inverse, covar)
-                    if len(self._linear_cache) > 16:
-                        self._linear_cache = {id(model): cached}
-                _, _, inverse, covar = cached
-                vectors = [inverse @ det.state_vector for det in dets]
-                covars = [covar.copy() for _ in dets]  # one array per state, as stock
-            else:
-                vectors = _inverse_bearing_range(model, dets)
-                means = np.array(vectors, dtype=np.float64)
-                zeros = np.zeros((len(dets),) + (means.shape[1],) * 2)
-                # the model's own Jacobian, state by state, bit for bit
-                if type(model) is AnalyticCartesianToBearingRange:
-                    _, _, _, jacobians = _analytic_bearing_range_batch(model, means, zeros, None)
-                else:
-                    _, _, _, jacobians = _bearing_range_batch(model, means, zeros)
-                inverses = np.linalg.pinv(jacobians)
-                stacked = (inverses @ np.asarray(noise)[np.newaxis]) @ inverses.transpose(0, 2, 1)
-                covars = [c.view(CovarianceMatrix) + prior_covar + load for c in stacked]
-            plain = type(prior) is GaussianState
-            for det, vector, covar in zip(dets, vectors, covars):
-                if plain:  # what Update.from_state builds from a plain GaussianState
-                    state = _UPDATE_STATE(
-                        state_vector=(prior_vector + vector).view(StateVector),
-                        covar=covar.view(CovarianceMatrix),
-                        hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)
-                else:
-                    state = Update.from_state(
-                        prior, state_vector=prior_vector + vector, covar=covar,
-                        hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)
-                tracks.add(Track([state]))
-        return tracks
-
-    def _update(self, hypothesis):
-        """``self.updater.update(hypothesis)``: for float vectors under a Kalman updater
-        without covariance options, the same NumPy expressions without the updater's
-        per-call machinery (the same numbers, bit for bit)."""
-        updater = self.updater
-        mp, measurement = hypothesis.measurement_prediction, hypothesis.measurement
-        if (type(updater) not in KALMAN_UPDATERS or updater.use_joseph_cov
-                or updater.force_positive_definite_covariance
-                or mp.state_vector.dtype != np.float64
-                or measurement.state_vector.dtype != np.float64):
-            return updater.update(hypothesis)
-        prediction = hypothesis.prediction
-        gain = mp.cross_covar @ np.linalg.inv(mp.covar)
-        covar = prediction.covar - gain @ mp.covar @ gain.T
-        if updater.force_symmetric_covariance:  # (P + Pᵀ)/2 on the plain array: the same
-            plain = np.asarray(covar)              # numbers, without the ufunc wrapper
-            covar = (plain + plain.T) / 2
-        mean = prediction.state_vector + gain @ (measurement.state_vector - mp.state_vector)
-        return _UPDATE_STATE(state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
-                             hypothesis=hypothesis, timestamp=measurement.timestamp)
+        """What the inner initiator returns for ``detections`` (see
+        :mod:`~ctxmodels.stonesoup.initiator_births`)."""
+        return self._births(self.initiator, detections, timestamp)
 
     def _associate(self, detections, timestamp):
         """Per holding row: the assigned (detection index, distance, measurement prediction,
@@ -403,27 +249,11 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         missed_distance = hypothesiser.missed_distance
         records = self._records
         n = len(records)
-        pred_means = np.empty_like(self._means)
-        pred_covars = np.empty_like(self._covars)
-        groups: dict = {}
-        for k, last in enumerate(self._last_times):
-            groups.setdefault(timestamp - last, []).append(k)
-        model = predictor.transition_model
-        control = predictor.control_model
-        for interval, members in groups.items():
-            idx = np.asarray(members) if len(members) < n else slice(None)
-            prior = records[members[0]].track.state
-            matrix = np.asarray(model.matrix(time_interval=interval), dtype=np.float64)
-            offset = control.function(None, prior=prior, time_interval=interval)
-            pred_means[idx] = (matrix[np.newaxis] @ self._means[idx]) \
-                + np.asarray(offset, dtype=np.float64)
-            process = np.asarray(model.covar(time_interval=interval), dtype=np.float64)
-            ctrl = control.matrix(control_input=None, prior=prior, time_interval=interval)
-            ctrl_noise = ctrl @ control.control_noise @ ctrl.T
-            pred_covars[idx] = ((matrix[np.newaxis] @ self._covars[idx]) @ matrix.T[np.newaxis]
-                                + process) + ctrl_noise
+        pred_means, pred_covars = predict_rows(
+            predictor, self._control_terms, lambda k: records[k].track.state, self._means,
+            self._covars, self._last_times, timestamp)
 
-        hypotheses: dict[int, list] = {}  # row -> [(column, distance, batch)]
+        hypotheses: dict[int, list] = {}  # row -> [(column, distance, batch, batch row)]
         if detections:
             by_model: dict = {}
             for j, det in enumerate(detections):
@@ -431,38 +261,36 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             squared = type(measure) is SquaredMahalanobis
             for raw_model, members in by_model.items():
                 resolved = updater._check_measurement_model(raw_model)
-                batch = measurement_batch(updater, resolved, pred_means, pred_covars)
                 group_dets = [detections[j] for j in members]
-                if hypothesiser.include_all:
-                    candidates = np.ones((n, len(members)), dtype=bool)
+                candidates = None if hypothesiser.include_all else screen_states(
+                    self._core_model(updater, resolved), pred_means, pred_covars, group_dets,
+                    float(missed_distance), squared)
+                if candidates is not None:
+                    # only the rows that kept a pair: their measurement prediction (row by
+                    # row the same numbers as in a batch of all rows)
+                    index = np.flatnonzero(candidates.any(axis=1))
+                    if not index.size:
+                        continue
+                    batch = measurement_batch(updater, resolved, pred_means[index],
+                                              pred_covars[index])
+                    candidates = candidates[index]
                 else:
-                    candidates = _screen(batch, group_dets, float(missed_distance), squared)
-                rows, cols = np.nonzero(candidates)
+                    index = None
+                    batch = measurement_batch(updater, resolved, pred_means, pred_covars)
+                    candidates = np.ones((n, len(members)), dtype=bool) \
+                        if hypothesiser.include_all \
+                        else screen(batch, group_dets, float(missed_distance), squared)
+                rows, cols = np.nonzero(candidates)  # batch rows
                 if not rows.size:
                     continue
-                plain = not batch.angle_rows and all(
-                    group_dets[c].state_vector.dtype == np.float64 for c in set(cols.tolist()))
-                if plain:
-                    # the stock measure's arithmetic on float vectors: pinv of each S (one
-                    # stacked call, matrix by matrix), then its einsum per pair
-                    unique = sorted(set(rows.tolist()))
-                    inverses = dict(zip(unique, np.linalg.pinv(batch.covars[unique])))
-                cache: dict = {}
-                for row, col in zip(rows.tolist(), cols.tolist()):
-                    det = group_dets[col]
-                    if plain:
-                        delta = -(det.state_vector.T - batch.means[row])
-                        distance = np.einsum('ij,jk,ik->i', delta, inverses[row],
-                                             delta).squeeze()[()]
-                        if not squared:
-                            distance = np.sqrt(distance)
-                    else:
-                        mp = cache.get(row)
-                        if mp is None:
-                            mp = cache[row] = _measurement_prediction(batch, row, timestamp)
-                        distance = measure(mp, det)
+                distances = pair_distances(batch, rows.tolist(), cols.tolist(), group_dets,
+                                           measure, squared, timestamp)
+                holding = rows if index is None else index[rows]
+                for row, brow, col, distance in zip(holding.tolist(), rows.tolist(),
+                                                    cols.tolist(), distances):
                     if hypothesiser.include_all or distance < missed_distance:
-                        hypotheses.setdefault(row, []).append((members[col], distance, batch))
+                        hypotheses.setdefault(row, []).append(
+                            (members[col], distance, batch, brow))
 
         assigned: list = ["missed"] * n
         detected = sorted(hypotheses)
@@ -471,7 +299,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             costs = np.full((len(detected), n_dets + len(detected)), np.inf)
             for i, k in enumerate(detected):
                 costs[i, n_dets + i] = missed_distance
-                for column, distance, _ in hypotheses[k]:
+                for column, distance, _, _ in hypotheses[k]:
                     costs[i, column] = distance
             try:
                 _, col4row = _stock_neighbour.linear_sum_assignment(costs, False)
@@ -483,8 +311,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                     continue
                 chosen = next((h for h in hypotheses[k] if h[0] == column), None)
                 if chosen is not None:
-                    column, distance, batch = chosen
-                    chosen = (column, distance, _measurement_prediction(batch, k, timestamp))
+                    column, distance, batch, brow = chosen
+                    chosen = (column, distance, _measurement_prediction(batch, brow, timestamp))
                 assigned[k] = chosen
         self._pred = (pred_means, pred_covars)
         return assigned
@@ -497,7 +325,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         pred_means, pred_covars = self._pred
         del self._pred
         records = self._records
-        block = _Block(pred_means, pred_covars, timestamp, records)
+        block = Block(pred_means, pred_covars, timestamp, self._serials)
         index = self._next_block
         self._blocks[index] = block
         self._next_block += 1
@@ -506,27 +334,49 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                                count=len(records))
         appended = np.ones(len(records), dtype=bool)
         updated = np.zeros(len(records), dtype=bool)
+        updater = self.updater
+        batched = (type(updater) in KALMAN_UPDATERS and not updater.use_joseph_cov
+                   and not updater.force_positive_definite_covariance)
+        pending = []  # float hypotheses, updated together below
+        transition = hypothesiser.predictor.transition_model
         for k, choice in enumerate(assigned):
             if choice is None:  # no hypothesis from the assignment: stock appends nothing
-                block.skipped.add(id(records[k]))
+                block.skipped.add(records[k].serial)
                 means[k], covars[k] = self._means[k], self._covars[k]
                 appended[k] = False
             elif choice != "missed":
                 column, distance, mp = choice
                 record = records[k]
-                prediction = _PRIOR_PREDICTION(
+                prediction = PRIOR_PREDICTION(
                     state_vector=pred_means[k].view(StateVector),
                     covar=pred_covars[k].view(CovarianceMatrix), timestamp=timestamp,
-                    transition_model=hypothesiser.predictor.transition_model, prior=None,
+                    transition_model=transition, prior=None,
                     **{name: getattr(record.track.state, name)
                        for name in _copied_properties(type(record.track.state))})
-                state = self._update(SingleDistanceHypothesis(
-                    prediction, detections[column], distance, mp))
-                block.updates[id(record)] = state
-                associated.add(id(detections[column]))
+                detection = detections[column]
+                hypothesis = _DISTANCE_HYPOTHESIS(prediction=prediction, measurement=detection,
+                                                  distance=distance, measurement_prediction=mp)
+                associated.add(id(detection))
                 updated[k] = True
+                wrap = angle_wrap(detection.state_vector, mp.state_vector) if batched else None
+                if wrap is not None:
+                    pending.append((k, hypothesis, wrap))
+                    continue
+                state = updater.update(hypothesis)
+                block.updates[record.serial] = state
                 means[k] = np.asarray(state.state_vector, dtype=np.float64)
                 covars[k] = np.asarray(state.covar, dtype=np.float64)
+        if pending:
+            hypotheses = [h for _, h, _ in pending]
+            new_means, new_covars = kalman_updates(
+                [h.prediction for h in hypotheses], [h.measurement_prediction for h in hypotheses],
+                [h.measurement for h in hypotheses], [w for _, _, w in pending],
+                bool(updater.force_symmetric_covariance))
+            for (k, hypothesis, _), mean, covar in zip(pending, new_means, new_covars):
+                block.updates[records[k].serial] = UPDATE_STATE(
+                    state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
+                    hypothesis=hypothesis, timestamp=hypothesis.measurement.timestamp)
+                means[k], covars[k] = mean, covar
         # points: updates (and predictions unless updates_only); the deleter's count of
         # distinct times: reset by a detection, one more for each new time
         self._counted += updated if self.updates_only else appended
@@ -545,8 +395,10 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             self.holding_tracks.discard(records[k].track)
             keep[k] = False
         if not keep.all():
-            self._records = [r for r, kept in zip(records, keep.tolist()) if kept]
-            self._last_times = [t for t, kept in zip(self._last_times, keep.tolist()) if kept]
+            kept = keep.tolist()
+            self._records = [r for r, k in zip(records, kept) if k]
+            self._serials = [r for r, k in zip(self._serials, kept) if k]
+            self._last_times = [t for t, k in zip(self._last_times, kept) if k]
             means, covars = means[keep], covars[keep]
             self._counted, self._since = self._counted[keep], self._since[keep]
         self._means, self._covars = means, covars

@@ -87,7 +87,9 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from .. import _core
 from ..context import DetectorContext
-from .array_initiator import _PRIOR_PREDICTION, ArrayMultiMeasurementInitiator
+from .array_initiator import ArrayMultiMeasurementInitiator
+from .initiator_arrays import ControlTerms
+from .initiator_blocks import PRIOR_PREDICTION as _PRIOR_PREDICTION
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast import KALMAN_UPDATERS, ObjectFactory, supports_predictor
 from .fast_association import _copied_properties
@@ -255,6 +257,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         self._counters: dict[Track, _MissCounter] = {}
         self._plan = None
         self._models: dict = {}
+        self._control_terms = ControlTerms()
         self.array_scans = 0
         self.component_scans = 0
 
@@ -395,10 +398,9 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         for interval in intervals:
             prior = priors[index.index(intervals[interval])]
             matrices.append(np.asarray(transition.matrix(time_interval=interval), dtype=np.float64))
-            offset = np.asarray(control.function(None, prior=prior, time_interval=interval),
-                                dtype=np.float64)
-            ctrl = control.matrix(control_input=None, prior=prior, time_interval=interval)
-            ctrl_noise = np.asarray(ctrl @ control.control_noise @ ctrl.T, dtype=np.float64)
+            offset, ctrl_noise = self._control_terms(control, prior, interval)
+            offset = np.asarray(offset, dtype=np.float64)
+            ctrl_noise = np.asarray(ctrl_noise, dtype=np.float64)
             if np.any(offset) or np.any(ctrl_noise):
                 return None  # a control input: the component path
             noises.append(np.asarray(transition.covar(time_interval=interval), dtype=np.float64))
