@@ -43,7 +43,7 @@ import json, sys
 from ctxmodels.experiment.runner import Job, run_job
 out = []
 for scenario, seed, tracker, duration in json.loads(sys.argv[1]):
-    r = run_job(Job(scenario, seed, tracker, duration))
+    r = run_job(Job(scenario, seed, tracker, duration, digest=True))
     out.append([r.hota.hota.hex(), r.hota.deta.hex(), r.hota.assa.hex(), r.gospa.rms.hex(),
                 r.track_count, r.digest])
 print(json.dumps(out))
@@ -68,11 +68,11 @@ def test_jobs_are_bit_identical_across_processes_hash_seeds_and_repeats():
         assert process.returncode == 0, stderr
         outputs.append(json.loads(stdout))
     # and in this process, each job twice, one after another
-    here = [fingerprint(run_job(Job(*job))) for job in JOBS]
-    again = [fingerprint(run_job(Job(*job))) for job in JOBS]
+    here = [fingerprint(run_job(Job(*job, digest=True))) for job in JOBS]
+    again = [fingerprint(run_job(Job(*job, digest=True))) for job in JOBS]
     assert outputs[0] == outputs[1] == here == again
-    # the runs did track: every job reported tracks and scored above zero
-    assert all(row[4] > 0 and float.fromhex(row[0]) > 0 for row in here)
+    # the runs did track: every job reported tracks and scored above zero, and was digested
+    assert all(row[4] > 0 and float.fromhex(row[0]) > 0 and len(row[5]) == 64 for row in here)
 
 
 # --- the stable order -------------------------------------------------------------------------

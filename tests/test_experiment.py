@@ -63,11 +63,13 @@ def test_context_models_follow_the_paper():
 
 
 def test_job_is_deterministic_and_scores_are_sane():
-    job = Job("mixed-range", 3, "gmphd-context", duration=20.0)
+    job = Job("mixed-range", 3, "gmphd-context", duration=20.0, digest=True)
     first, second = run_job(job), run_job(job)
     # bit for bit: nothing iterates a set of detections, tracks or tags in address order
     assert first.hota.hota == second.hota.hota and first.gospa.rms == second.gospa.rms
     assert first.track_count == second.track_count and first.digest == second.digest
+    assert len(first.digest) == 64  # asked for, so computed
+    assert run_job(Job("mixed-range", 3, "gmphd-context", duration=20.0)).digest == ""
     assert 0.0 <= first.hota.hota <= 1.0
     assert 0.0 <= first.gospa.rms <= 30.0 * math.sqrt(10)  # a few missed/false targets at most
 

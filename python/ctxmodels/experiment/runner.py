@@ -47,6 +47,9 @@ class Job:
     duration: float | None = None
     stock: bool = False
     keep_tracks: bool = False
+    #: Compute :attr:`JobResult.digest` (a pass over every track state: a sixth of a whole
+    #: study's CPU time, so only the reproducibility checks ask for it).
+    digest: bool = False
     static_distractors: bool = True
     #: Truth models of the simulated sensors (None: the scenario defaults). The trackers'
     #: models never change with these: they are the sensitivity knobs of the simulation.
@@ -64,7 +67,7 @@ class JobResult:
     track_count: int
     tracks: list = field(default_factory=list)  # [(times, xy)] when job.keep_tracks
     #: SHA-256 of every reported track state (time, mean, covariance), in track order: equal
-    #: digests mean bit-identical tracks.
+    #: digests mean bit-identical tracks. Empty unless ``job.digest``.
     digest: str = ""
     #: Tracks and vessels present at each radar time (distractors dropped), for the
     #: track-count report.
@@ -121,7 +124,7 @@ def run_job(job: Job) -> JobResult:
                          [[float(s.state_vector[0]), float(s.state_vector[2])]
                           for s in track.states]))
     return JobResult(job, score.hota, score.gospa, seconds, scans, score.track_count, kept,
-                     tracks_digest(reported), score.tracks_per_time, score.truths_per_time)
+                     tracks_digest(reported) if job.digest else "", score.tracks_per_time, score.truths_per_time)
 
 
 @functools.lru_cache(maxsize=2)
