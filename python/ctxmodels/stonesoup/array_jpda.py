@@ -230,6 +230,34 @@ def _updater_supported(updater) -> bool:
             and not updater.force_positive_definite_covariance and not updater.use_joseph_cov)
 
 
+# --- tracks -------------------------------------------------------------------------------
+_object_attribute = object.__getattribute__
+
+
+def _plain_track_lists(track):
+    """``(states, metadatas)`` of a plain :class:`~stonesoup.types.track.Track`, read from
+    its ``__dict__``; None for any other track type. Every attribute read on a track goes
+    through Stone Soup's ``StateMutableSequence.__getattribute__`` (in Python: the track,
+    then its last state): with ~50 tracks a scan those reads were a sixth of a JPDA run."""
+    if type(track) is not Track:
+        return None
+    fields = _object_attribute(track, "__dict__")
+    states, metadatas = fields.get("_property_states"), fields.get("metadatas")
+    if type(states) is not list or type(metadatas) is not list:
+        return None
+    return states, metadatas
+
+
+def _track_length(track) -> int:
+    lists = _plain_track_lists(track)
+    return len(track) if lists is None else len(lists[0])
+
+
+def _is_backed(state) -> bool:
+    """:func:`is_detection_backed`, answered at once for the array path's predictions."""
+    return type(state) is not GaussianStatePrediction and is_detection_backed(state)
+
+
 # --- deletion counters ----------------------------------------------------------------------
 class _MissCounter:
     """Per track and counting deleter (``values``, one entry per member of the deletion plan
@@ -338,7 +366,8 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         ndim = predictor.transition_model.ndim_state
         priors = []
         for track in tracks:
-            prior = track.state
+            lists = _plain_track_lists(track)
+            prior = track.state if lists is None else lists[0][-1]
             vector, covar = getattr(prior, "state_vector", None), getattr(prior, "covar", None)
             if not (isinstance(prior, GaussianState) and _copied_properties(type(prior)) is not None
                     and isinstance(vector, np.ndarray) and vector.dtype == np.float64
@@ -470,8 +499,15 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         marginals = out["marginals"]
         detections = scan.detections
         for t, track in enumerate(tracks):
+            lists = _plain_track_lists(track)
             if records:
-                hypothesiser._record(track, time, pd_list[t])
+                if lists is None:
+                    hypothesiser._record(track, time, pd_list[t])
+                else:
+                    states = lists[0]
+                    hypothesiser._record_at(track, len(states),
+                                            bool(states) and _is_backed(states[-1]), time,
+                                            pd_list[t])
             mean = means[t].view(StateVector)
             covar = covars[t].view(CovarianceMatrix)
             if updates[t]:
@@ -483,8 +519,9 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             else:
                 state = _PREDICTION(state_vector=mean, covar=covar, timestamp=time)
                 metadata = None
-            self._append(track, state, metadata)
-            self._count(track, state, pd_list[t], counting)
+            length = self._append(track, lists, state, metadata)
+            # an update here always has detection hypotheses: it is detection-backed
+            self._count(track, length, updates[t], state, pd_list[t], counting)
 
     @staticmethod
     def _update_metadata(track, detections, columns, marginals):
@@ -501,12 +538,19 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         return metadata
 
     @staticmethod
-    def _append(track, state, metadata):
-        if type(track) is not Track or "metadatas" not in track.__dict__:
+    def _append(track, lists, state, metadata) -> int:
+        """Appends ``state`` (and its metadata, as ``Track.append`` would) to ``track``;
+        returns the track's length before."""
+        if lists is None:
+            length = len(track)
             track.append(state)  # another track type: its own bookkeeping
-            return
-        track.metadatas.append(track.metadata.copy() if metadata is None else metadata)
-        track.states.append(state)
+            return length
+        states, metadatas = lists
+        if metadata is None:
+            metadata = (metadatas[-1] if metadatas else track.init_metadata).copy()
+        metadatas.append(metadata)
+        states.append(state)
+        return len(states) - 1
 
     # --- deletion -------------------------------------------------------------------------
     def _deletion_plan(self):
@@ -552,15 +596,16 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
                 counting.append(("expected", float(member.default_prob_detect)))
         return counting
 
-    def _count(self, track, state, prob_detect, counting):
+    def _count(self, track, length, backed, state, prob_detect, counting):
+        """Counts ``state``, just appended to ``track`` (of ``length`` states before; is it
+        ``backed`` by a detection), into the track's miss counter."""
         if not counting:
             return
         counter = self._counters.get(track)
-        if counter is None or counter.length != len(track) - 1:
+        if counter is None or counter.length != length:
             self._counters.pop(track, None)
             return  # re-read from the track when next needed
         counter.length += 1
-        backed = is_detection_backed(state)
         values = counter.values
         for k, (kind, default) in enumerate(counting):
             if kind == "steps":
@@ -622,7 +667,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         for track in tracks:
             if counted:
                 counter = counters.get(track)
-                if counter is None or counter.length != len(track):
+                if counter is None or counter.length != _track_length(track):
                     counter = self._read_counter(track, plan)
             # the composite's rule, member by member in its order: all (intersect) or any
             verdict = intersect
@@ -704,7 +749,8 @@ def _covariance_check(deleter):
     i, j = mapping if len(mapping) == 2 else (mapping[0], None)
 
     def check(track) -> bool:
-        covar = track.states[-1].covar
+        lists = _plain_track_lists(track)
+        covar = (track.states if lists is None else lists[0])[-1].covar
         if not (type(covar) in _COVARIANCE_TYPES and covar.dtype == np.float64
                 and covar.ndim == 2):
             return bool(deleter.check_for_deletion(track))

@@ -192,14 +192,22 @@ class PDAHypothesiser(_StockPDAHypothesiser):
     def _record(self, track, timestamp, prob_detect: float) -> None:
         if not isinstance(track, StateMutableSequence) or isinstance(track, State):
             return  # a bare state as prior: no track to attach the record to
+        n = len(track)
+        self._record_at(track, n, bool(n) and is_detection_backed(track[-1]), timestamp,
+                        prob_detect)
+
+    def _record_at(self, track, length: int, last_backed: bool, timestamp,
+                   prob_detect: float) -> None:
+        """:meth:`_record` with the track's length and whether its last state is
+        detection-backed already known (the array JPDA path knows both)."""
         log = self.__dict__.get("_pd_log")
         if log is None:
             log = self.__dict__["_pd_log"] = weakref.WeakKeyDictionary()
         entries: dict[int, tuple[object, float]] | None = log.get(track)
         # Only states after the last detection-backed one matter to deleters: keep it small.
-        if entries is None or (len(track) and is_detection_backed(track[-1])):
+        if entries is None or last_backed:
             entries = log[track] = {}
-        entries[len(track)] = (timestamp, prob_detect)
+        entries[length] = (timestamp, prob_detect)
 
     def recorded_prob_detect(self, track, index: int = -1) -> float | None:
         """The :math:`P_D` this hypothesiser used for the state at ``index`` of ``track``
