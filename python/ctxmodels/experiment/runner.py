@@ -25,12 +25,15 @@ distractors, neither hits nor false tracks (see :mod:`ctxmodels.experiment.scori
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import functools
 import gc
 import os
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from . import metrics
 from .executors import InlineExecutor, sigint_blocked, stop_now, worker_ignores_sigint
@@ -75,20 +78,33 @@ class JobResult:
     truths_per_time: tuple = ()
 
 
-def track_scans(tracker) -> tuple[float, int, set]:
-    """Runs ``tracker`` over all its scans as a job does: ``(seconds, scans, tracks)`` — the
-    tracking time, the number of scans, and every track it reported on any scan.
+@contextlib.contextmanager
+def collector_paused():
+    """Pauses Python's cyclic garbage collector, the objects alive on entry frozen out of
+    its sight (nests; restores the collector's state on exit).
 
-    Whatever the tracker was built from (the simulated run: every scan's detections, the
-    truths) stays alive and unchanged while it runs, so it is frozen out of the garbage
-    collector's sight. And the collector is paused while it tracks: no tracker makes
-    reference cycles (tests hold every tracker to that), so a collection could free
-    nothing, yet its full passes over the growing tracks cost a sixth of a P_D-aware run.
-    Reference counting frees everything as before."""
+    No tracker makes reference cycles (tests hold every tracker to that), so a collection
+    while a job runs could free nothing, yet its full passes over the growing tracks cost a
+    sixth of a P_D-aware run, and once the tracking is done, the first full pass over a
+    JPDA run's half a million states took a second of each job's scoring. Reference
+    counting frees everything as before."""
+    collecting, outermost = gc.isenabled(), gc.get_freeze_count() == 0
     gc.freeze()
-    collecting = gc.isenabled()
     gc.disable()
     try:
+        yield
+    finally:
+        if outermost:
+            gc.unfreeze()
+        if collecting:
+            gc.enable()
+
+
+def track_scans(tracker) -> tuple[float, int, set]:
+    """Runs ``tracker`` over all its scans as a job does: ``(seconds, scans, tracks)`` — the
+    tracking time, the number of scans, and every track it reported on any scan. The
+    collector is paused meanwhile (see :func:`collector_paused`)."""
+    with collector_paused():
         started = time.perf_counter()
         all_tracks = set()
         scans = 0
@@ -96,10 +112,6 @@ def track_scans(tracker) -> tuple[float, int, set]:
             all_tracks |= tracks
             scans += 1
         seconds = time.perf_counter() - started
-    finally:
-        if collecting:
-            gc.enable()
-        gc.unfreeze()
     return seconds, scans, all_tracks
 
 
@@ -110,21 +122,36 @@ def run_job(job: Job) -> JobResult:
 
     spec = TRACKERS[job.tracker]
     run = simulated_run(job.scenario, job.seed, job.duration, job.radar, job.lidar)
-    tracker = build_tracker(spec, run, fast=not job.stock)
-    seconds, scans, all_tracks = track_scans(tracker)
-    # By content, not set (address) order: the metrics then see the same track order in
-    # every process.
-    reported = [track for track in in_track_order(all_tracks) if len(track)]
-    score = score_run(run, reported, job.static_distractors)
-    kept = []
-    if job.keep_tracks:
-        epoch = run.radar_times[0]
-        for track in reported:
-            kept.append(([(s.timestamp - epoch).total_seconds() for s in track.states],
-                         [[float(s.state_vector[0]), float(s.state_vector[2])]
-                          for s in track.states]))
+    with collector_paused():  # tracking, scoring and the tracks' release
+        tracker = build_tracker(spec, run, fast=not job.stock)
+        seconds, scans, all_tracks = track_scans(tracker)
+        # By content, not set (address) order: the metrics then see the same track order
+        # in every process.
+        reported = [track for track in in_track_order(all_tracks) if len(track)]
+        score = score_run(run, reported, job.static_distractors)
+        kept = kept_paths(reported, run.radar_times[0]) if job.keep_tracks else []
+        digest = tracks_digest(reported) if job.digest else ""
+        del tracker, all_tracks, reported
     return JobResult(job, score.hota, score.gospa, seconds, scans, score.track_count, kept,
-                     tracks_digest(reported) if job.digest else "", score.tracks_per_time, score.truths_per_time)
+                     digest, score.tracks_per_time, score.truths_per_time)
+
+
+def kept_paths(tracks, epoch) -> list:
+    """Each track's path for the figures: (seconds since ``epoch``, [[x, y], ...]) lists."""
+    kept = []
+    seconds: dict = {}  # the tracks share their scans' timestamps
+    for track in tracks:
+        states = track.states
+        times = []
+        for state in states:
+            stamp = state.timestamp
+            value = seconds.get(stamp)
+            if value is None:
+                value = seconds[stamp] = (stamp - epoch).total_seconds()
+            times.append(value)
+        vectors = np.array([state.state_vector for state in states], dtype=np.float64)
+        kept.append((times, vectors[:, [0, 2], 0].tolist()))
+    return kept
 
 
 @functools.lru_cache(maxsize=2)
