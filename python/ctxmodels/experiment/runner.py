@@ -121,8 +121,9 @@ def run_job(job: Job) -> JobResult:
     from .trackers import TRACKERS, build_tracker
 
     spec = TRACKERS[job.tracker]
-    run = simulated_run(job.scenario, job.seed, job.duration, job.radar, job.lidar)
-    with collector_paused():  # tracking, scoring and the tracks' release
+    # simulation (its objects are acyclic too), tracking, scoring and the tracks' release
+    with collector_paused():
+        run = simulated_run(job.scenario, job.seed, job.duration, job.radar, job.lidar)
         tracker = build_tracker(spec, run, fast=not job.stock)
         seconds, scans, all_tracks = track_scans(tracker)
         # By content, not set (address) order: the metrics then see the same track order

@@ -91,7 +91,7 @@ from .array_initiator import ArrayMultiMeasurementInitiator
 from .initiator_arrays import ControlTerms
 from .initiator_blocks import PRIOR_PREDICTION as _PRIOR_PREDICTION
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
-from .fast import KALMAN_UPDATERS, ObjectFactory, supports_predictor
+from .fast import KALMAN_UPDATERS, ObjectFactory, plain_track_lists, supports_predictor
 from .fast_association import _copied_properties
 from .hypothesiser import PDAHypothesiser, is_detection_backed, scan_context
 from .measurement import AnalyticCartesianToBearingRange
@@ -153,7 +153,8 @@ class _ScanHypotheses(MultipleHypothesis):
     def _build(self):
         scan, t, prior = self.__dict__["_pending"]
         prediction = _PRIOR_PREDICTION(
-            state_vector=scan.prediction_vectors[t], covar=scan.prediction_covars[t],
+            state_vector=scan.pred_means[t].reshape(-1, 1).view(StateVector),
+            covar=scan.pred_covars[t].view(CovarianceMatrix),
             timestamp=scan.time, transition_model=scan.transition_model, prior=prior,
             **{name: getattr(prior, name) for name in (_copied_properties(type(prior)) or ())})
         vector = scan.meas_means[t].reshape(-1, 1).copy()
@@ -187,8 +188,8 @@ def _plain_multiple_hypothesis(state):
 class _Scan:
     """What one scan's lazily built hypotheses need from the scan."""
 
-    __slots__ = ("time", "detections", "transition_model", "prediction_vectors",
-                 "prediction_covars", "meas_means", "meas_covars", "cross_covars", "gated",
+    __slots__ = ("time", "detections", "transition_model", "pred_means",
+                 "pred_covars", "meas_means", "meas_covars", "cross_covars", "gated",
                  "marginals", "bearing_row", "bearing_type")
 
 
@@ -231,25 +232,8 @@ def _updater_supported(updater) -> bool:
 
 
 # --- tracks -------------------------------------------------------------------------------
-_object_attribute = object.__getattribute__
-
-
-def _plain_track_lists(track):
-    """``(states, metadatas)`` of a plain :class:`~stonesoup.types.track.Track`, read from
-    its ``__dict__``; None for any other track type. Every attribute read on a track goes
-    through Stone Soup's ``StateMutableSequence.__getattribute__`` (in Python: the track,
-    then its last state): with ~50 tracks a scan those reads were a sixth of a JPDA run."""
-    if type(track) is not Track:
-        return None
-    fields = _object_attribute(track, "__dict__")
-    states, metadatas = fields.get("_property_states"), fields.get("metadatas")
-    if type(states) is not list or type(metadatas) is not list:
-        return None
-    return states, metadatas
-
-
 def _track_length(track) -> int:
-    lists = _plain_track_lists(track)
+    lists = plain_track_lists(track)
     return len(track) if lists is None else len(lists[0])
 
 
@@ -366,7 +350,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         ndim = predictor.transition_model.ndim_state
         priors = []
         for track in tracks:
-            lists = _plain_track_lists(track)
+            lists = plain_track_lists(track)
             prior = track.state if lists is None else lists[0][-1]
             vector, covar = getattr(prior, "state_vector", None), getattr(prior, "covar", None)
             if not (isinstance(prior, GaussianState) and _copied_properties(type(prior)) is not None
@@ -474,8 +458,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         scan.time = time
         scan.detections = detections
         scan.transition_model = transition
-        scan.prediction_vectors = [row.reshape(-1, 1).view(StateVector) for row in pred_means]
-        scan.prediction_covars = [block.view(CovarianceMatrix) for block in pred_covars]
+        scan.pred_means, scan.pred_covars = pred_means, pred_covars  # (viewed when read)
         scan.meas_means = out["meas_means"]
         scan.meas_covars = out["meas_covars"]
         scan.cross_covars = out["cross_covars"]
@@ -499,7 +482,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         marginals = out["marginals"]
         detections = scan.detections
         for t, track in enumerate(tracks):
-            lists = _plain_track_lists(track)
+            lists = plain_track_lists(track)
             if records:
                 if lists is None:
                     hypothesiser._record(track, time, pd_list[t])
@@ -749,7 +732,7 @@ def _covariance_check(deleter):
     i, j = mapping if len(mapping) == 2 else (mapping[0], None)
 
     def check(track) -> bool:
-        lists = _plain_track_lists(track)
+        lists = plain_track_lists(track)
         covar = (track.states if lists is None else lists[0])[-1].covar
         if not (type(covar) in _COVARIANCE_TYPES and covar.dtype == np.float64
                 and covar.ndim == 2):

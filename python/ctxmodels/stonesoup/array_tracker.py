@@ -53,7 +53,7 @@ from stonesoup.types.track import Track
 from .. import _core
 from ..context import detection_positions, require_array_context
 from .array_plan import _Plan
-from .fast import ObjectFactory
+from .fast import ObjectFactory, plain_track_lists
 from .ordering import in_stable_order
 from .pointprocess import CircularRegion, PointProcessMultiTargetTracker, _accepts_context
 
@@ -376,7 +376,8 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
             if track is None:
                 tracks[tag] = self.target_tracks[state.tag] = Track([state], id=state.tag)
             else:
-                track.states.append(state)
+                lists = plain_track_lists(track)
+                (track.states if lists is None else lists[0]).append(state)
         for tag in gone:
             del self.target_tracks[names[tag]]
             del tracks[tag]

@@ -47,6 +47,7 @@ from stonesoup.types.angle import Angle, Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.prediction import GaussianMeasurementPrediction, GaussianStatePrediction
 from stonesoup.types.state import CreatableFromState
+from stonesoup.types.track import Track
 from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
 
 from .measurement import (
@@ -178,6 +179,25 @@ class ObjectFactory:
             obj.__dict__ = slots
             return obj
         return make
+
+
+# --- tracks ---------------------------------------------------------------------------------
+_object_attribute = object.__getattribute__
+
+
+def plain_track_lists(track):
+    """``(states, metadatas)`` of a plain :class:`~stonesoup.types.track.Track` (exactly that
+    type), read from its ``__dict__``; None for any other track. Every attribute read on a
+    track goes through Stone Soup's ``StateMutableSequence.__getattribute__`` (in Python:
+    the track, then its last state), which costs more than the work around it in loops
+    that touch every track every scan."""
+    if type(track) is not Track:
+        return None
+    fields = _object_attribute(track, "__dict__")
+    states, metadatas = fields.get("_property_states"), fields.get("metadatas")
+    if type(states) is not list or type(metadatas) is not list:
+        return None
+    return states, metadatas
 
 
 # --- Stone Soup's from_state type selection, resolved once per type ---------------------------
