@@ -3,68 +3,92 @@ context-aware models' coverage per scenario, and a summary per scope (scores wit
 intervals, and the paired differences of the findings on that scope)."""
 from __future__ import annotations
 
+import concurrent.futures
+import functools
+import os
 from pathlib import Path
 
 import numpy as np
 
+from .executors import sigint_blocked, stop_now, worker_ignores_sigint
 from .findings import COMBINED
 
 _SCOPE_TITLES = {COMBINED: "Scenarios 1 and 2 combined", "mixed-range": "Scenario 1 (mixed-range)",
                  "formation": "Scenario 2 (formation)", "islands": "Scenario 3 (islands)"}
 
 
-def draw_experiment_figures(results, folder: Path) -> dict[str, Path]:
+def draw_experiment_figures(results, folder: Path, workers: int | None = None) -> dict[str, Path]:
     """Writes the figures of ``results`` (an :class:`~.report.ExperimentResults`) to
-    ``folder``; returns ``{name: path}``."""
-    written = _draw_tracks_and_coverage(results, folder)
-    written.update(_draw_summaries(results, folder))
+    ``folder``; returns ``{name: path}``. The scenarios' figures and the summaries are
+    independent tasks, drawn by ``workers`` processes (default: one per core; 1: here)."""
+    config = results.config
+    tasks = []
+    for scenario in config.scenarios:
+        plotted = [(r.job.tracker, r.tracks) for r in sorted(results.results, key=lambda r: r.job.tracker)
+                   if r.job.scenario == scenario and r.job.seed == config.plot_seed]
+        tasks.append(functools.partial(_draw_scenario, folder, scenario, config.plot_seed,
+                                       config.duration, plotted))
+    tasks += [functools.partial(_draw_summary, folder, *args) for args in _summaries(results)]
+    workers = min(workers or os.cpu_count() or 1, len(tasks))
+    written = {}
+    if workers <= 1:
+        for task in tasks:
+            written.update(task())
+        return written
+    import matplotlib.pyplot  # noqa: F401 (imported once, before the workers fork)
+    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers,
+                                                  initializer=worker_ignores_sigint)
+    try:
+        with sigint_blocked():  # (see runner.run_jobs)
+            futures = [pool.submit(task) for task in tasks]
+        for future in futures:  # in task order: the same dict order every run
+            written.update(future.result())
+    except BaseException:
+        stop_now(pool)
+        raise
+    pool.shutdown()
     return written
 
 
-def _draw_tracks_and_coverage(results, folder: Path) -> dict[str, Path]:
+def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted) -> dict[str, Path]:
+    """Every plotted tracker's tracks on ``scenario`` (``plotted``: (tracker, kept track
+    paths) pairs), and the context-aware models' coverage there."""
     from .plots import Polyline, plot_coverage, plot_tracks
     from .scenarios import make_scenario
     from .sensors import paper_sensor_models
     from .trackers import TRACKERS
     written = {}
-    config = results.config
-    for scenario in config.scenarios:
-        run = make_scenario(scenario, config.plot_seed, config.duration)
-        epoch = run.radar_times[0]
-        truths = [Polyline.from_states(t.states, epoch, label=t.id)
-                  for t in sorted(run.truths, key=lambda t: t.id)]
-        ego = Polyline([(t - epoch).total_seconds() for t in run.ego.timestamps],
-                       run.ego.positions)
-        for result in sorted(results.results, key=lambda r: r.job.tracker):
-            job = result.job
-            if job.scenario != scenario or job.seed != config.plot_seed:
-                continue
-            tracks = [Polyline(times, xy) for times, xy in result.tracks]
-            path = folder / f"tracks_{scenario}_{job.tracker}.png"
-            plot_tracks(path, f"{scenario}: {TRACKERS[job.tracker].label} (seed {job.seed})",
-                        tracks, truths, ego, float(run.ego.headings[-1]), land=run.land,
-                        static_positions=run.static_positions)
-            written[path.stem] = path
-        pose = run.ego.pose_at(run.radar_times[0])
-        path = folder / f"coverage_{scenario}.png"
-        plot_coverage(path, paper_sensor_models(land=run.land), tuple(pose), land=run.land,
-                      title=f"P_D of the context-aware models, {scenario}, first radar scan")
+    run = make_scenario(scenario, seed, duration)
+    epoch = run.radar_times[0]
+    truths = [Polyline.from_states(t.states, epoch, label=t.id)
+              for t in sorted(run.truths, key=lambda t: t.id)]
+    ego = Polyline([(t - epoch).total_seconds() for t in run.ego.timestamps], run.ego.positions)
+    for tracker, paths in plotted:
+        tracks = [Polyline(times, xy) for times, xy in paths]
+        path = folder / f"tracks_{scenario}_{tracker}.png"
+        plot_tracks(path, f"{scenario}: {TRACKERS[tracker].label} (seed {seed})",
+                    tracks, truths, ego, float(run.ego.headings[-1]), land=run.land,
+                    static_positions=run.static_positions)
         written[path.stem] = path
+    pose = run.ego.pose_at(run.radar_times[0])
+    path = folder / f"coverage_{scenario}.png"
+    plot_coverage(path, paper_sensor_models(land=run.land), tuple(pose), land=run.land,
+                  title=f"P_D of the context-aware models, {scenario}, first radar scan")
+    written[path.stem] = path
     return written
 
 
-def _draw_summaries(results, folder: Path) -> dict[str, Path]:
-    from .summary_plots import plot_summary
-    written = {}
+def _summaries(results) -> list[tuple]:
+    """Per scope, the arguments of :func:`_draw_summary`."""
     rows = results.scores()
     findings = [f for f in results.findings() if f.hota is not None]
     seeds = len(results.config.seeds)
+    out = []
     for scope in results.scopes():
         scored = [row for row in rows if scope in row]
         here = [f for f in findings if f.finding.scope == scope]
-        path = folder / f"summary_{scope}.png"
-        plot_summary(
-            path, [row["label"] for row in scored],
+        out.append((
+            scope, [row["label"] for row in scored],
             np.array([_triple(row[scope]["hota"]) for row in scored]).reshape(-1, 3),
             np.array([_triple(row[scope]["gospa"]) for row in scored]).reshape(-1, 3),
             [f.finding.short or f.finding.key for f in here],
@@ -73,9 +97,16 @@ def _draw_summaries(results, folder: Path) -> dict[str, Path]:
             # findings sign them so that positive supports the claim.
             np.array([_triple(f.gospa, negate=True) for f in here]).reshape(-1, 3),
             [f.verdict for f in here],
-            title=f"{_SCOPE_TITLES.get(scope, scope)}: mean and 95 % interval over {seeds} seeds")
-        written[path.stem] = path
-    return written
+            f"{_SCOPE_TITLES.get(scope, scope)}: mean and 95 % interval over {seeds} seeds"))
+    return out
+
+
+def _draw_summary(folder: Path, scope: str, *args) -> dict[str, Path]:
+    from .summary_plots import plot_summary
+    *fields, title = args
+    path = folder / f"summary_{scope}.png"
+    plot_summary(path, *fields, title=title)
+    return {path.stem: path}
 
 
 def _triple(interval, negate: bool = False) -> tuple[float, float, float]:

@@ -91,6 +91,7 @@ pools the times of several sequences before taking it.
 from __future__ import annotations
 
 import datetime
+import operator
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -664,19 +665,21 @@ def _state_position(state, mapping: np.ndarray, name: str) -> np.ndarray:
     return vector[mapping]
 
 
+_timestamp_of = operator.attrgetter("timestamp")
+
+
 def _positions_at(paths, mapping, timestamps, name: str, require_inside_span: bool):
     """Per timestamp: indices of the paths with a state there, and positions."""
     wanted = set(timestamps)
     present: dict[datetime.datetime, tuple[list[int], list[np.ndarray]]] = {
         timestamp: ([], []) for timestamp in timestamps}
     for index, path in enumerate(paths):
-        state_at = {}
-        for state in path.states:  # later states at the same time win
-            if state.timestamp in wanted:
-                state_at[state.timestamp] = state
-        if require_inside_span and len(path.states) > 0:
-            first = min(state.timestamp for state in path.states)
-            last = max(state.timestamp for state in path.states)
+        states = path.states
+        stamps = list(map(_timestamp_of, states))
+        # later states at the same time win
+        state_at = {stamp: state for stamp, state in zip(stamps, states) if stamp in wanted}
+        if require_inside_span and stamps:
+            first, last = min(stamps), max(stamps)
             gaps = [t for t in timestamps if first <= t <= last and t not in state_at]
             if gaps:
                 raise ValueError(

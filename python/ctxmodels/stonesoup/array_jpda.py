@@ -113,6 +113,8 @@ _UPDATE = ObjectFactory(GaussianStateUpdate, dict(
     hypothesis=SingleHypothesis(None, Detection(StateVector([0.0]))), timestamp=None))
 _PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
     state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None))
+_NEW_UPDATE = _UPDATE.maker("state_vector", "covar", "hypothesis", "timestamp")
+_NEW_PREDICTION = _PREDICTION.maker("state_vector", "covar", "timestamp")
 _MEASUREMENT_PREDICTION = ObjectFactory(GaussianMeasurementPrediction, dict(
     state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
     cross_covar=Matrix([[1.0]])))
@@ -232,6 +234,19 @@ def _updater_supported(updater) -> bool:
 
 
 # --- tracks -------------------------------------------------------------------------------
+_GAUSSIAN_PRIOR_TYPES: dict = {}
+
+
+def _gaussian_prior_type(kind: type) -> bool:
+    """Whether the array path can take a last state of type ``kind`` as a prior (a
+    :class:`GaussianState` whose Properties a prediction copies are known), per type."""
+    known = _GAUSSIAN_PRIOR_TYPES.get(kind)
+    if known is None:
+        known = _GAUSSIAN_PRIOR_TYPES[kind] = (issubclass(kind, GaussianState)
+                                                and _copied_properties(kind) is not None)
+    return known
+
+
 def _track_length(track) -> int:
     lists = plain_track_lists(track)
     return len(track) if lists is None else len(lists[0])
@@ -348,23 +363,27 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
 
         predictor = hypothesiser.predictor
         ndim = predictor.transition_model.ndim_state
-        priors = []
+        priors, vectors, covars, stamps = [], [], [], []
         for track in tracks:
             lists = plain_track_lists(track)
             prior = track.state if lists is None else lists[0][-1]
             vector, covar = getattr(prior, "state_vector", None), getattr(prior, "covar", None)
-            if not (isinstance(prior, GaussianState) and _copied_properties(type(prior)) is not None
+            stamp = getattr(prior, "timestamp", None)
+            if not (_gaussian_prior_type(type(prior))
                     and isinstance(vector, np.ndarray) and vector.dtype == np.float64
                     and vector.shape == (ndim, 1) and isinstance(covar, np.ndarray)
                     and covar.dtype == np.float64 and covar.shape == (ndim, ndim)
-                    and prior.timestamp is not None):
+                    and stamp is not None):
                 return None
             priors.append(prior)
+            vectors.append(vector)
+            covars.append(covar)
+            stamps.append(stamp)
 
         taken_mask = None
         if tracks:
-            scan = self._run_core(time, detections, tracks, priors, hypothesiser, context,
-                                  core_model, bearing_row)
+            scan = self._run_core(time, detections, tracks, priors, (vectors, covars, stamps),
+                                  hypothesiser, context, core_model, bearing_row)
             if scan is None:
                 return None
             scan_result, out, prob_detect = scan
@@ -392,17 +411,20 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
                 np.eye(1, ndim), np.eye(1))
         return cached
 
-    def _run_core(self, time, detections, tracks, priors, hypothesiser, context, core_model,
-                  bearing_row):
+    def _run_core(self, time, detections, tracks, priors, prior_arrays, hypothesiser, context,
+                  core_model, bearing_row):
+        """The scan through the core; ``prior_arrays``: the priors' state vectors,
+        covariances and timestamps."""
         predictor = hypothesiser.predictor
         transition = predictor.transition_model
         control = predictor.control_model
-        means = np.array([p.state_vector for p in priors], dtype=np.float64)[:, :, 0]
-        covars = np.array([p.covar for p in priors], dtype=np.float64)
+        vectors, covars, stamps = prior_arrays
+        means = np.array(vectors, dtype=np.float64)[:, :, 0]
+        covars = np.array(covars, dtype=np.float64)
         intervals: dict = {}
         index = []
-        for prior in priors:
-            interval = time - prior.timestamp
+        for stamp in stamps:
+            interval = time - stamp
             k = intervals.get(interval)
             if k is None:
                 k = intervals[interval] = len(intervals)
@@ -481,6 +503,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         gated = out["gated"]
         marginals = out["marginals"]
         detections = scan.detections
+        new_update, new_prediction = _NEW_UPDATE, _NEW_PREDICTION
         for t, track in enumerate(tracks):
             lists = plain_track_lists(track)
             if records:
@@ -495,12 +518,11 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             covar = covars[t].view(CovarianceMatrix)
             if updates[t]:
                 hypothesis = _lazy_hypothesis(scan, t, priors[t])
-                state = _UPDATE(state_vector=mean, covar=covar, hypothesis=hypothesis,
-                                timestamp=time)
+                state = new_update(mean, covar, hypothesis, time)
                 columns = np.flatnonzero(gated[t]).tolist()
                 metadata = self._update_metadata(track, detections, columns, marginals[t])
             else:
-                state = _PREDICTION(state_vector=mean, covar=covar, timestamp=time)
+                state = new_prediction(mean, covar, time)
                 metadata = None
             length = self._append(track, lists, state, metadata)
             # an update here always has detection hypotheses: it is detection-backed
