@@ -4,6 +4,7 @@
 
 use crate::error::{ModelError, Result};
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Which columns of a state row hold the x and y position. Stone Soup's constant-velocity
 /// state [x, vx, y, vy] maps to (0, 2).
@@ -106,15 +107,26 @@ pub const CHUNK: usize = 1024;
 /// Below this many rows the work stays on the calling thread.
 pub const PARALLEL_THRESHOLD: usize = 32 * 1024;
 
+/// The process that first handed work to Rayon's global pool. A process forked from it
+/// (a multiprocessing worker, say) inherits the pool's bookkeeping but none of its threads:
+/// work handed to the pool there would wait forever, so a forked child stays serial.
+static POOL_OWNER: OnceLock<u32> = OnceLock::new();
+
+/// Whether this process may use Rayon's global pool (see [`POOL_OWNER`]).
+pub fn pool_usable() -> bool {
+    *POOL_OWNER.get_or_init(std::process::id) == std::process::id()
+}
+
 /// Calls `kernel(first_row, out_chunk)` over `out` in chunks of [`CHUNK`] rows, in parallel
-/// for large N. The kernel returns the index (within its chunk) of the first row it could
-/// not evaluate; the smallest such global row is reported.
+/// for large N (serially in a process forked after the pool started). The kernel returns
+/// the index (within its chunk) of the first row it could not evaluate; the smallest such
+/// global row is reported. Chunks are the same either way, so are the results.
 pub fn for_each_chunk<F>(out: &mut [f64], kernel: F) -> Option<usize>
 where
     F: Fn(usize, &mut [f64]) -> Option<usize> + Sync,
 {
     let run = |(c, chunk): (usize, &mut [f64])| kernel(c * CHUNK, chunk).map(|bad| c * CHUNK + bad);
-    if out.len() >= PARALLEL_THRESHOLD {
+    if out.len() >= PARALLEL_THRESHOLD && pool_usable() {
         out.par_chunks_mut(CHUNK).enumerate().filter_map(run).min()
     } else {
         out.chunks_mut(CHUNK).enumerate().filter_map(run).min()

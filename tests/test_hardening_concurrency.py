@@ -192,3 +192,31 @@ def test_the_gil_test_would_notice_a_call_that_holds_the_gil():
         sys.setswitchinterval(old)
         thread.join()
     assert total > 0 and during == 0
+
+
+def _evaluate_in_child(connection, means, covars, areas):
+    context = sensor().context((0.0, 0.0, 0.3))
+    connection.send(digest([evaluate_all(context, means, covars, areas)]))
+    connection.close()
+
+
+def test_large_batches_evaluate_in_a_child_forked_after_the_pool_started():
+    """A forked child inherits Rayon's pool without its threads: the core must not hand it
+    work there (it would wait forever). The child's results equal the parent's."""
+    import multiprocessing
+    if "fork" not in multiprocessing.get_all_start_methods():
+        pytest.skip("no fork on this platform")
+    data = inputs(11)
+    here = digest([evaluate_all(sensor().context((0.0, 0.0, 0.3)), *data)])  # pool started
+    context = multiprocessing.get_context("fork")
+    receiver, sender = context.Pipe(duplex=False)
+    child = context.Process(target=_evaluate_in_child, args=(sender, *data))
+    child.start()
+    sender.close()
+    answered = receiver.poll(120)  # a hang, not a slow machine: serial takes ~1 s
+    if not answered:
+        child.kill()
+    child.join(10)
+    assert answered, "the forked child hung in a large evaluation"
+    assert receiver.recv() == here
+    assert child.exitcode == 0

@@ -53,7 +53,7 @@ def _run_experiment(args, folder) -> int:
                 staged = results.save(stage)
                 if not args.no_plots:
                     from .experiment.figures import draw_experiment_figures
-                    staged.update(draw_experiment_figures(results, stage, args.workers))
+                    staged.update(draw_experiment_figures(results, stage))
                 folder.commit(stage)
         except OSError as err:  # e.g. a full disk: the previous outputs stay as they were
             folder.discard()

@@ -3,50 +3,31 @@ context-aware models' coverage per scenario, and a summary per scope (scores wit
 intervals, and the paired differences of the findings on that scope)."""
 from __future__ import annotations
 
-import concurrent.futures
-import functools
-import os
 from pathlib import Path
 
 import numpy as np
 
-from .executors import sigint_blocked, stop_now, worker_ignores_sigint
 from .findings import COMBINED
 
 _SCOPE_TITLES = {COMBINED: "Scenarios 1 and 2 combined", "mixed-range": "Scenario 1 (mixed-range)",
                  "formation": "Scenario 2 (formation)", "islands": "Scenario 3 (islands)"}
 
 
-def draw_experiment_figures(results, folder: Path, workers: int | None = None) -> dict[str, Path]:
+def draw_experiment_figures(results, folder: Path) -> dict[str, Path]:
     """Writes the figures of ``results`` (an :class:`~.report.ExperimentResults`) to
-    ``folder``; returns ``{name: path}``. The scenarios' figures and the summaries are
-    independent tasks, drawn by ``workers`` processes (default: one per core; 1: here)."""
+    ``folder``; returns ``{name: path}``.
+
+    Drawn in this process, one after the other: a forked pool would inherit the Rust core's
+    thread pool without its threads, and the coverage grids are large enough to use it."""
     config = results.config
-    tasks = []
+    written = {}
     for scenario in config.scenarios:
         plotted = [(r.job.tracker, r.tracks) for r in sorted(results.results, key=lambda r: r.job.tracker)
                    if r.job.scenario == scenario and r.job.seed == config.plot_seed]
-        tasks.append(functools.partial(_draw_scenario, folder, scenario, config.plot_seed,
-                                       config.duration, plotted))
-    tasks += [functools.partial(_draw_summary, folder, *args) for args in _summaries(results)]
-    workers = min(workers or os.cpu_count() or 1, len(tasks))
-    written = {}
-    if workers <= 1:
-        for task in tasks:
-            written.update(task())
-        return written
-    import matplotlib.pyplot  # noqa: F401 (imported once, before the workers fork)
-    pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers,
-                                                  initializer=worker_ignores_sigint)
-    try:
-        with sigint_blocked():  # (see runner.run_jobs)
-            futures = [pool.submit(task) for task in tasks]
-        for future in futures:  # in task order: the same dict order every run
-            written.update(future.result())
-    except BaseException:
-        stop_now(pool)
-        raise
-    pool.shutdown()
+        written.update(_draw_scenario(folder, scenario, config.plot_seed, config.duration,
+                                      plotted))
+    for args in _summaries(results):
+        written.update(_draw_summary(folder, *args))
     return written
 
 

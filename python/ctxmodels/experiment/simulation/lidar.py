@@ -26,11 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 from stonesoup.models.measurement.linear import LinearGaussian
 from stonesoup.types.array import CovarianceMatrix, StateVector
-from stonesoup.types.detection import Detection
+from stonesoup.types.detection import Clutter, Detection
 
 from .geometry import land_edges, polar, visible
-from .scans import (Scan, SensorPose, SensorScene, new_clutter, object_detection,
-                    object_metadata)
+from .scans import Scan, SensorPose, SensorScene, object_detection, object_metadata
 
 __all__ = ["LidarConfig", "generate_lidar_scans"]
 
@@ -129,7 +128,13 @@ def generate_lidar_scans(
             detections.add(object_detection(scene.sources[j], state_vector, timestamp, model,
                                              metadata, truth_paths))
         for i in range(bounds[k], bounds[k + 1]):
-            detections.add(new_clutter(StateVector(clutter_xy[i]), timestamp, model,
-                                       {"source": "clutter", "area": float(clutter_area[i])}))
+            detections.add(
+                Clutter(
+                    StateVector(clutter_xy[i]),
+                    timestamp=timestamp,
+                    measurement_model=model,
+                    metadata={"source": "clutter", "area": float(clutter_area[i])},
+                )
+            )
         scans.append(Scan(timestamp, detections, pose))
     return scans

@@ -34,7 +34,7 @@ import numpy as np
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.angle import Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
-from stonesoup.types.detection import Detection
+from stonesoup.types.detection import Clutter, Detection
 
 # (a Stone Soup model with its exact Jacobian: no ctxmodels core, no context models)
 from ...stonesoup.measurement import AnalyticCartesianToBearingRange
@@ -47,8 +47,7 @@ from .geometry import (
     visible,
     wrap_angle,
 )
-from .scans import (Scan, SensorPose, SensorScene, new_clutter, object_detection,
-                    object_metadata)
+from .scans import Scan, SensorPose, SensorScene, object_detection, object_metadata
 
 __all__ = ["RadarConfig", "generate_radar_scans"]
 
@@ -174,8 +173,14 @@ def generate_radar_scans(
             (land_split[k], "land"),
         ):
             for bearing, range_ in measured:
-                detections.add(new_clutter(StateVector([Bearing(bearing), range_]), timestamp,
-                                           model, {"source": source}))
+                detections.add(
+                    Clutter(
+                        StateVector([Bearing(bearing), range_]),
+                        timestamp=timestamp,
+                        measurement_model=model,
+                        metadata={"source": source},
+                    )
+                )
         scans.append(Scan(timestamp, detections, pose))
     return scans
 

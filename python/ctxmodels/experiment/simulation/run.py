@@ -21,12 +21,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from stonesoup.types.array import StateVector
-from stonesoup.types.groundtruth import GroundTruthPath
+from stonesoup.types.groundtruth import GroundTruthPath, GroundTruthState
 
 from .geometry import on_land, wrap_angle
 from .lidar import LidarConfig, generate_lidar_scans
 from .radar import RadarConfig, generate_radar_scans
-from .scans import Scan, SensorPose, SensorScene, new_truth_state, scan_offsets_us
+from .scans import Scan, SensorPose, SensorScene, scan_offsets_us
 from .scene import SceneLayout, StaticObject
 
 __all__ = ["EPOCH", "EgoNavigation", "ScenarioRun", "simulate"]
@@ -150,7 +150,7 @@ def simulate(
         )
         truth_paths[target.id] = GroundTruthPath(
             [
-                new_truth_state(StateVector(states[i]), timestamps[i], {})
+                GroundTruthState(StateVector(states[i]), timestamp=timestamps[i])
                 for i in np.flatnonzero(sample.exists)
             ],
             id=target.id,

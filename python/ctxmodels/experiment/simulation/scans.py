@@ -15,11 +15,7 @@ import datetime
 from typing import NamedTuple
 
 import numpy as np
-from stonesoup.types.array import StateVector
 from stonesoup.types.detection import Clutter, Detection, TrueDetection
-from stonesoup.types.groundtruth import GroundTruthState
-
-from ...stonesoup.fast import ObjectFactory
 
 __all__ = [
     "Scan",
@@ -66,31 +62,12 @@ def object_metadata(source) -> dict:
     return {"source": kind, key: object_id}
 
 
-# A run makes tens of thousands of these: built as their constructors build them, without
-# the per-Property machinery (a third of a run's simulation time); checked against the
-# constructors once (ObjectFactory), which are used instead should the two ever differ.
-_PROBE_VECTOR = StateVector([0.0, 0.0])
-#: ``new_clutter(state_vector, timestamp, measurement_model, metadata)``
-new_clutter = ObjectFactory(Clutter, dict(
-    state_vector=_PROBE_VECTOR, timestamp=None, measurement_model=None, metadata={})).maker(
-    "state_vector", "timestamp", "measurement_model", "metadata")
-_new_true_detection = ObjectFactory(TrueDetection, dict(
-    state_vector=_PROBE_VECTOR, groundtruth_path=None, timestamp=None, measurement_model=None,
-    metadata={})).maker("state_vector", "groundtruth_path", "timestamp", "measurement_model",
-                        "metadata")
-#: ``new_truth_state(state_vector, timestamp, metadata)``
-new_truth_state = ObjectFactory(GroundTruthState, dict(
-    state_vector=_PROBE_VECTOR, timestamp=None, metadata={})).maker(
-    "state_vector", "timestamp", "metadata")
-
-
 def object_detection(source, state_vector, timestamp, model, metadata, truth_paths):
-    """A vessel's detection is a TrueDetection linked to its path; anything else is Clutter.
-    ``state_vector`` is a :class:`~stonesoup.types.array.StateVector`."""
+    """A vessel's detection is a TrueDetection linked to its path; anything else is Clutter."""
     if source[0] == "target":
-        return _new_true_detection(state_vector, truth_paths[source[2]], timestamp, model,
-                                   metadata)
-    return new_clutter(state_vector, timestamp, model, metadata)
+        return TrueDetection(state_vector, groundtruth_path=truth_paths[source[2]],
+                             timestamp=timestamp, measurement_model=model, metadata=metadata)
+    return Clutter(state_vector, timestamp=timestamp, measurement_model=model, metadata=metadata)
 
 
 def scan_offsets_us(period: float, phase: float, duration: float) -> np.ndarray:
