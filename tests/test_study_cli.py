@@ -97,3 +97,13 @@ def test_sweep_usage_errors_exit_2_before_any_work(argv, option, tmp_path, capsy
     err = capsys.readouterr().err
     assert option in err and len(err.strip().splitlines()[-1]) > 0
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", ["experiment", "sweep"])
+def test_help_prints_its_text_as_written(command, capsys):
+    # argparse formats only argument help with %: a "%%" in a description prints as is
+    with pytest.raises(SystemExit) as exit_:
+        main([command, "--help"])
+    assert exit_.value.code == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "95 % " in out and "%%" not in out

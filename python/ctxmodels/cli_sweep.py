@@ -21,7 +21,7 @@ def add_sweep_command(commands) -> None:
                     "map (far clutter × bearing noise, lidar at its default) and a lidar line "
                     "(clutter rate, radar at its default). The trackers never change; only the "
                     "simulated truth does. Writes sweep.md/.json and one heatmap per finding "
-                    "and map (paired ΔHOTA; cells whose 95 %% interval excludes 0 framed). The "
+                    "and map (paired ΔHOTA; cells whose 95 % interval excludes 0 framed). The "
                     "default grid is 11 studies of 5 seeds: about 11 × 2.5 min on 2 cores.")
     study_options(sweep, "sweep", SWEEP_SEEDS, QUICK_SEEDS, QUICK_DURATION)
     grid = sweep.add_argument_group("grid (simulated truth only)")
