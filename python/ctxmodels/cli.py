@@ -260,7 +260,7 @@ def parser() -> argparse.ArgumentParser:
                     "(JPDA, GM-PHD uniform / radar-only / P_D-aware / context-aware, ...) on "
                     "each seed, and scores HOTA and RMS GOSPA at radar timestamps. With no "
                     "options it runs the full study (every tracker, all 480 s of each "
-                    "scenario, 10 seeds: about 5.5 min on 2 cores, measured). Prints the table (paper "
+                    "scenario, 10 seeds: 4–5.5 min on 2 cores, measured on two hosts). Prints the table (paper "
                     "Table II layout, mean and 95 % bootstrap interval over seeds), the "
                     "paper's findings as paired comparisons with verdicts, and tracks per "
                     "radar scan; writes results.md/.csv/.json, findings.md/.json and PNG "
