@@ -250,7 +250,11 @@ proptest! {
         let mounting = Mounting::new(m.0, m.1, m.2);
         prop_assert_eq!(mounting.is_ok(), m.0.is_finite() && m.1.is_finite() && m.2.is_finite());
         if let (Ok(pose), Ok(mounting)) = (pose, mounting) {
-            let _ = pose.mount(&mounting).frame();
+            let mounted = pose.mount(&mounting);
+            if let Ok(sensor) = mounted {
+                prop_assert!(sensor.x.is_finite() && sensor.y.is_finite() && sensor.heading.is_finite());
+                let _ = sensor.frame();
+            }
         }
     }
 

@@ -45,14 +45,16 @@ impl Pose {
         Ok(Pose { x, y, heading })
     }
 
-    /// The pose of a sensor mounted on this platform.
-    pub fn mount(&self, mounting: &Mounting) -> Pose {
+    /// The pose of a sensor mounted on this platform; an error naming `mounting` when the
+    /// sum overflows (finite inputs near the largest float can make an infinite pose).
+    pub fn mount(&self, mounting: &Mounting) -> Result<Pose> {
         let (s, c) = self.heading.sin_cos();
-        Pose {
-            x: self.x + c * mounting.forward - s * mounting.left,
-            y: self.y + s * mounting.forward + c * mounting.left,
-            heading: self.heading + mounting.yaw,
+        let (x, y) = (self.x + c * mounting.forward - s * mounting.left, self.y + s * mounting.forward + c * mounting.left);
+        let heading = self.heading + mounting.yaw;
+        if !(x.is_finite() && y.is_finite() && heading.is_finite()) {
+            return Err(ModelError::invalid("mounting", format!("the mounted sensor pose ({x}, {y}, {heading}) is not finite: the lever arm or yaw overflows the platform's pose")));
         }
+        Ok(Pose { x, y, heading })
     }
 
     /// The precomputed world→sensor transform of this pose.
@@ -110,9 +112,17 @@ mod tests {
     }
 
     #[test]
+    fn a_mounting_that_overflows_the_pose_is_an_error() {
+        let platform = Pose::new(0.0, f64::MAX, 0.0).unwrap();
+        let err = platform.mount(&Mounting::new(0.0, f64::MAX, 0.0).unwrap()).unwrap_err();
+        assert!(err.to_string().starts_with("mounting"), "{err}");
+        assert!(platform.mount(&Mounting::new(0.0, -1.0, 0.0).unwrap()).is_ok());
+    }
+
+    #[test]
     fn mounting_lever_arm_and_yaw() {
         let platform = Pose::new(1.0, 2.0, FRAC_PI_2).unwrap();
-        let sensor = platform.mount(&Mounting::new(3.0, 1.0, 0.5).unwrap());
+        let sensor = platform.mount(&Mounting::new(3.0, 1.0, 0.5).unwrap()).unwrap();
         // Forward is +y, left is -x for a north-facing platform.
         assert!((sensor.x - 0.0).abs() < 1e-12);
         assert!((sensor.y - 5.0).abs() < 1e-12);

@@ -462,7 +462,7 @@ impl PyClutterModel {
 /// The pose (x, y, heading) of a sensor mounted on a platform at `pose`.
 #[pyfunction]
 fn mount(pose: (f64, f64, f64), forward: f64, left: f64, yaw: f64) -> PyResult<(f64, f64, f64)> {
-    let mounted = pose_of(pose)?.mount(&Mounting::new(forward, left, yaw).map_err(to_py)?);
+    let mounted = pose_of(pose)?.mount(&Mounting::new(forward, left, yaw).map_err(to_py)?).map_err(to_py)?;
     Ok((mounted.x, mounted.y, mounted.heading))
 }
 

@@ -13,7 +13,7 @@ import re
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
@@ -240,6 +240,7 @@ def test_land_mask_and_line_of_sight(polys, points):
 
 
 @given(SCALARS, SCALARS, SCALARS, SCALARS, SCALARS, SCALARS)
+@example(0.0, 1.7976931348623157e308, 0.0, 0.0, 1.7976931348623157e308, 0.0)  # y overflowed to inf
 def test_pose_and_mounting_constructors(x, y, heading, forward, left, yaw):
     pose = checked(Pose, ["x", "y", "heading"], x=x, y=y, heading=heading)
     mounting = checked(Mounting, ["forward", "left", "yaw"], forward=forward, left=left, yaw=yaw)
