@@ -8,6 +8,10 @@ inputs:
   states. NumPy: squared range against squared edges, the sector as a dot product against
   the sector's centre direction (squared, no square root, no ``atan2``), preallocated
   temporaries and in-place ufuncs.
+* **Per-call cost** of a detector context: ``prob_detection_array(states, out=out)`` at
+  N = 1, 10, 100 against the NumPy radar's call at the same N, and the scalar
+  ``prob_detection(hypothesis)`` against a plain Python function of the same radar
+  (``PythonRadar``), in ns per call.
 * **Expected P_D** over Gaussians with the third-degree cubature rule (4 points), against P_D
   at the mean; NumPy evaluates the same 4 sigma points with the same Cholesky factor.
 * **Clutter density** with the paper's lidar metadata rule (segment ``area < 10`` → 1e-1, else
@@ -213,6 +217,61 @@ def bench_pd(sizes, repeats, min_sample):
         t_ctx = median_time(lambda: context.prob_detection_array(states, out=out), repeats, min_sample)
         t_np = median_time(lambda: numpy_radar(x, y), repeats, min_sample)
         rows.append(row("pd_radar", n, n, {"ctxmodels": t_ctx, "numpy": t_np}, check))
+    return rows
+
+
+class PythonRadar:
+    """The radar's P_D of one hypothesis as a plain Python function, what a user would pass
+    where Stone Soup takes a callable: the same r² edges and dot-product sector as
+    :class:`NumpyRadar`, on the two floats of the prediction's position."""
+
+    def __init__(self, sensor=SENSOR, heading=HEADING):
+        self.sx, self.sy = sensor
+        bearing = heading + math.pi
+        self.cx, self.cy = math.cos(bearing), math.sin(bearing)
+        self.cos2 = math.cos(BLIND_WIDTH / 2) ** 2
+        self.e0, self.e1 = EDGES[0] ** 2, EDGES[1] ** 2
+
+    def __call__(self, hypothesis) -> float:
+        vector = hypothesis.prediction.state_vector
+        dx, dy = vector[0, 0] - self.sx, vector[2, 0] - self.sy
+        r2 = dx * dx + dy * dy
+        if not self.e0 < r2 < self.e1:
+            return 0.0
+        along = dx * self.cx + dy * self.cy
+        return 0.0 if along >= 0 and along * along >= r2 * self.cos2 else 0.4
+
+
+def bench_calls(sizes, repeats, min_sample):
+    """Per-call cost: ``prob_detection_array`` with ``out=`` at small N against the NumPy
+    radar's call at the same N, and the scalar ``prob_detection(hypothesis)`` (a Stone Soup
+    ``Probability``) against :class:`PythonRadar` (a float), ns per call."""
+    from stonesoup.types.hypothesis import SingleHypothesis
+    from stonesoup.types.prediction import GaussianStatePrediction
+    context = radar_model().context((*SENSOR, HEADING))
+    rows = []
+    for n in sizes:
+        states = cv_states(n, seed=100 + n)
+        x, y = np.ascontiguousarray(states[:, 0]), np.ascontiguousarray(states[:, 2])
+        numpy_radar = NumpyRadar(n)
+        out = np.empty(n)
+        check = agreement(context.prob_detection_array(states, out=out).copy(),
+                          numpy_radar(x, y).copy(), numpy_radar.near_boundary(x, y))
+        times = {"ctxmodels": median_time(lambda: context.prob_detection_array(states, out=out),
+                                          repeats, min_sample),
+                 "numpy": median_time(lambda: numpy_radar(x, y), repeats, min_sample)}
+        rows.append(row("pd_call_array (per call)", n, 1, times, check))
+    states = cv_states(1000, seed=7)
+    hypotheses = [SingleHypothesis(GaussianStatePrediction(s.reshape(-1, 1), np.eye(4)), None)
+                  for s in states]
+    python_radar, numpy_radar = PythonRadar(), NumpyRadar(len(states))
+    ours = np.array([float(context.prob_detection(h)) for h in hypotheses])
+    theirs = np.array([python_radar(h) for h in hypotheses])
+    check = agreement(ours, theirs, numpy_radar.near_boundary(states[:, 0], states[:, 2]))
+    one = hypotheses[len(hypotheses) // 2]
+    times = {"ctxmodels": median_time(lambda: context.prob_detection(one), repeats, min_sample),
+             "python": median_time(lambda: python_radar(one), repeats, min_sample)}
+    rows.append(row("pd_call_scalar (per call)", 1, 1, times, check))
     return rows
 
 
@@ -468,6 +527,7 @@ def main(argv=None) -> int:
     }
     out = results["results"]
     out += bench_pd(pd_sizes, repeats, min_sample)
+    out += bench_calls((1, 10, 100), repeats, min_sample)
     out += bench_expected_pd(cub_n, repeats, min_sample)
     out += bench_clutter(clutter_n, repeats, min_sample)
     out += bench_land(vertex_counts, n_points, repeats, min_sample)

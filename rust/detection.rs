@@ -55,7 +55,7 @@ impl DetectionModel {
     }
 
     /// The model at one sensor pose: per-scan constants computed once.
-    pub fn at_pose(&self, pose: &Pose) -> ScanDetection<'_> {
+    pub fn at_pose(&self, pose: &Pose) -> ScanDetection {
         let frame = pose.frame();
         let mut constant = 1.0;
         let mut steps = Vec::with_capacity(self.factors.len());
@@ -64,11 +64,11 @@ impl DetectionModel {
                 DetectionFactor::Constant(v) => constant *= v,
                 DetectionFactor::Range(bands) => steps.push(match bands.squared() {
                     Some(sq) => Step::SquaredBands(sq),
-                    None => Step::Bands(bands),
+                    None => Step::Bands(bands.clone()),
                 }),
                 DetectionFactor::Sector(s) => steps.push(Step::Sector(s.in_frame(&frame))),
-                DetectionFactor::Land(land) => steps.push(Step::Land(land)),
-                DetectionFactor::Sight(sight) => steps.push(Step::Sight(sight)),
+                DetectionFactor::Land(land) => steps.push(Step::Land(Arc::clone(land))),
+                DetectionFactor::Sight(sight) => steps.push(Step::Sight(Arc::clone(sight))),
             }
         }
         // Cheap factors first, so land and sight only run where P_D is still non-zero.
@@ -101,23 +101,24 @@ thread_local! {
     });
 }
 
-/// One factor, prepared for a pose.
-enum Step<'a> {
+/// One factor, prepared for a pose (owned, so a scan's model can outlive the call that
+/// built it: the bindings keep one per detector context).
+enum Step {
     SquaredBands(SquaredBands),
-    Bands(&'a RangeBands),
+    Bands(RangeBands),
     Sector(FramedSector),
-    Land(&'a LandMask),
-    Sight(&'a LineOfSight),
+    Land(Arc<LandMask>),
+    Sight(Arc<LineOfSight>),
 }
 
 /// A [`DetectionModel`] at one pose.
-pub struct ScanDetection<'a> {
+pub struct ScanDetection {
     frame: SensorFrame,
-    steps: Vec<Step<'a>>,
+    steps: Vec<Step>,
     constant: f64,
 }
 
-impl ScanDetection<'_> {
+impl ScanDetection {
     /// P_D at the world points (xs[i], ys[i]) of `scratch` into out[i] (one chunk).
     /// Factor by factor over the chunk, so each loop body is small and branch-free enough
     /// for the compiler to vectorise.

@@ -24,9 +24,10 @@ use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
 
-mod mixture;
 mod jpda;
+mod mixture;
 mod particles;
+mod scan;
 
 fn to_py(err: ModelError) -> PyErr {
     PyValueError::new_err(err.to_string())
@@ -481,6 +482,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyLandMask>()?;
     m.add_class::<PyLineOfSight>()?;
     m.add_class::<PyDetectionModel>()?;
+    m.add_class::<scan::PyDetectionAtPose>()?;
     m.add_class::<PyMetadataThreshold>()?;
     m.add_class::<PyClutterModel>()?;
     m.add_function(wrap_pyfunction!(mount, m)?)?;

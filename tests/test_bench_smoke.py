@@ -35,7 +35,10 @@ def test_quick_run_writes_agreeing_results(quick_results):
     names = {r["benchmark"] for r in quick_results["results"]}
     assert names == {"pd_radar", "expected_pd_cubature", "clutter_metadata", "land_contains_smooth",
                      "land_contains_jagged", "line_of_sight_smooth", "line_of_sight_jagged",
-                     "pd_radar_land_sight"}
+                     "pd_radar_land_sight", "pd_call_array (per call)",
+                     "pd_call_scalar (per call)"}
+    assert {r["size"] for r in quick_results["results"]
+            if r["benchmark"] == "pd_call_array (per call)"} == {1, 10, 100}
     for r in quick_results["results"]:
         a = r["agreement"]
         assert a["n"] > 0 and a["differ_far_from_boundary"] == 0, r
@@ -68,6 +71,13 @@ def test_numpy_radar_is_the_papers_radar(compare):
     near = radar.near_boundary(x, y)
     assert np.array_equal(got[~near], want[~near])
     assert 0 < (got > 0).sum() < len(x) and blind.sum() > 100
+    # the plain Python function of the per-call benchmark: the same radar, point by point
+    from stonesoup.types.hypothesis import SingleHypothesis
+    from stonesoup.types.prediction import GaussianStatePrediction
+    python_radar = compare.PythonRadar()
+    scalar = np.array([python_radar(SingleHypothesis(GaussianStatePrediction(
+        np.array([[a], [0.0], [b], [0.0]]), np.eye(4)), None)) for a, b in zip(x, y)])
+    assert np.array_equal(scalar[~near], want[~near])
 
 
 def test_agreement_check_catches_a_wrong_answer(compare):

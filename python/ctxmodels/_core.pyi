@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 __all__ = [
     "AngularSector",
     "ClutterModel",
+    "DetectionAtPose",
     "DetectionModel",
     "GaussianMixtureArrays",
     "JPDAMeasurementModel",
@@ -129,6 +130,24 @@ class DetectionModel:
         out: _Floats | None = None,
     ) -> _Floats:
         """Expected P_D of Gaussians (`means` (N, D), `covars` (N, D, D)) under `rule`."""
+
+@final
+class DetectionAtPose:
+    """A detection model fixed at one sensor pose and position mapping (a detector
+    context's thin calls): the common case only, None for anything else."""
+
+    def __new__(
+        cls, model: DetectionModel, pose: _Pose, position_mapping: _Mapping = ...
+    ) -> DetectionAtPose: ...
+    def evaluate(self, states: object, out: object | None = None) -> _Floats | None:
+        """P_D at each row of `states` (N, D), into `out` if given; None (nothing evaluated)
+        unless `states` is a C-contiguous, aligned float64 2-D array.
+
+        An `out` that is not a float64 (N,) C-contiguous, aligned array also returns None
+        (the Python layer's check names what is wrong with it)."""
+    def at(self, vector: object) -> float | None:
+        """P_D at one state vector, a float64 (D, 1) column or (D,) array whose position is
+        finite: the same bits as a row of [`Self::evaluate`]. None for anything else."""
 
 @final
 class MetadataThreshold:

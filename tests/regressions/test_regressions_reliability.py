@@ -59,6 +59,8 @@ def _overlap_cases():
     for label, make_inputs, call in [
         ("DetectionModel.evaluate states", lambda: [states()],
          lambda a, out: DETECTION._compiled().evaluate(POSE.as_tuple(), a[0], (0, 2), out)),
+        ("DetectionAtPose.evaluate states", lambda: [states()],
+         lambda a, out: _core.DetectionAtPose(DETECTION._compiled(), POSE.as_tuple()).evaluate(a[0], out)),
         ("DetectionModel.expected means", lambda: [states(), np.tile(np.eye(4), (N, 1, 1))],
          lambda a, out: DETECTION._compiled().expected(POSE.as_tuple(), a[0], a[1], (0, 2), "cubature", 3,
                                                       out)),

@@ -1,0 +1,43 @@
+"""What a :class:`~ctxmodels.DetectorContext` prepares once for its scan's P_D calls.
+
+A tracker asks a scan's context for :math:`P_D` once per hypothesis (Stone Soup's stock
+hypothesisers and updaters) or once per batch of a few states. Each call used to read the
+context's Properties, convert the pose, check the position mapping and wrap the result in
+a new :class:`~stonesoup.types.numeric.Probability`: several microseconds of Python around
+a fraction of a microsecond in the core. :class:`ScanCalls` does that work once per
+context: the core's model at the scan's pose and mapping, and one ``Probability`` per
+distinct P_D value (a scan has a handful: products of band, sector and land values).
+"""
+from __future__ import annotations
+
+from stonesoup.types.numeric import Probability
+
+from . import _core
+
+
+class ScanCalls:
+    """The detection model of ``sensor_model`` fixed at ``pose`` for the thin calls; the
+    values are the general path's, bit for bit (tested)."""
+
+    __slots__ = ("at_pose", "mean_only", "_probabilities")
+
+    #: Distinct P_D values whose Probability is kept (a scan has a handful).
+    max_probabilities = 256
+
+    def __init__(self, sensor_model, pose):
+        self.at_pose = _core.DetectionAtPose(sensor_model.detection._compiled(),
+                                             pose.as_tuple(),
+                                             tuple(sensor_model.position_mapping))
+        #: P_D is read at the mean of a Gaussian (no integration over its covariance).
+        self.mean_only = sensor_model.pd_evaluation == "mean"
+        self._probabilities: dict[float, Probability] = {}
+
+    def probability(self, value: float) -> Probability:
+        """``Probability(value)``, built once per distinct value (Probabilities are
+        immutable numbers, so the callers may share one)."""
+        found = self._probabilities.get(value)
+        if found is None:
+            if len(self._probabilities) >= self.max_probabilities:
+                self._probabilities.clear()
+            found = self._probabilities[value] = Probability(value)
+        return found

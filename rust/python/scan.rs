@@ -1,0 +1,86 @@
+//! A detection model fixed at one sensor pose and position mapping: what a detector
+//! context evaluates, prepared once per scan (pose frame, factor steps), so that each call
+//! converts nothing but its states. The thin entry points of `DetectorContext`: they take
+//! the common case only (a C-contiguous, aligned float64 array; one finite state vector)
+//! and return None for anything else, which the Python layer then converts and checks,
+//! raising its errors that name the argument.
+
+use super::{borrow, detached, mapping_of, output, pose_of, slice, value_error, PyDetectionModel};
+use crate::batch::PositionMapping;
+use crate::detection::ScanDetection;
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+
+/// Rows below which a call keeps the GIL: releasing and retaking it costs more than
+/// evaluating them (the core splits work over threads only far above this).
+const DETACH_ROWS: usize = 4096;
+
+#[pyclass(name = "DetectionAtPose", module = "ctxmodels._core", frozen)]
+pub struct PyDetectionAtPose {
+    scan: ScanDetection,
+    mapping: PositionMapping,
+}
+
+#[pymethods]
+impl PyDetectionAtPose {
+    #[new]
+    #[pyo3(signature = (model, pose, position_mapping = (0, 2)))]
+    fn new(model: &Bound<'_, PyDetectionModel>, pose: (f64, f64, f64), position_mapping: (i64, i64)) -> PyResult<Self> {
+        let pose = pose_of(pose)?;
+        let mapping = mapping_of(position_mapping)?;
+        Ok(PyDetectionAtPose { scan: model.get().0.at_pose(&pose), mapping })
+    }
+
+    /// P_D at each row of `states` (N, D), into `out` if given; None (nothing evaluated)
+    /// unless `states` is a C-contiguous, aligned float64 2-D array.
+    /// An `out` that is not a float64 (N,) C-contiguous, aligned array also returns None
+    /// (the Python layer's check names what is wrong with it).
+    #[pyo3(signature = (states, out = None))]
+    fn evaluate<'py>(&self, py: Python<'py>, states: &Bound<'py, PyAny>, out: Option<&Bound<'py, PyAny>>) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
+        let Ok(states) = states.cast::<PyArray2<f64>>() else { return Ok(None) };
+        if !(states.is_c_contiguous() && states.is_aligned()) {
+            return Ok(None);
+        }
+        let (n, ncols) = (states.shape()[0], states.shape()[1]);
+        let out = match out {
+            None => None,
+            Some(out) => match out.cast::<PyArray1<f64>>() {
+                Ok(out) if out.len() == n && out.is_c_contiguous() && out.is_aligned() => Some(out.clone()),
+                _ => return Ok(None),
+            },
+        };
+        let states = borrow(states, "states")?;
+        let data = slice(&states, "states")?;
+        let mut out = output(py, out, n, &[("states", data)])?;
+        let result = Bound::clone(&out);
+        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
+        let (scan, mapping) = (&self.scan, self.mapping);
+        if n == 0 {
+            mapping.check(ncols, "states").map_err(super::to_py)?;
+        } else if n < DETACH_ROWS {
+            scan.at_states(data, ncols, mapping, buffer).map_err(super::to_py)?;
+        } else {
+            detached(py, || scan.at_states(data, ncols, mapping, buffer))?;
+        }
+        Ok(Some(result))
+    }
+
+    /// P_D at one state vector, a float64 (D, 1) column or (D,) array whose position is
+    /// finite: the same bits as a row of [`Self::evaluate`]. None for anything else.
+    fn at(&self, vector: &Bound<'_, PyAny>) -> Option<f64> {
+        let PositionMapping { x, y } = self.mapping;
+        let (px, py) = if let Ok(column) = vector.cast::<PyArray2<f64>>() {
+            if column.shape()[1] != 1 {
+                return None;
+            }
+            (column.get_owned([x, 0])?, column.get_owned([y, 0])?)
+        } else if let Ok(flat) = vector.cast::<PyArray1<f64>>() {
+            (flat.get_owned([x])?, flat.get_owned([y])?)
+        } else {
+            return None;
+        };
+        let mut pd = [0.0];
+        self.scan.at_states(&[px, py], 2, PositionMapping { x: 0, y: 1 }, &mut pd).ok()?;
+        Some(pd[0])
+    }
+}
