@@ -108,8 +108,8 @@ def test_scalar_call_equals_the_array_row_for_every_kind_of_state():
         for given in (SingleHypothesis(prediction, None), prediction, StateVector(row), row,
                       row.reshape(-1, 1).copy(), row.tolist()):
             value = context.prob_detection(given)
-            assert type(value) is Probability and float(value) == pd
-            assert value == Probability(pd) and value.log_value == Probability(pd).log_value
+            assert type(value) is Probability and value.log_value == Probability(pd).log_value
+        assert context._scan_calls.at_pose.at(prediction.state_vector) == pd  # the thin path ran
 
 
 def test_scalar_call_falls_back_where_the_core_does_not_read():
@@ -135,8 +135,8 @@ def test_expected_pd_contexts_still_integrate_over_the_covariance():
     expected = context.sensor_model.detection.expected(
         context.pose, prediction.state_vector.reshape(1, -1), prediction.covar[np.newaxis],
         rule="cubature")[0]
-    value = float(context.prob_detection(SingleHypothesis(prediction, None)))
-    assert value == expected and value != at_mean
+    value = context.prob_detection(SingleHypothesis(prediction, None))
+    assert value.log_value == Probability(expected).log_value and expected != at_mean
     # a bare vector has no covariance: read at the point
     assert float(context.prob_detection(prediction.state_vector)) == at_mean
 
@@ -159,3 +159,37 @@ def test_contexts_pickle_and_copy_after_use():
     for other in (pickle.loads(pickle.dumps(context)), copy.copy(context), copy.deepcopy(context)):
         assert np.array_equal(other.prob_detection_array(states), expected)
         assert other.sensor_model == context.sensor_model and other.pose == context.pose
+
+
+@pytest.mark.parametrize("rule", ["cubature", "unscented", "gauss-hermite"])
+def test_scalar_expected_pd_has_the_general_paths_bits(rule):
+    context = _sensor(rule).context((10.0, -20.0, 0.3))
+    rng = np.random.default_rng(5)
+    means = _states(200, seed=2)
+    scales = rng.uniform(1, 60, size=(200, 2))
+    covars = np.zeros((200, 4, 4))
+    for k, (sx, sy) in enumerate(scales):
+        rho = rng.uniform(-0.9, 0.9) * sx * sy
+        covars[k] = np.diag([sx * sx, 1.0, sy * sy, 1.0])
+        covars[k, 0, 2] = covars[k, 2, 0] = rho
+    model = context.sensor_model
+    expected = model.detection.expected(context.pose, means, covars, rule=rule,
+                                        order=model.pd_order)
+    # smeared over band edges, sector and land: values no single point has
+    assert len(set(expected.tolist()) - {0.0, 0.9 * 0.8, 0.9 * 0.4}) >= 3
+    for mean, covar, pd in zip(means, covars, expected):
+        prediction = GaussianStatePrediction(StateVector(mean), covar)
+        value = context.prob_detection(SingleHypothesis(prediction, None))
+        # (a Probability keeps log(p): float() of it need not give p back)
+        assert type(value) is Probability and value.log_value == Probability(pd).log_value
+        # ... and it came from the thin entry point, not the general path
+        assert context._scan_calls.at_pose.expected_at(prediction.state_vector, prediction) == pd
+
+
+def test_scalar_expected_pd_refuses_what_the_general_path_refuses():
+    context = _sensor("cubature").context((0.0, 0.0, 0.0))
+    bad = np.diag([-4.0, 1.0, 9.0, 1.0])  # not positive semi-definite
+    with pytest.raises(ValueError, match="covars"):
+        context.prob_detection(GaussianStatePrediction(StateVector([100.0, 0, 0, 0]), bad))
+    with pytest.raises(ValueError, match="means"):
+        context.prob_detection(GaussianStatePrediction(StateVector([np.inf, 0, 0, 0]), np.eye(4)))

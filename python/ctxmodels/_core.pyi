@@ -137,7 +137,12 @@ class DetectionAtPose:
     context's thin calls): the common case only, None for anything else."""
 
     def __new__(
-        cls, model: DetectionModel, pose: _Pose, position_mapping: _Mapping = ...
+        cls,
+        model: DetectionModel,
+        pose: _Pose,
+        position_mapping: _Mapping = ...,
+        rule: _Rule = "mean",
+        order: int = 3,
     ) -> DetectionAtPose: ...
     def evaluate(self, states: object, out: object | None = None) -> _Floats | None:
         """P_D at each row of `states` (N, D), into `out` if given; None (nothing evaluated)
@@ -148,6 +153,12 @@ class DetectionAtPose:
     def at(self, vector: object) -> float | None:
         """P_D at one state vector, a float64 (D, 1) column or (D,) array whose position is
         finite: the same bits as a row of [`Self::evaluate`]. None for anything else."""
+    def expected_at(self, vector: object, state: object) -> float | None:
+        """Expected P_D under the rule over one Gaussian: `vector` a float64 (D, 1) column or
+        (D,) array, the mean of `state`, whose `covar` is read only then (a particle state
+        computes it) and must be a float64 (D, D) array; the same bits as a row of the
+        model's `expected`. None for anything else, or a position or covariance block the
+        general path refuses (it then names the fault)."""
 
 @final
 class MetadataThreshold:

@@ -383,11 +383,10 @@ class DetectorContext(_UpstreamContext):
         state = getattr(hypothesis_or_state, "prediction", hypothesis_or_state)
         vector = getattr(state, "state_vector", state)
         calls = self._scan_calls or self._calls()
-        if calls.mean_only or getattr(state, "covar", None) is None:
-            # one float64 vector with a finite position: straight to the core
-            pd = calls.at_pose.at(vector)
-            if pd is not None:
-                return calls.probability(pd)
+        # one float64 vector (and covariance) with a finite position: straight to the core
+        pd = calls.at_pose.at(vector) if calls.mean_only else calls.at_pose.expected_at(vector, state)
+        if pd is not None:
+            return calls.probability(pd)
         try:
             vector = np.asarray(vector, dtype=np.float64)
         except (TypeError, ValueError):

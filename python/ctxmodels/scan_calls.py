@@ -5,7 +5,8 @@ hypothesisers and updaters) or once per batch of a few states. Each call used to
 context's Properties, convert the pose, check the position mapping and wrap the result in
 a new :class:`~stonesoup.types.numeric.Probability`: several microseconds of Python around
 a fraction of a microsecond in the core. :class:`ScanCalls` does that work once per
-context: the core's model at the scan's pose and mapping, and one ``Probability`` per
+context: the core's model at the scan's pose and mapping (and the sensor model's rule for
+the expected P_D of a Gaussian), and one ``Probability`` per
 distinct P_D value (a scan has a handful: products of band, sector and land values).
 """
 from __future__ import annotations
@@ -27,7 +28,8 @@ class ScanCalls:
     def __init__(self, sensor_model, pose):
         self.at_pose = _core.DetectionAtPose(sensor_model.detection._compiled(),
                                              pose.as_tuple(),
-                                             tuple(sensor_model.position_mapping))
+                                             tuple(sensor_model.position_mapping),
+                                             sensor_model.pd_evaluation, sensor_model.pd_order)
         #: P_D is read at the mean of a Gaussian (no integration over its covariance).
         self.mean_only = sensor_model.pd_evaluation == "mean"
         self._probabilities: dict[float, Probability] = {}

@@ -5,8 +5,9 @@
 //! and return None for anything else, which the Python layer then converts and checks,
 //! raising its errors that name the argument.
 
-use super::{borrow, detached, mapping_of, output, pose_of, slice, value_error, PyDetectionModel};
+use super::{borrow, detached, mapping_of, output, pose_of, rule_of, slice, value_error, PyDetectionModel};
 use crate::batch::PositionMapping;
+use crate::cubature::Rule;
 use crate::detection::ScanDetection;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -19,16 +20,19 @@ const DETACH_ROWS: usize = 4096;
 pub struct PyDetectionAtPose {
     scan: ScanDetection,
     mapping: PositionMapping,
+    /// The context's integration rule for the expected P_D of a Gaussian.
+    rule: Rule,
 }
 
 #[pymethods]
 impl PyDetectionAtPose {
     #[new]
-    #[pyo3(signature = (model, pose, position_mapping = (0, 2)))]
-    fn new(model: &Bound<'_, PyDetectionModel>, pose: (f64, f64, f64), position_mapping: (i64, i64)) -> PyResult<Self> {
+    #[pyo3(signature = (model, pose, position_mapping = (0, 2), rule = "mean", order = 3))]
+    fn new(model: &Bound<'_, PyDetectionModel>, pose: (f64, f64, f64), position_mapping: (i64, i64), rule: &str, order: i64) -> PyResult<Self> {
         let pose = pose_of(pose)?;
         let mapping = mapping_of(position_mapping)?;
-        Ok(PyDetectionAtPose { scan: model.get().0.at_pose(&pose), mapping })
+        let rule = rule_of(rule, order)?;
+        Ok(PyDetectionAtPose { scan: model.get().0.at_pose(&pose), mapping, rule })
     }
 
     /// P_D at each row of `states` (N, D), into `out` if given; None (nothing evaluated)
@@ -81,6 +85,35 @@ impl PyDetectionAtPose {
         };
         let mut pd = [0.0];
         self.scan.at_states(&[px, py], 2, PositionMapping { x: 0, y: 1 }, &mut pd).ok()?;
+        Some(pd[0])
+    }
+
+    /// Expected P_D under the rule over one Gaussian: `vector` a float64 (D, 1) column or
+    /// (D,) array, the mean of `state`, whose `covar` is read only then (a particle state
+    /// computes it) and must be a float64 (D, D) array; the same bits as a row of the
+    /// model's `expected`. None for anything else, or a position or covariance block the
+    /// general path refuses (it then names the fault).
+    fn expected_at(&self, vector: &Bound<'_, PyAny>, state: &Bound<'_, PyAny>) -> Option<f64> {
+        let PositionMapping { x, y } = self.mapping;
+        let (px, py) = if let Ok(column) = vector.cast::<PyArray2<f64>>() {
+            if column.shape()[1] != 1 {
+                return None;
+            }
+            (column.get_owned([x, 0])?, column.get_owned([y, 0])?)
+        } else if let Ok(flat) = vector.cast::<PyArray1<f64>>() {
+            (flat.get_owned([x])?, flat.get_owned([y])?)
+        } else {
+            return None;
+        };
+        let covar = state.getattr(pyo3::intern!(state.py(), "covar")).ok()?;
+        let covar = covar.cast::<PyArray2<f64>>().ok()?;
+        let d = covar.shape()[0];
+        if covar.shape()[1] != d || vector.len().ok()? != d {
+            return None;
+        }
+        let block = [covar.get_owned([x, x])?, covar.get_owned([x, y])?, covar.get_owned([y, x])?, covar.get_owned([y, y])?];
+        let mut pd = [0.0];
+        self.scan.expected_at_gaussians(&[px, py], &block, 2, PositionMapping { x: 0, y: 1 }, &self.rule, &mut pd).ok()?;
         Some(pd[0])
     }
 }
