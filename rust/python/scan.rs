@@ -72,17 +72,7 @@ impl PyDetectionAtPose {
     /// P_D at one state vector, a float64 (D, 1) column or (D,) array whose position is
     /// finite: the same bits as a row of [`Self::evaluate`]. None for anything else.
     fn at(&self, vector: &Bound<'_, PyAny>) -> Option<f64> {
-        let PositionMapping { x, y } = self.mapping;
-        let (px, py) = if let Ok(column) = vector.cast::<PyArray2<f64>>() {
-            if column.shape()[1] != 1 {
-                return None;
-            }
-            (column.get_owned([x, 0])?, column.get_owned([y, 0])?)
-        } else if let Ok(flat) = vector.cast::<PyArray1<f64>>() {
-            (flat.get_owned([x])?, flat.get_owned([y])?)
-        } else {
-            return None;
-        };
+        let (px, py) = self.position_of(vector)?;
         let mut pd = [0.0];
         self.scan.at_states(&[px, py], 2, PositionMapping { x: 0, y: 1 }, &mut pd).ok()?;
         Some(pd[0])
@@ -94,17 +84,8 @@ impl PyDetectionAtPose {
     /// model's `expected`. None for anything else, or a position or covariance block the
     /// general path refuses (it then names the fault).
     fn expected_at(&self, vector: &Bound<'_, PyAny>, state: &Bound<'_, PyAny>) -> Option<f64> {
+        let (px, py) = self.position_of(vector)?;
         let PositionMapping { x, y } = self.mapping;
-        let (px, py) = if let Ok(column) = vector.cast::<PyArray2<f64>>() {
-            if column.shape()[1] != 1 {
-                return None;
-            }
-            (column.get_owned([x, 0])?, column.get_owned([y, 0])?)
-        } else if let Ok(flat) = vector.cast::<PyArray1<f64>>() {
-            (flat.get_owned([x])?, flat.get_owned([y])?)
-        } else {
-            return None;
-        };
         let covar = state.getattr(pyo3::intern!(state.py(), "covar")).ok()?;
         let covar = covar.cast::<PyArray2<f64>>().ok()?;
         let d = covar.shape()[0];
@@ -115,5 +96,22 @@ impl PyDetectionAtPose {
         let mut pd = [0.0];
         self.scan.expected_at_gaussians(&[px, py], &block, 2, PositionMapping { x: 0, y: 1 }, &self.rule, &mut pd).ok()?;
         Some(pd[0])
+    }
+}
+
+impl PyDetectionAtPose {
+    /// The mapped position of a float64 (D, 1) column or (D,) array; None for anything else.
+    fn position_of(&self, vector: &Bound<'_, PyAny>) -> Option<(f64, f64)> {
+        let PositionMapping { x, y } = self.mapping;
+        if let Ok(column) = vector.cast::<PyArray2<f64>>() {
+            if column.shape()[1] != 1 {
+                return None;
+            }
+            Some((column.get_owned([x, 0])?, column.get_owned([y, 0])?))
+        } else if let Ok(flat) = vector.cast::<PyArray1<f64>>() {
+            Some((flat.get_owned([x])?, flat.get_owned([y])?))
+        } else {
+            None
+        }
     }
 }
