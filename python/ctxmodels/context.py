@@ -314,7 +314,7 @@ class DetectorContext(_UpstreamContext):
                 return pd
         model = self.sensor_model
         mapping = tuple(model.position_mapping)
-        if covars is None or model.pd_evaluation == "mean":
+        if covars is None or calls.mean_only:
             return model.detection.evaluate(self.pose, means, mapping, out=out)
         return model.detection.expected(self.pose, means, covars, mapping,
                                         model.pd_evaluation, model.pd_order, out=out)
@@ -380,7 +380,7 @@ class DetectorContext(_UpstreamContext):
     def prob_detection(self, hypothesis_or_state) -> Probability:
         """P_D of one hypothesis' prediction, a state, or a plain state vector. A particle
         state gets the weighted mean of its particles' P_D."""
-        state = getattr(hypothesis_or_state, "prediction", hypothesis_or_state)
+        state = _state_of(hypothesis_or_state)
         vector = getattr(state, "state_vector", state)
         calls = self._scan_calls or self._calls()
         # one float64 vector (and covariance) with a finite position: straight to the core

@@ -59,9 +59,7 @@ impl PyDetectionAtPose {
         let result = Bound::clone(&out);
         let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
         let (scan, mapping) = (&self.scan, self.mapping);
-        if n == 0 {
-            mapping.check(ncols, "states").map_err(super::to_py)?;
-        } else if n < DETACH_ROWS {
+        if n < DETACH_ROWS {
             scan.at_states(data, ncols, mapping, buffer).map_err(super::to_py)?;
         } else {
             detached(py, || scan.at_states(data, ncols, mapping, buffer))?;
