@@ -133,25 +133,29 @@ fn expected_pd(c: &mut Criterion) {
     let model = DetectionModel::new(radar_factors()).unwrap();
     let pose = Pose::new(0.0, 0.0, 0.3).unwrap();
     let scan = model.at_pose(&pose);
-    let n = 100_000;
-    let means = states(n, 2);
-    let covars = covariances(n, 3);
-    let mut out = vec![0.0; n];
-    let mut group = c.benchmark_group("expected_pd_1e5");
-    group.throughput(Throughput::Elements(n as u64));
-    group.bench_function("at_mean_states", |b| b.iter(|| scan.at_states(black_box(&means), 4, PositionMapping::default(), &mut out).unwrap()));
     let rules = [
         ("mean", Rule::mean()),
         ("cubature", Rule::cubature()),
         ("unscented", Rule::unscented()),
         ("gauss_hermite_3", Rule::gauss_hermite(3).unwrap()),
     ];
-    for (name, rule) in &rules {
-        group.bench_function(*name, |b| {
-            b.iter(|| scan.expected_at_gaussians(black_box(&means), &covars, 4, PositionMapping::default(), rule, &mut out).unwrap())
-        });
+    // 10⁴ Gaussians (one thread, in cache) and 10⁵ (two threads; the covariances, 128 B
+    // each, come from L3 or memory).
+    for exp in [4u32, 5] {
+        let n = 10usize.pow(exp);
+        let means = states(n, 2);
+        let covars = covariances(n, 3);
+        let mut out = vec![0.0; n];
+        let mut group = c.benchmark_group(format!("expected_pd_1e{exp}"));
+        group.throughput(Throughput::Elements(n as u64));
+        group.bench_function("at_mean_states", |b| b.iter(|| scan.at_states(black_box(&means), 4, PositionMapping::default(), &mut out).unwrap()));
+        for (name, rule) in &rules {
+            group.bench_function(*name, |b| {
+                b.iter(|| scan.expected_at_gaussians(black_box(&means), &covars, 4, PositionMapping::default(), rule, &mut out).unwrap())
+            });
+        }
+        group.finish();
     }
-    group.finish();
 }
 
 const QUERIES: usize = 100_000;

@@ -3,6 +3,7 @@
 //! split of states over threads, and the first-bad-row error.
 
 use crate::error::{ModelError, Result};
+use crate::simd::Lanes;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -51,31 +52,89 @@ pub enum Layout {
 }
 
 impl Layout {
-    /// Positions of states `first..first + xs.len()` into `xs`, `ys`. One gather for both
-    /// layouts, so P_D is computed by the same kernel whichever way the states lie.
-    #[inline]
-    pub fn gather(self, data: &[f64], first: usize, mapping: PositionMapping, xs: &mut [f64], ys: &mut [f64]) {
-        let n = xs.len();
+    /// The position of state `i`.
+    #[inline(always)]
+    pub fn position(self, data: &[f64], i: usize, mapping: PositionMapping) -> [f64; 2] {
         match self {
-            // Stone Soup's [x, vx, y, vy]: fixed offsets let the gather vectorise.
-            Layout::Rows { ncols: 4 } if mapping == PositionMapping::default() => {
-                for (i, row) in data[first * 4..(first + n) * 4].chunks_exact(4).enumerate() {
-                    xs[i] = row[0];
-                    ys[i] = row[2];
-                }
-            }
-            Layout::Rows { ncols } => {
-                for (i, row) in data[first * ncols..(first + n) * ncols].chunks_exact(ncols).enumerate() {
-                    xs[i] = row[mapping.x];
-                    ys[i] = row[mapping.y];
-                }
-            }
-            // A particle's x and y are contiguous runs of their rows.
-            Layout::Columns { nstates } => {
-                xs.copy_from_slice(&data[mapping.x * nstates + first..][..n]);
-                ys.copy_from_slice(&data[mapping.y * nstates + first..][..n]);
-            }
+            Layout::Rows { ncols } => [data[i * ncols + mapping.x], data[i * ncols + mapping.y]],
+            Layout::Columns { nstates } => [data[mapping.x * nstates + i], data[mapping.y * nstates + i]],
         }
+    }
+}
+
+/// Reads the positions of states in lanes of four, straight from the caller's array (no
+/// copy). One implementation per layout, so a kernel's block loop has no layout branch.
+pub trait Positions: Copy {
+    /// x and y of states `first..first + 4`.
+    fn lanes<L: Lanes>(self, first: usize) -> (L, L);
+    /// x and y of state `i`.
+    fn one(self, i: usize) -> [f64; 2];
+
+    /// As [`Self::lanes`] for the `count` < 4 states from `first` (a chunk's last block),
+    /// padded with zeros: finite, so never reported as a bad state.
+    #[inline(always)]
+    fn partial<L: Lanes>(self, first: usize, count: usize) -> (L, L) {
+        let (mut xs, mut ys) = ([0.0; 4], [0.0; 4]);
+        for i in 0..count {
+            [xs[i], ys[i]] = self.one(first + i);
+        }
+        (L::from_array(xs), L::from_array(ys))
+    }
+}
+
+/// Stone Soup's constant-velocity rows [x, vx, y, vy]: four rows are four vector loads.
+#[derive(Clone, Copy)]
+pub struct CvRows<'a>(pub &'a [f64]);
+
+impl Positions for CvRows<'_> {
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> (L, L) {
+        L::rows4_columns02(&self.0[first * 4..])
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> [f64; 2] {
+        [self.0[i * 4], self.0[i * 4 + 2]]
+    }
+}
+
+/// Any other (N, ncols) rows.
+#[derive(Clone, Copy)]
+pub struct Rows<'a> {
+    pub data: &'a [f64],
+    pub ncols: usize,
+    pub mapping: PositionMapping,
+}
+
+impl Positions for Rows<'_> {
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> (L, L) {
+        let [x0, y0] = self.one(first);
+        let [x1, y1] = self.one(first + 1);
+        let [x2, y2] = self.one(first + 2);
+        let [x3, y3] = self.one(first + 3);
+        (L::from_array([x0, x1, x2, x3]), L::from_array([y0, y1, y2, y3]))
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> [f64; 2] {
+        Layout::Rows { ncols: self.ncols }.position(self.data, i, self.mapping)
+    }
+}
+
+/// A (D, N) C-ordered particle array: x and y are contiguous runs of their rows.
+#[derive(Clone, Copy)]
+pub struct Columns<'a> {
+    pub xs: &'a [f64],
+    pub ys: &'a [f64],
+}
+
+impl Positions for Columns<'_> {
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> (L, L) {
+        (L::load(&self.xs[first..]), L::load(&self.ys[first..]))
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> [f64; 2] {
+        [self.xs[i], self.ys[i]]
     }
 }
 

@@ -5,10 +5,11 @@
 //! `area < 10` → 1e-1, otherwise 1e-3). λ is a density in the detection's measurement
 //! space, so it must be strictly positive: trackers divide by it.
 
-use crate::batch::{for_each_chunk, CHUNK};
+use crate::batch::for_each_chunk;
 use crate::error::{ModelError, Result};
 use crate::pose::Pose;
 use crate::range_bands::RangeBands;
+use crate::simd::{dispatch, LaneKernel, Lanes};
 
 /// λ factor from one metadata column: `below` when value < threshold, `at_or_above`
 /// otherwise; `missing` (if given) when the detection has no such metadata (NaN).
@@ -117,73 +118,11 @@ impl ClutterModel {
         // The first row that cannot be evaluated, with the argument and the problem.
         let problems = std::sync::Mutex::new(Vec::<(usize, &'static str, String)>::new());
         let bad = for_each_chunk(out, |first, chunk| {
-            let mut range = [0.0f64; CHUNK];
-            for i in 0..chunk.len() {
-                let row = first + i;
-                let (x, y) = (positions[2 * row], positions[2 * row + 1]);
-                let measured = ranges.map_or(f64::NAN, |r| r[row]);
-                range[i] = if measured.is_nan() {
-                    ((x - origin[0]).powi(2) + (y - origin[1]).powi(2)).sqrt()
-                } else {
-                    measured
-                };
-                // NaN marks the row as not evaluable and survives every product below.
-                let unusable = self.uses_position && !(x.is_finite() && y.is_finite());
-                chunk[i] = if unusable { f64::NAN } else { 1.0 };
-            }
-            for f in &self.factors {
-                match f {
-                    ClutterFactor::Constant(v) => chunk.iter_mut().for_each(|o| *o *= v),
-                    ClutterFactor::Range(bands) => {
-                        for i in 0..chunk.len() {
-                            chunk[i] *= bands.at(range[i]);
-                        }
-                    }
-                    ClutterFactor::Metadata(rule) => {
-                        for i in 0..chunk.len() {
-                            let value = metadata[(first + i) * k + rule.column];
-                            chunk[i] *= if value.is_nan() {
-                                rule.missing.unwrap_or(f64::NAN)
-                            } else if value.is_infinite() {
-                                // ±inf (an overflowed value) would pass as "at or above".
-                                f64::NAN
-                            } else if value < rule.threshold {
-                                rule.below
-                            } else {
-                                rule.at_or_above
-                            };
-                        }
-                    }
-                }
-            }
-            // Every factor value is finite and > 0, so a λ that is not marks a row that could
-            // not be evaluated (or a product that under/overflowed); say why for the first one.
-            let i = chunk.iter().position(|v| !(v.is_finite() && *v > 0.0))?;
-            let row = first + i;
-            let (x, y) = (positions[2 * row], positions[2 * row + 1]);
-            let problem = if self.uses_position && !(x.is_finite() && y.is_finite()) {
-                ("positions", "position is NaN or infinite".to_string())
-            } else {
-                let metadata_problem = self.factors.iter().find_map(|f| match f {
-                    ClutterFactor::Metadata(rule) => {
-                        let value = metadata[row * k + rule.column];
-                        if value.is_infinite() {
-                            Some(format!("metadata column {} is {value}; values must be finite (NaN = missing)", rule.column))
-                        } else if rule.missing.is_none() && value.is_nan() {
-                            Some(format!("metadata column {} is missing and the rule has no `missing` value", rule.column))
-                        } else {
-                            None
-                        }
-                    }
-                    _ => None,
-                });
-                match metadata_problem {
-                    Some(message) => ("metadata", message),
-                    None => ("factors", format!("the product of the clutter factors is {}, not a finite density > 0 (factors too small or too large)", chunk[i])),
-                }
-            };
-            problems.lock().unwrap().push((row, problem.0, problem.1));
-            Some(i)
+            let bad = dispatch(Densities { model: self, origin, positions, metadata, ranges, first, out: chunk })?;
+            let row = first + bad;
+            let (argument, message) = self.problem(positions, metadata, row, chunk[bad]);
+            problems.lock().unwrap().push((row, argument, message));
+            Some(bad)
         });
         if let Some(row) = bad {
             let problems = problems.into_inner().unwrap();
@@ -191,6 +130,146 @@ impl ClutterModel {
             return Err(ModelError::non_finite(argument, row, message));
         }
         Ok(())
+    }
+
+    /// λ of one detection at (x, y) with its metadata row and measured range (NaN: none),
+    /// one factor after another: the readable reference the lane kernel must match bit for
+    /// bit. NaN when the detection cannot be evaluated.
+    pub fn at_one(&self, origin: [f64; 2], [x, y]: [f64; 2], metadata: &[f64], measured: f64) -> f64 {
+        let range = if measured.is_nan() { ((x - origin[0]).powi(2) + (y - origin[1]).powi(2)).sqrt() } else { measured };
+        let mut density = if self.uses_position && !(x.is_finite() && y.is_finite()) { f64::NAN } else { 1.0 };
+        for f in &self.factors {
+            density *= match f {
+                ClutterFactor::Constant(v) => *v,
+                ClutterFactor::Range(bands) => bands.at(range),
+                ClutterFactor::Metadata(rule) => {
+                    let value = metadata[rule.column];
+                    if value.is_nan() {
+                        rule.missing.unwrap_or(f64::NAN)
+                    } else if value.is_infinite() {
+                        // ±inf (an overflowed value) would pass as "at or above".
+                        f64::NAN
+                    } else if value < rule.threshold {
+                        rule.below
+                    } else {
+                        rule.at_or_above
+                    }
+                }
+            };
+        }
+        density
+    }
+
+    /// Why row `row` has no finite density > 0 (every factor value is one, so it could not
+    /// be evaluated, or the product under/overflowed).
+    fn problem(&self, positions: &[f64], metadata: &[f64], row: usize, density: f64) -> (&'static str, String) {
+        let (x, y) = (positions[2 * row], positions[2 * row + 1]);
+        if self.uses_position && !(x.is_finite() && y.is_finite()) {
+            return ("positions", "position is NaN or infinite".to_string());
+        }
+        let k = self.metadata_columns;
+        let metadata_problem = self.factors.iter().find_map(|f| match f {
+            ClutterFactor::Metadata(rule) => {
+                let value = metadata[row * k + rule.column];
+                if value.is_infinite() {
+                    Some(format!("metadata column {} is {value}; values must be finite (NaN = missing)", rule.column))
+                } else if rule.missing.is_none() && value.is_nan() {
+                    Some(format!("metadata column {} is missing and the rule has no `missing` value", rule.column))
+                } else {
+                    None
+                }
+            }
+            _ => None,
+        });
+        match metadata_problem {
+            Some(message) => ("metadata", message),
+            None => ("factors", format!("the product of the clutter factors is {density}, not a finite density > 0 (factors too small or too large)")),
+        }
+    }
+}
+
+/// λ of detections `first..first + out.len()`, four at a time: positions read as (x, y)
+/// pairs, the range computed (or the measured one taken) and every factor applied in
+/// registers. The index (in `out`) of the first detection without a finite λ > 0.
+struct Densities<'a> {
+    model: &'a ClutterModel,
+    origin: [f64; 2],
+    positions: &'a [f64],
+    metadata: &'a [f64],
+    ranges: Option<&'a [f64]>,
+    first: usize,
+    out: &'a mut [f64],
+}
+
+impl Densities<'_> {
+    /// Entry `column` of the metadata rows of detections `first..first + count`,
+    /// zero-padded.
+    #[inline(always)]
+    fn metadata<L: Lanes>(&self, first: usize, count: usize, column: usize) -> L {
+        let k = self.model.metadata_columns;
+        if count == 4 && k == 1 {
+            return L::load(&self.metadata[first..]);
+        }
+        let at = |i: usize| if i < count { self.metadata[(first + i) * k + column] } else { 0.0 };
+        L::from_array([at(0), at(1), at(2), at(3)])
+    }
+}
+
+impl LaneKernel for Densities<'_> {
+    type Output = Option<usize>;
+
+    #[inline(always)]
+    fn run<L: Lanes>(self) -> Option<usize> {
+        let model = self.model;
+        let (zero, one, nan) = (L::splat(0.0), L::splat(1.0), L::splat(f64::NAN));
+        let (ox, oy) = (L::splat(self.origin[0]), L::splat(self.origin[1]));
+        let mut bad = L::none();
+        let n = self.out.len();
+        let mut b = 0;
+        while b < n {
+            let (first, count) = (self.first + b, (n - b).min(4));
+            let (x, y) = if count == 4 {
+                L::pairs(&self.positions[2 * first..])
+            } else {
+                let at = |i: usize, j: usize| if i < count { self.positions[2 * (first + i) + j] } else { 0.0 };
+                (L::from_array([at(0, 0), at(1, 0), at(2, 0), at(3, 0)]), L::from_array([at(0, 1), at(1, 1), at(2, 1), at(3, 1)]))
+            };
+            let (dx, dy) = (x - ox, y - oy);
+            let mut range = (dx * dx + dy * dy).sqrt();
+            if let Some(measured) = self.ranges {
+                let at = |i: usize| if i < count { measured[first + i] } else { f64::NAN };
+                let measured = L::from_array([at(0), at(1), at(2), at(3)]);
+                range = L::select(measured.is_nan(), range, measured);
+            }
+            let mut density = one;
+            if model.uses_position {
+                density = L::select(L::or(x.non_finite(), y.non_finite()), nan, one);
+            }
+            for f in &model.factors {
+                density = density
+                    * match f {
+                        ClutterFactor::Constant(v) => L::splat(*v),
+                        ClutterFactor::Range(bands) => bands.lanes_at(range),
+                        ClutterFactor::Metadata(rule) => {
+                            let value: L = self.metadata(first, count, rule.column);
+                            let known = L::select(value.lt(L::splat(rule.threshold)), L::splat(rule.below), L::splat(rule.at_or_above));
+                            let finite = L::select(value.non_finite(), nan, known);
+                            L::select(value.is_nan(), L::splat(rule.missing.unwrap_or(f64::NAN)), finite)
+                        }
+                    };
+            }
+            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+            if count == 4 {
+                density.store(&mut self.out[b..]);
+            } else {
+                self.out[b..].copy_from_slice(&density.to_array()[..count]);
+            }
+            b += 4;
+        }
+        if !L::any(bad) {
+            return None;
+        }
+        self.out.iter().position(|v| !(v.is_finite() && *v > 0.0))
     }
 }
 
@@ -263,5 +342,44 @@ mod tests {
     fn zero_or_negative_density_is_rejected() {
         assert!(ClutterModel::new(vec![ClutterFactor::Constant(0.0)]).is_err());
         assert!(ClutterModel::new(vec![ClutterFactor::Constant(-1e-3)]).is_err());
+    }
+
+    #[test]
+    fn every_backend_gives_the_reference_bits() {
+        use crate::simd::{run_on, Backend};
+        let model = ClutterModel::new(vec![
+            ClutterFactor::Constant(0.7),
+            ClutterFactor::Range(RangeBands::new(vec![100.0, 1000.0], vec![1e-3, 1e-2, 3e-2], vec![true, false]).unwrap()),
+            ClutterFactor::Metadata(MetadataThreshold { column: 1, threshold: 10.0, below: 1e-1, at_or_above: 1e-3, missing: Some(1e-2) }),
+            ClutterFactor::Metadata(MetadataThreshold { column: 0, threshold: 0.5, below: 2.0, at_or_above: 0.5, missing: None }),
+        ])
+        .unwrap();
+        let origin = [3.0, -4.0];
+        for m in [1, 3, 4, 5, 9, 130] {
+            let mut positions: Vec<f64> = (0..2 * m).map(|k| ((k as f64) * 0.618_033_988_749_895).sin() * 1500.0).collect();
+            // on the band edges exactly, far away, and one position that cannot be used
+            positions[0] = origin[0] + 100.0;
+            positions[1] = origin[1];
+            if m > 4 {
+                positions[8] = origin[0] + 1000.0;
+                positions[9] = origin[1];
+                positions[6] = 1e300;
+            }
+            let metadata: Vec<f64> = (0..2 * m).map(|k| match k % 7 { 0 => f64::NAN, 1 => 10.0, 2 => 0.5, _ => (k % 23) as f64 }).collect();
+            let ranges: Vec<f64> = (0..m).map(|i| if i % 3 == 0 { 1000.0 } else { f64::NAN }).collect();
+            for ranges in [None, Some(&ranges[..])] {
+                // metadata column 0 must be present (no `missing`): rows with NaN there fail.
+                let reference: Vec<u64> = (0..m)
+                    .map(|i| model.at_one(origin, [positions[2 * i], positions[2 * i + 1]], &metadata[2 * i..2 * i + 2], ranges.map_or(f64::NAN, |r| r[i])).to_bits())
+                    .collect();
+                let first_bad = reference.iter().position(|&v| !(f64::from_bits(v).is_finite() && f64::from_bits(v) > 0.0));
+                for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
+                    let mut out = vec![0.0; m];
+                    let bad = run_on(backend, Densities { model: &model, origin, positions: &positions, metadata: &metadata, ranges, first: 0, out: &mut out });
+                    assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), reference, "{backend:?} m={m}");
+                    assert_eq!(bad, first_bad, "{backend:?} m={m}");
+                }
+            }
+        }
     }
 }

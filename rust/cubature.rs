@@ -8,6 +8,7 @@
 //! constant, so no rule is exact on it: higher orders converge to the expectation.
 
 use crate::error::{ModelError, Result};
+use crate::simd::Lanes;
 use nalgebra::{DMatrix, SymmetricEigen};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -93,13 +94,44 @@ pub fn cholesky2(a: f64, b: f64, b_t: f64, c: f64) -> Option<[f64; 3]> {
     if (b - b_t).abs() > 1e-9 * scale || a < -1e-12 * scale || c < -1e-12 * scale {
         return None;
     }
-    let l11 = a.max(0.0).sqrt();
+    let l11 = positive_part(a).sqrt();
     let l21 = if l11 > 0.0 { b / l11 } else if b.abs() <= 1e-12 * scale { 0.0 } else { return None };
     let rest = c - l21 * l21;
     if rest < -1e-9 * scale {
         return None;
     }
-    Some([l11, l21, rest.max(0.0).sqrt()])
+    Some([l11, l21, positive_part(rest).sqrt()])
+}
+
+/// max(v, 0) with +0 for every v ≤ 0 (also −0), as the lanes compute it.
+#[inline(always)]
+fn positive_part(v: f64) -> f64 {
+    if v > 0.0 {
+        v
+    } else {
+        0.0
+    }
+}
+
+/// [`cholesky2`] of four matrices at once, the same bits: the factors, and a mask of the
+/// lanes for which `cholesky2` gives None (their factors are meaningless).
+#[inline(always)]
+pub fn cholesky2_lanes<L: Lanes>(a: L, b: L, b_t: L, c: L) -> (L::Mask, [L; 3]) {
+    let zero = L::splat(0.0);
+    let scale = a.abs().max(c.abs()).max(L::splat(f64::MIN_POSITIVE));
+    let non_finite = L::or(L::or(a.non_finite(), b.non_finite()), L::or(b_t.non_finite(), c.non_finite()));
+    let asymmetric = (b - b_t).abs().gt(L::splat(1e-9) * scale);
+    let tolerance = L::splat(-1e-12) * scale;
+    let negative = L::or(a.lt(tolerance), c.lt(tolerance));
+    let l11 = a.max(zero).sqrt();
+    let pivot = l11.gt(zero);
+    let l21 = L::select(pivot, b.div(l11), zero);
+    // No pivot: only a zero covariance is allowed.
+    let unpivoted = L::and(l11.le(zero), b.abs().gt(L::splat(1e-12) * scale));
+    let rest = c - l21 * l21;
+    let indefinite = rest.lt(L::splat(-1e-9) * scale);
+    let bad = L::or(L::or(non_finite, asymmetric), L::or(L::or(negative, unpivoted), indefinite));
+    (bad, [l11, l21, rest.max(zero).sqrt()])
 }
 
 #[cfg(test)]

@@ -6,15 +6,18 @@
 //! The expected P_D of a Gaussian position, E[P_D(p)] with p ~ N(m, P), is evaluated with a
 //! [`Rule`](crate::cubature::Rule).
 
-use crate::batch::{check_columns, check_rows, for_each_chunk, Layout, MemoryOrder, PositionMapping, CHUNK};
-use crate::cubature::{cholesky2, Rule};
+use crate::batch::{check_columns, check_rows, for_each_chunk, Columns, CvRows, Layout, MemoryOrder, PositionMapping, Rows};
+use crate::cubature::Rule;
 use crate::error::{check_probability, ModelError, Result};
 use crate::land::LandMask;
 use crate::pose::{Pose, SensorFrame};
 use crate::range_bands::{RangeBands, SquaredBands};
 use crate::sector::{AngularSector, FramedSector};
 use crate::sight::LineOfSight;
+use crate::simd::dispatch;
 use std::sync::Arc;
+
+mod lanes;
 
 #[derive(Debug, Clone)]
 pub enum DetectionFactor {
@@ -58,7 +61,9 @@ impl DetectionModel {
     pub fn at_pose(&self, pose: &Pose) -> ScanDetection {
         let frame = pose.frame();
         let mut constant = 1.0;
-        let mut steps = Vec::with_capacity(self.factors.len());
+        let (mut steps, mut indexed) = (Vec::new(), Vec::new());
+        // Land and sight run after the others (which keep their order, and so their bits),
+        // only where P_D is still non-zero.
         for f in &self.factors {
             match f {
                 DetectionFactor::Constant(v) => constant *= v,
@@ -67,47 +72,28 @@ impl DetectionModel {
                     None => Step::Bands(bands.clone()),
                 }),
                 DetectionFactor::Sector(s) => steps.push(Step::Sector(s.in_frame(&frame))),
-                DetectionFactor::Land(land) => steps.push(Step::Land(Arc::clone(land))),
-                DetectionFactor::Sight(sight) => steps.push(Step::Sight(Arc::clone(sight))),
+                DetectionFactor::Land(land) => indexed.push(Indexed::Land(Arc::clone(land))),
+                DetectionFactor::Sight(sight) => indexed.push(Indexed::Sight(Arc::clone(sight))),
             }
         }
-        // Cheap factors first, so land and sight only run where P_D is still non-zero.
-        steps.sort_by_key(|s| matches!(s, Step::Land(_) | Step::Sight(_)));
-        ScanDetection { frame, steps, constant }
+        ScanDetection { frame, steps, indexed, constant }
     }
 }
 
-#[inline(always)]
-fn is_non_finite(v: f64) -> bool {
-    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
-    v.to_bits() & EXPONENT == EXPONENT
-}
-
-/// Per-thread scratch for one chunk: allocated once per thread, so evaluating a chunk
-/// neither allocates nor clears 40 KB of stack arrays.
-pub(crate) struct Scratch {
-    xs: Vec<f64>,
-    ys: Vec<f64>,
-    dx: Vec<f64>,
-    dy: Vec<f64>,
-    r2: Vec<f64>,
-    band: Vec<f64>,
-}
-
-thread_local! {
-    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch {
-        xs: vec![0.0; CHUNK], ys: vec![0.0; CHUNK], dx: vec![0.0; CHUNK],
-        dy: vec![0.0; CHUNK], r2: vec![0.0; CHUNK], band: vec![0.0; CHUNK],
-    });
-}
-
-/// One factor, prepared for a pose (owned, so a scan's model can outlive the call that
-/// built it: the bindings keep one per detector context).
+/// A range or sector factor prepared for a pose, evaluated four states at a time
+/// (owned, so a scan's model can outlive the call that built it: the bindings keep one per
+/// detector context).
 enum Step {
     SquaredBands(SquaredBands),
     Bands(RangeBands),
     Sector(FramedSector),
+}
+
+/// A factor evaluated point by point (a spatial index lookup each).
+enum Indexed {
+    /// Land (boundary included) gets 0.
     Land(Arc<LandMask>),
+    /// A target shadowed from the sensor by land gets 0.
     Sight(Arc<LineOfSight>),
 }
 
@@ -115,54 +101,44 @@ enum Step {
 pub struct ScanDetection {
     frame: SensorFrame,
     steps: Vec<Step>,
+    indexed: Vec<Indexed>,
     constant: f64,
 }
 
 impl ScanDetection {
-    /// P_D at the world points (xs[i], ys[i]) of `scratch` into out[i] (one chunk).
-    /// Factor by factor over the chunk, so each loop body is small and branch-free enough
-    /// for the compiler to vectorise.
-    fn at_points(&self, scratch: &mut Scratch, out: &mut [f64]) {
-        let n = out.len();
-        let Scratch { xs, ys, dx, dy, r2, band } = scratch;
-        let (xs, ys) = (&xs[..n], &ys[..n]);
-        let (dx, dy, r2) = (&mut dx[..n], &mut dy[..n], &mut r2[..n]);
+    /// P_D at one world point, one factor after another: the readable reference the lane
+    /// kernels ([`lanes`]) must match bit for bit.
+    pub fn at_point(&self, x: f64, y: f64) -> f64 {
         let [ox, oy] = self.frame.origin;
-        for i in 0..n {
-            dx[i] = xs[i] - ox;
-            dy[i] = ys[i] - oy;
-            r2[i] = dx[i] * dx[i] + dy[i] * dy[i];
-            out[i] = self.constant;
-        }
+        let (dx, dy) = (x - ox, y - oy);
+        let r2 = dx * dx + dy * dy;
+        let mut pd = self.constant;
         for step in &self.steps {
-            match step {
-                Step::SquaredBands(bands) => bands.multiply_into(r2, out, band),
-                Step::Bands(bands) => {
-                    for i in 0..n {
-                        out[i] *= bands.at(r2[i].sqrt());
-                    }
-                }
-                Step::Sector(sector) => {
-                    for i in 0..n {
-                        out[i] *= sector.at_squared(dx[i], dy[i], r2[i]);
-                    }
-                }
-                Step::Land(land) => {
-                    for i in 0..n {
-                        if out[i] != 0.0 && land.contains([xs[i], ys[i]]) {
-                            out[i] = 0.0;
-                        }
-                    }
-                }
-                Step::Sight(sight) => {
-                    for i in 0..n {
-                        if out[i] != 0.0 && !sight.visible(self.frame.origin, [xs[i], ys[i]]) {
-                            out[i] = 0.0;
-                        }
-                    }
-                }
+            pd *= match step {
+                Step::SquaredBands(bands) => bands.at_squared(r2),
+                Step::Bands(bands) => bands.at(r2.sqrt()),
+                Step::Sector(sector) => sector.at_squared(dx, dy, r2),
+            };
+        }
+        self.indexed_at(x, y, pd)
+    }
+
+    /// `pd` after the land and sight factors at (x, y): skipped once it is 0.
+    #[inline]
+    fn indexed_at(&self, x: f64, y: f64, mut pd: f64) -> f64 {
+        for step in &self.indexed {
+            if pd == 0.0 {
+                break;
+            }
+            let hidden = match step {
+                Indexed::Land(land) => land.contains([x, y]),
+                Indexed::Sight(sight) => !sight.visible(self.frame.origin, [x, y]),
+            };
+            if hidden {
+                pd = 0.0;
             }
         }
+        pd
     }
 
     /// P_D at the position of each state row. `states` is (N, ncols) row-major.
@@ -188,26 +164,13 @@ impl ScanDetection {
 
     /// P_D of every state of a checked array; the first state whose position is not finite.
     fn at_layout(&self, states: &[f64], layout: Layout, mapping: PositionMapping, out: &mut [f64]) -> Option<usize> {
-        for_each_chunk(out, |first, chunk| {
-            let n = chunk.len();
-            SCRATCH.with(|cell| {
-                let scratch = &mut *cell.borrow_mut();
-                let (xs, ys) = (&mut scratch.xs[..n], &mut scratch.ys[..n]);
-                layout.gather(states, first, mapping, xs, ys);
-                // Branch-free scan for NaN/inf (all exponent bits set); the rare bad chunk is
-                // then searched for its first bad state.
-                let mut non_finite = 0u64;
-                for i in 0..n {
-                    non_finite |= (is_non_finite(xs[i]) | is_non_finite(ys[i])) as u64;
-                }
-                let bad = if non_finite == 0 {
-                    None
-                } else {
-                    (0..n).find(|&i| !(xs[i].is_finite() && ys[i].is_finite()))
-                };
-                self.at_points(scratch, chunk);
-                bad
-            })
+        for_each_chunk(out, |first, chunk| match layout {
+            Layout::Rows { ncols: 4 } if mapping == PositionMapping::default() => dispatch(lanes::AtStates { scan: self, positions: CvRows(states), first, out: chunk }),
+            Layout::Rows { ncols } => dispatch(lanes::AtStates { scan: self, positions: Rows { data: states, ncols, mapping }, first, out: chunk }),
+            Layout::Columns { nstates } => {
+                let (xs, ys) = (&states[mapping.x * nstates..][..nstates], &states[mapping.y * nstates..][..nstates]);
+                dispatch(lanes::AtStates { scan: self, positions: Columns { xs, ys }, first, out: chunk })
+            }
         })
     }
 
@@ -227,81 +190,30 @@ impl ScanDetection {
         if covars.len() != n * ncols * ncols {
             return Err(ModelError::shape("covars", format!("must be ({n}, {ncols}, {ncols}) to match means, got {} values", covars.len())));
         }
-        #[derive(Clone, Copy, PartialEq)]
-        enum Bad {
-            Mean,
-            Covar,
-        }
-        let bad_kind = std::sync::Mutex::new(Vec::<(usize, Bad)>::new());
+        let gaussians = lanes::Gaussians { means: Rows { data: means, ncols, mapping }, covars };
+        // The first bad row of each chunk, with what is wrong with it.
+        let problems = std::sync::Mutex::new(Vec::<(usize, lanes::BadGaussian)>::new());
         let bad = for_each_chunk(out, |first, chunk| {
-            let n = chunk.len();
-            let mut mx = [0.0f64; CHUNK];
-            let mut my = [0.0f64; CHUNK];
-            let mut chol = [[0.0f64; 3]; CHUNK];
-            let mut bad = None;
-            for i in 0..n {
-                let row = first + i;
-                mx[i] = means[row * ncols + mapping.x];
-                my[i] = means[row * ncols + mapping.y];
-                let c = &covars[row * ncols * ncols..(row + 1) * ncols * ncols];
-                let (ix, iy) = (mapping.x, mapping.y);
-                let l = cholesky2(c[ix * ncols + ix], c[ix * ncols + iy], c[iy * ncols + ix], c[iy * ncols + iy]);
-                let kind = if !(mx[i].is_finite() && my[i].is_finite()) {
-                    Some(Bad::Mean)
-                } else if l.is_none() {
-                    Some(Bad::Covar)
-                } else {
-                    None
-                };
-                if let Some(kind) = kind {
-                    if bad.is_none() {
-                        bad = Some(i);
-                        bad_kind.lock().unwrap().push((row, kind));
-                    }
-                    mx[i] = 0.0;
-                    my[i] = 0.0;
-                }
-                chol[i] = l.unwrap_or([0.0; 3]);
-            }
-            chunk.fill(0.0);
-            let mut value = [0.0f64; CHUNK];
-            SCRATCH.with(|cell| {
-                let scratch = &mut *cell.borrow_mut();
-                for (u, &w) in rule.points().iter().zip(rule.weights()) {
-                    for i in 0..n {
-                        let [l11, l21, l22] = chol[i];
-                        scratch.xs[i] = mx[i] + l11 * u[0];
-                        scratch.ys[i] = my[i] + l21 * u[0] + l22 * u[1];
-                    }
-                    self.at_points(scratch, &mut value[..n]);
-                    for i in 0..n {
-                        chunk[i] += w * value[i];
-                    }
-                }
-            });
-            // Rounding can push a weighted sum of values in [0, 1] a hair outside.
-            for v in chunk.iter_mut() {
-                *v = v.clamp(0.0, 1.0);
-            }
-            bad
+            let (i, kind) = dispatch(lanes::Expected { scan: self, gaussians, rule, first, out: chunk })?;
+            problems.lock().unwrap().push((first + i, kind));
+            Some(i)
         });
-        if let Some(row) = bad {
-            let kinds = bad_kind.into_inner().unwrap();
-            let kind = kinds.iter().find(|(r, _)| *r == row).map(|(_, k)| *k).unwrap_or(Bad::Mean);
-            return Err(match kind {
-                Bad::Mean => ModelError::non_finite("means", row, "position is NaN or infinite"),
-                Bad::Covar => ModelError::invalid(
-                    "covars",
-                    format!("row {row}: the position block is not a finite symmetric positive semi-definite matrix"),
-                ),
-            });
-        }
-        Ok(())
+        let Some(row) = bad else { return Ok(()) };
+        let problems = problems.into_inner().unwrap();
+        Err(match problems.iter().find(|(r, _)| *r == row).map(|(_, k)| *k) {
+            Some(lanes::BadGaussian::Covar) => ModelError::invalid(
+                "covars",
+                format!("row {row}: the position block is not a finite symmetric positive semi-definite matrix"),
+            ),
+            _ => ModelError::non_finite("means", row, "position is NaN or infinite"),
+        })
     }
 }
 
 #[cfg(test)]
 mod column_tests;
+#[cfg(test)]
+mod lane_tests;
 
 #[cfg(test)]
 mod tests {

@@ -18,6 +18,7 @@ pub mod pose;
 pub mod range_bands;
 pub mod sector;
 pub mod sight;
+pub mod simd;
 #[cfg(test)] mod fuzz;
 
 #[cfg(feature = "python")]

@@ -467,6 +467,13 @@ fn mount(pose: (f64, f64, f64), forward: f64, left: f64, yaw: f64) -> PyResult<(
     Ok((mounted.x, mounted.y, mounted.heading))
 }
 
+/// The build of the array kernels this process runs: "avx2" or "portable" (see
+/// `crate::simd`; `CTXMODELS_SIMD=portable` forces the latter). Both give the same bits.
+#[pyfunction]
+fn simd_backend() -> &'static str {
+    crate::simd::backend().name()
+}
+
 /// Points and weights of an integration rule in standard-normal space.
 #[pyfunction]
 #[pyo3(signature = (rule, order = 3))]
@@ -487,6 +494,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyClutterModel>()?;
     m.add_function(wrap_pyfunction!(mount, m)?)?;
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;
+    m.add_function(wrap_pyfunction!(simd_backend, m)?)?;
     mixture::register(m)?;
     jpda::register(m)?;
     Ok(())

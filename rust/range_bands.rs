@@ -7,6 +7,7 @@
 //! says that r == e_i falls into the band above e_i.
 
 use crate::error::{ModelError, Result};
+use crate::simd::Lanes;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct RangeBands {
@@ -63,6 +64,27 @@ impl RangeBands {
         }
         value
     }
+
+    /// [`Self::at`] for four ranges (r ≥ 0 or NaN), the same bits.
+    #[inline(always)]
+    pub fn lanes_at<L: Lanes>(&self, r: L) -> L {
+        let mut value = L::splat(self.values[0]);
+        for (i, &edge) in self.edges.iter().enumerate() {
+            value = L::select(passed(r, L::splat(edge), self.upper_owns[i]), L::splat(self.values[i + 1]), value);
+        }
+        value
+    }
+}
+
+/// Whether `r` is past `edge`: beyond it, or on it when the band above owns the edge.
+#[inline(always)]
+fn passed<L: Lanes>(r: L, edge: L, upper_owns: bool) -> L::Mask {
+    // r ≥ e ⇔ r > e or r == e (both false for NaN).
+    if upper_owns {
+        r.ge(edge)
+    } else {
+        r.gt(edge)
+    }
 }
 
 /// `if condition { a } else { b }` without a branch: bit masks, exact values. Range and
@@ -98,22 +120,14 @@ impl SquaredBands {
         value
     }
 
-    /// out[i] *= f(r2[i]) over a chunk; `band` is scratch of the same length.
-    #[inline]
-    pub fn multiply_into(&self, r2: &[f64], out: &mut [f64], band: &mut [f64]) {
-        let n = out.len();
-        let (r2, band) = (&r2[..n], &mut band[..n]);
-        band.fill(self.values[0]);
+    /// [`Self::at_squared`] for four squared ranges, the same bits.
+    #[inline(always)]
+    pub fn lanes_at_squared<L: Lanes>(&self, r2: L) -> L {
+        let mut value = L::splat(self.values[0]);
         for k in 0..self.count {
-            let (edge, owns, value) = (self.edges2[k], self.upper_owns[k], self.values[k + 1]);
-            for i in 0..n {
-                let passed = (r2[i] > edge) | (owns & (r2[i] == edge));
-                band[i] = select(passed, value, band[i]);
-            }
+            value = L::select(passed(r2, L::splat(self.edges2[k]), self.upper_owns[k]), L::splat(self.values[k + 1]), value);
         }
-        for i in 0..n {
-            out[i] *= band[i];
-        }
+        value
     }
 }
 

@@ -9,6 +9,7 @@
 use crate::error::{ModelError, Result};
 use crate::pose::SensorFrame;
 use crate::range_bands::select;
+use crate::simd::Lanes;
 use std::f64::consts::{PI, TAU};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -81,6 +82,23 @@ impl FramedSector {
         let inside = (narrow & ahead & (along * along >= bound))
             | (!narrow & (ahead | (along * along <= bound) | (self.cos_half <= -1.0)));
         select(inside, self.inside, self.outside)
+    }
+
+    /// [`Self::at_squared`] for four offsets, the same bits. Which of the two tests applies
+    /// is a property of the sector, so it is chosen once, outside the lanes.
+    #[inline(always)]
+    pub fn lanes_at_squared<L: Lanes>(&self, dx: L, dy: L, r2: L) -> L {
+        let along = dx * L::splat(self.centre[0]) + dy * L::splat(self.centre[1]);
+        let bound = r2 * L::splat(self.cos_half) * L::splat(self.cos_half);
+        let zero = L::splat(0.0);
+        let inside = if self.cos_half >= 0.0 {
+            L::and(along.ge(zero), (along * along).ge(bound))
+        } else if self.cos_half <= -1.0 {
+            return L::splat(self.inside);
+        } else {
+            L::or(along.ge(zero), (along * along).le(bound))
+        };
+        L::select(inside, L::splat(self.inside), L::splat(self.outside))
     }
 
     #[inline(always)]

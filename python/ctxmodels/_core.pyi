@@ -202,6 +202,10 @@ def mount(pose: _Pose, forward: float, left: float, yaw: float) -> _Pose:
 def rule_points(rule: _Rule, order: int = 3) -> tuple[list[tuple[float, float]], list[float]]:
     """Points and weights of an integration rule in standard-normal space."""
 
+def simd_backend() -> Literal["avx2", "portable"]:
+    """The build of the array kernels this process runs (``CTXMODELS_SIMD=portable`` forces
+    the portable one); both give the same bits."""
+
 # --- GM-PHD scan core (rust/gmphd, binding rust/python/mixture.rs) -----------------------
 
 @final

@@ -1,0 +1,194 @@
+//! The P_D kernels, four states at a time and fused: positions are read from the caller's
+//! rows, every range and sector factor is applied in registers, and the product is stored
+//! once. Land and line of sight then run point by point on the lanes still non-zero.
+//! Written once over [`Lanes`]; [`crate::simd::dispatch`] picks the CPU's build. Each
+//! kernel gives the bits of [`ScanDetection::at_point`] (tested for every backend).
+
+use super::{ScanDetection, Step};
+use crate::batch::{Positions, Rows};
+use crate::cubature::{cholesky2_lanes, Rule};
+use crate::simd::{LaneKernel, Lanes};
+
+impl Step {
+    #[inline(always)]
+    fn lanes_at<L: Lanes>(&self, dx: L, dy: L, r2: L) -> L {
+        match self {
+            Step::SquaredBands(bands) => bands.lanes_at_squared(r2),
+            Step::Bands(bands) => bands.lanes_at(r2.sqrt()),
+            Step::Sector(sector) => sector.lanes_at_squared(dx, dy, r2),
+        }
+    }
+}
+
+impl ScanDetection {
+    /// [`Self::at_point`] at four world points.
+    #[inline(always)]
+    fn lanes_at<L: Lanes>(&self, x: L, y: L) -> L {
+        let [ox, oy] = self.frame.origin;
+        let (dx, dy) = (x - L::splat(ox), y - L::splat(oy));
+        let r2 = dx * dx + dy * dy;
+        let mut pd = L::splat(self.constant);
+        for step in &self.steps {
+            pd = pd * step.lanes_at(dx, dy, r2);
+        }
+        if self.indexed.is_empty() {
+            return pd;
+        }
+        let (xs, ys, mut pds) = (x.to_array(), y.to_array(), pd.to_array());
+        for l in 0..4 {
+            pds[l] = self.indexed_at(xs[l], ys[l], pds[l]);
+        }
+        L::from_array(pds)
+    }
+}
+
+/// P_D of states `first..first + out.len()`; the index (in `out`) of the first state whose
+/// position is not finite.
+pub(super) struct AtStates<'a, P> {
+    pub scan: &'a ScanDetection,
+    pub positions: P,
+    pub first: usize,
+    pub out: &'a mut [f64],
+}
+
+impl<P: Positions> LaneKernel for AtStates<'_, P> {
+    type Output = Option<usize>;
+
+    #[inline(always)]
+    fn run<L: Lanes>(self) -> Option<usize> {
+        let AtStates { scan, positions, first, out } = self;
+        let n = out.len();
+        let full = n - n % 4;
+        // Non-finite positions are noted in one branch-free mask and located afterwards.
+        let mut bad = L::none();
+        let mut b = 0;
+        while b < full {
+            let (x, y) = positions.lanes::<L>(first + b);
+            bad = L::or(bad, L::or(x.non_finite(), y.non_finite()));
+            scan.lanes_at(x, y).store(&mut out[b..]);
+            b += 4;
+        }
+        if full < n {
+            let (x, y) = positions.partial::<L>(first + full, n - full);
+            bad = L::or(bad, L::or(x.non_finite(), y.non_finite()));
+            out[full..].copy_from_slice(&scan.lanes_at(x, y).to_array()[..n - full]);
+        }
+        if !L::any(bad) {
+            return None;
+        }
+        (0..n).find(|&i| !positions.one(first + i).iter().all(|v| v.is_finite()))
+    }
+}
+
+/// What is wrong with a Gaussian that cannot be evaluated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum BadGaussian {
+    Mean,
+    Covar,
+}
+
+/// Means (N, ncols) and their (N, ncols, ncols) covariances.
+#[derive(Clone, Copy)]
+pub(super) struct Gaussians<'a> {
+    pub means: Rows<'a>,
+    pub covars: &'a [f64],
+}
+
+impl Gaussians<'_> {
+    /// Entry `e` (row-major) of the covariances of the `count` ≤ 4 Gaussians from `first`,
+    /// zero-padded. A method, not a closure: closures are compiled apart from the kernel,
+    /// without its AVX2, and cost a call per use.
+    #[inline(always)]
+    fn entry<L: Lanes>(self, first: usize, count: usize, e: usize) -> L {
+        let size = self.means.ncols * self.means.ncols;
+        let at = |i: usize| if i < count { self.covars[(first + i) * size + e] } else { 0.0 };
+        L::from_array([at(0), at(1), at(2), at(3)])
+    }
+
+    /// Means, the Cholesky factors [l11, l21, l22] of the position blocks and a mask of the
+    /// Gaussians that cannot be evaluated, for the `count` ≤ 4 Gaussians from `first`
+    /// (padding lanes are point masses at the origin).
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize, count: usize) -> (L, L, [L; 3], L::Mask, L::Mask) {
+        let k = self.means.ncols;
+        let (ix, iy) = (self.means.mapping.x, self.means.mapping.y);
+        let (mx, my) = if count == 4 { self.means.lanes::<L>(first) } else { self.means.partial::<L>(first, count) };
+        let (a, b) = (self.entry::<L>(first, count, ix * k + ix), self.entry::<L>(first, count, ix * k + iy));
+        let (b_t, c) = (self.entry::<L>(first, count, iy * k + ix), self.entry::<L>(first, count, iy * k + iy));
+        let (bad_covar, l) = cholesky2_lanes(a, b, b_t, c);
+        (mx, my, l, L::or(mx.non_finite(), my.non_finite()), bad_covar)
+    }
+}
+
+/// Expected P_D of Gaussians `first..first + out.len()` under `rule`: the points m + L u
+/// are made and evaluated in the same pass, four Gaussians at a time. The first Gaussian
+/// that cannot be evaluated, with the reason (its own entry is then meaningless).
+pub(super) struct Expected<'a> {
+    pub scan: &'a ScanDetection,
+    pub gaussians: Gaussians<'a>,
+    pub rule: &'a Rule,
+    pub first: usize,
+    pub out: &'a mut [f64],
+}
+
+impl LaneKernel for Expected<'_> {
+    type Output = Option<(usize, BadGaussian)>;
+
+    #[inline(always)]
+    fn run<L: Lanes>(self) -> Self::Output {
+        let Expected { scan, gaussians, rule, first, out } = self;
+        let mut bad = None;
+        let (zero, one) = (L::splat(0.0), L::splat(1.0));
+        // Factors for GROUP blocks first, then their points: each Cholesky factor is a chain
+        // of two square roots and a division, and a short loop of independent ones lets the
+        // CPU overlap them.
+        const GROUP: usize = 16;
+        let mut factors = [[zero; 5]; GROUP];
+        for (g, group) in out.chunks_mut(4 * GROUP).enumerate() {
+            let start = 4 * GROUP * g;
+            for (j, block) in group.chunks(4).enumerate() {
+                let (mut mx, mut my, mut l, bad_mean, bad_covar) = gaussians.lanes::<L>(first + start + 4 * j, block.len());
+                let unusable = L::or(bad_mean, bad_covar);
+                if L::any(unusable) {
+                    // Said for the first such Gaussian; evaluated as a point mass at the
+                    // origin in its place.
+                    let (mean, either) = (L::select(bad_mean, one, zero).to_array(), L::select(unusable, one, zero).to_array());
+                    if let Some(i) = (0..block.len()).find(|&i| either[i] != 0.0) {
+                        bad = bad.or(Some((start + 4 * j + i, if mean[i] != 0.0 { BadGaussian::Mean } else { BadGaussian::Covar })));
+                    }
+                    (mx, my) = (L::select(unusable, zero, mx), L::select(unusable, zero, my));
+                    l = [L::select(unusable, zero, l[0]), L::select(unusable, zero, l[1]), L::select(unusable, zero, l[2])];
+                }
+                factors[j] = [mx, my, l[0], l[1], l[2]];
+            }
+            for (j, block) in group.chunks_mut(4).enumerate() {
+                let [mx, my, l11, l21, l22] = factors[j];
+                let mut expected = zero;
+                for (u, &w) in rule.points().iter().zip(rule.weights()) {
+                    let (u0, u1) = (L::splat(u[0]), L::splat(u[1]));
+                    let (x, y) = (mx + l11 * u0, my + l21 * u0 + l22 * u1);
+                    expected = expected + L::splat(w) * scan.lanes_at(x, y);
+                }
+                // Rounding can push a weighted sum of values in [0, 1] a hair outside.
+                expected = L::select(expected.lt(zero), zero, L::select(expected.gt(one), one, expected));
+                if block.len() == 4 {
+                    expected.store(block);
+                } else {
+                    block.copy_from_slice(&expected.to_array()[..block.len()]);
+                }
+            }
+        }
+        bad
+    }
+}
+
+/// The scalar formula for one Gaussian, for tests: Σ_k w_k P_D(m + L u_k), clamped.
+#[cfg(test)]
+pub(super) fn expected_reference(scan: &ScanDetection, mean: [f64; 2], l: [f64; 3], rule: &Rule) -> f64 {
+    let mut expected = 0.0;
+    for (u, &w) in rule.points().iter().zip(rule.weights()) {
+        let (x, y) = (mean[0] + l[0] * u[0], mean[1] + l[1] * u[0] + l[2] * u[1]);
+        expected += w * scan.at_point(x, y);
+    }
+    expected.clamp(0.0, 1.0)
+}

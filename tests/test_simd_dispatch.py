@@ -1,0 +1,93 @@
+"""The array kernels' two builds (AVX2, chosen at run time, and portable) give the same
+bits: the same evaluations run in a process on the CPU's build and in one forced onto the
+portable build (``CTXMODELS_SIMD=portable``), and their outputs are compared byte for byte.
+(On a CPU without AVX2 both processes run the portable build; the Rust tests compare the
+builds lane by lane where AVX2 exists.)"""
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+import ctxmodels._core as core
+
+SCRIPT = r'''
+import hashlib, json, math
+import numpy as np
+import ctxmodels._core as core
+from ctxmodels import (AngularSector, ClutterDensityModel, DetectionProbabilityModel, LandMask,
+                       LineOfSight, MetadataThreshold, RangeBands, SensorModel)
+
+rng = np.random.default_rng(20261123)
+island = [[300.0, -200.0], [600.0, -200.0], [600.0, 200.0], [300.0, 200.0]]
+land = LandMask(polygons=[island])
+models = {
+    "radar": [RangeBands(edges=(50.0, 1612.0), values=(0.0, 0.4, 0.0), upper_owns=(False, True)),
+              AngularSector.blind(math.pi, math.radians(65))],
+    "wide_and_many_bands": [0.9, AngularSector(centre=1.0, width=math.radians(300), inside=0.7,
+                                               outside=0.1),
+                            RangeBands(edges=(100, 200, 300, 400, 500, 600),
+                                       values=(0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3))],
+    "land_and_sight": [0.9, land, RangeBands(edges=(700.0,), values=(0.93, 0.11)),
+                       LineOfSight(land=land)],
+}
+n = 40_003  # above the parallel threshold, with a ragged last block
+states = rng.uniform(-1800, 1800, size=(n, 4))
+states[:300, 0] = 50.0  # exactly on the radar's first edge
+states[:300, 2] = 0.0
+wide = rng.uniform(-1800, 1800, size=(n, 6))
+covars = np.zeros((n, 4, 4))
+sx, sy, rho = rng.uniform(1, 80, n), rng.uniform(1, 80, n), rng.uniform(-0.9, 0.9, n)
+covars[:, 0, 0], covars[:, 2, 2] = sx * sx, sy * sy
+covars[:, 0, 2] = covars[:, 2, 0] = rho * sx * sy
+digests = {"backend": core.simd_backend()}
+for name, factors in models.items():
+    detection = DetectionProbabilityModel(factors=factors)
+    for rule in ("mean", "cubature", "gauss-hermite"):
+        sensor = SensorModel(detection=detection, clutter=ClutterDensityModel(factors=[1e-3]),
+                             pd_evaluation=rule)
+        context = sensor.context((1.0, 2.0, 0.3))
+        values = [context.prob_detection_array(states), context.prob_detection_array(states, covars),
+                  context.prob_detection_particles(states.T.copy()),
+                  detection.evaluate(context.pose, wide, (4, 1))]
+        digests[f"{name}/{rule}"] = hashlib.sha256(b"".join(v.tobytes() for v in values)).hexdigest()
+clutter = ClutterDensityModel(factors=[
+    0.7, RangeBands(edges=(100.0, 1000.0), values=(1e-3, 1e-2, 3e-2), upper_owns=(True, False)),
+    MetadataThreshold(key="area", threshold=10.0, below=1e-1, at_or_above=1e-3, missing=1e-2)])
+context = SensorModel(detection=DetectionProbabilityModel(factors=[0.9]), clutter=clutter).context(
+    (1.0, 2.0, 0.3))
+positions = rng.uniform(-2500, 2500, (n, 2))
+area = rng.uniform(0, 40, (n, 1))
+area[rng.random(n) < 0.1] = np.nan
+ranges = np.where(rng.random(n) < 0.3, 1000.0, np.nan)
+values = [context.clutter_spatial_density_array(positions, area),
+          context.clutter_spatial_density_array(positions, area, ranges=ranges)]
+digests["clutter"] = hashlib.sha256(b"".join(v.tobytes() for v in values)).hexdigest()
+print(json.dumps(digests))
+'''
+
+
+def _digests(**env):
+    environment = {**os.environ, **env}
+    result = subprocess.run([sys.executable, "-c", SCRIPT], env=environment, capture_output=True,
+                            text=True, timeout=300, check=True)
+    return json.loads(result.stdout)
+
+
+def test_portable_build_gives_the_bits_of_the_dispatched_one():
+    portable = _digests(CTXMODELS_SIMD="portable")
+    dispatched = _digests()
+    assert portable.pop("backend") == "portable"
+    assert dispatched.pop("backend") == core.simd_backend()
+    assert len(portable) == 10
+    assert dispatched == portable
+
+
+@pytest.mark.parametrize("value", ["portable", "PORTABLE"])
+def test_the_environment_forces_the_portable_build(value):
+    result = subprocess.run(
+        [sys.executable, "-c", "import ctxmodels._core as c; print(c.simd_backend())"],
+        env={**os.environ, "CTXMODELS_SIMD": value}, capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == "portable"
+    assert core.simd_backend() in ("avx2", "portable")
