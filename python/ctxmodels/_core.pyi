@@ -32,6 +32,7 @@ __all__ = [
     "jpda_screen_states",
     "mount",
     "rule_points",
+    "simd_backend",
 ]
 
 _Pose: TypeAlias = tuple[float, float, float]
