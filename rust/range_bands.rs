@@ -107,6 +107,9 @@ pub struct SquaredBands {
     edges2: [f64; SQUARED_EDGES],
     upper_owns: [bool; SQUARED_EDGES],
     values: [f64; SQUARED_EDGES + 1],
+    /// r² passes edge k ⇔ r² ≥ at_least[k] (NaN beyond `count`: never), so the lanes need
+    /// neither the owner nor the count.
+    at_least: [f64; SQUARED_EDGES],
 }
 
 impl SquaredBands {
@@ -123,9 +126,11 @@ impl SquaredBands {
     /// [`Self::at_squared`] for four squared ranges, the same bits.
     #[inline(always)]
     pub fn lanes_at_squared<L: Lanes>(&self, r2: L) -> L {
+        // Two edges (both of the paper's sensors) or up to four, unrolled.
+        let edges = if self.count <= 2 { 2 } else { SQUARED_EDGES };
         let mut value = L::splat(self.values[0]);
-        for k in 0..self.count {
-            value = L::select(passed(r2, L::splat(self.edges2[k]), self.upper_owns[k]), L::splat(self.values[k + 1]), value);
+        for k in 0..edges {
+            value = L::select(r2.ge(L::splat(self.at_least[k])), L::splat(self.values[k + 1]), value);
         }
         value
     }
@@ -142,10 +147,19 @@ impl RangeBands {
             edges2: [f64::INFINITY; SQUARED_EDGES],
             upper_owns: [false; SQUARED_EDGES],
             values: [*self.values.last().unwrap(); SQUARED_EDGES + 1],
+            at_least: [f64::NAN; SQUARED_EDGES],
         };
         for (k, &e) in self.edges.iter().enumerate() {
-            bands.edges2[k] = e * e;
+            let e2 = e * e;
+            bands.edges2[k] = e2;
             bands.upper_owns[k] = self.upper_owns[k];
+            // r² > e² ⇔ r² ≥ the next float above e² (none lies between); above an infinite
+            // e² there is nothing, so NaN (never passed).
+            bands.at_least[k] = match (self.upper_owns[k], e2.is_finite()) {
+                (true, _) => e2,
+                (false, true) => e2.next_up(),
+                (false, false) => f64::NAN,
+            };
         }
         bands.values[..self.values.len()].copy_from_slice(&self.values);
         Some(bands)

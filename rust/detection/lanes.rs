@@ -21,9 +21,10 @@ impl Step {
 }
 
 impl ScanDetection {
-    /// [`Self::at_point`] at four world points.
+    /// [`Self::at_point`] at four world points, and the squared ranges: infinite or NaN
+    /// where a position is (or, rarely, where a finite one is very far away).
     #[inline(always)]
-    fn lanes_at<L: Lanes>(&self, x: L, y: L) -> L {
+    fn lanes_at<L: Lanes>(&self, x: L, y: L) -> (L, L) {
         let [ox, oy] = self.frame.origin;
         let (dx, dy) = (x - L::splat(ox), y - L::splat(oy));
         let r2 = dx * dx + dy * dy;
@@ -32,13 +33,13 @@ impl ScanDetection {
             pd = pd * step.lanes_at(dx, dy, r2);
         }
         if self.indexed.is_empty() {
-            return pd;
+            return (pd, r2);
         }
         let (xs, ys, mut pds) = (x.to_array(), y.to_array(), pd.to_array());
         for l in 0..4 {
             pds[l] = self.indexed_at(xs[l], ys[l], pds[l]);
         }
-        L::from_array(pds)
+        (L::from_array(pds), r2)
     }
 }
 
@@ -59,19 +60,23 @@ impl<P: Positions> LaneKernel for AtStates<'_, P> {
         let AtStates { scan, positions, first, out } = self;
         let n = out.len();
         let full = n - n % 4;
-        // Non-finite positions are noted in one branch-free mask and located afterwards.
+        // A non-finite position makes r² non-finite: noted in one branch-free mask, and
+        // the chunk searched afterwards (a finite position so far away that r² overflows
+        // costs that search and is not reported).
         let mut bad = L::none();
         let mut b = 0;
         while b < full {
             let (x, y) = positions.lanes::<L>(first + b);
-            bad = L::or(bad, L::or(x.non_finite(), y.non_finite()));
-            scan.lanes_at(x, y).store(&mut out[b..]);
+            let (pd, r2) = scan.lanes_at(x, y);
+            bad = L::or(bad, r2.non_finite());
+            pd.store(&mut out[b..]);
             b += 4;
         }
         if full < n {
             let (x, y) = positions.partial::<L>(first + full, n - full);
-            bad = L::or(bad, L::or(x.non_finite(), y.non_finite()));
-            out[full..].copy_from_slice(&scan.lanes_at(x, y).to_array()[..n - full]);
+            let (pd, r2) = scan.lanes_at(x, y);
+            bad = L::or(bad, r2.non_finite());
+            out[full..].copy_from_slice(&pd.to_array()[..n - full]);
         }
         if !L::any(bad) {
             return None;
@@ -167,7 +172,7 @@ impl LaneKernel for Expected<'_> {
                 for (u, &w) in rule.points().iter().zip(rule.weights()) {
                     let (u0, u1) = (L::splat(u[0]), L::splat(u[1]));
                     let (x, y) = (mx + l11 * u0, my + l21 * u0 + l22 * u1);
-                    expected = expected + L::splat(w) * scan.lanes_at(x, y);
+                    expected = expected + L::splat(w) * scan.lanes_at(x, y).0;
                 }
                 // Rounding can push a weighted sum of values in [0, 1] a hair outside.
                 expected = L::select(expected.lt(zero), zero, L::select(expected.gt(one), one, expected));
