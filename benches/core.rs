@@ -1,4 +1,5 @@
-//! Criterion benchmarks of the Rust core: P_D over 10³…10⁷ states (the paper's radar),
+//! Criterion benchmarks of the Rust core: P_D over 10³…10⁷ states (the paper's radar) and
+//! per call for 1, 10 and 100 states,
 //! land-mask containment and line of sight on deterministic coastlines of 10²…10⁵ vertices
 //! (smooth and jagged), expected P_D (cubature rules) against P_D at the mean, and clutter
 //! density with metadata rules.
@@ -126,6 +127,21 @@ fn pd_radar(c: &mut Criterion) {
             b.iter(|| scan.at_states(black_box(s), 4, PositionMapping::default(), &mut out).unwrap())
         });
     }
+    group.finish();
+}
+
+/// The core's cost per call for the few states a tracker asks about at once: N = 1, 10,
+/// 100 rows (one thread, no allocation), and one point through the scalar reference.
+fn pd_call(c: &mut Criterion) {
+    let model = DetectionModel::new(radar_factors()).unwrap();
+    let scan = model.at_pose(&Pose::new(0.0, 0.0, 0.3).unwrap());
+    let mut group = c.benchmark_group("pd_call");
+    for n in [1usize, 10, 100] {
+        let s = states(n, 8);
+        let mut out = vec![0.0; n];
+        group.bench_function(format!("rows/{n}"), |b| b.iter(|| scan.at_states(black_box(&s), 4, PositionMapping::default(), &mut out).unwrap()));
+    }
+    group.bench_function("at_point", |b| b.iter(|| scan.at_point(black_box(420.0), black_box(-75.0))));
     group.finish();
 }
 
@@ -278,6 +294,6 @@ criterion_group! {
     name = benches;
     // Short warm-up and measurement keep the full run to a few minutes on 2 cores.
     config = Criterion::default().warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2)).sample_size(20);
-    targets = pd_radar, expected_pd, land_contains, land_build, line_of_sight, sight_index_build, pd_radar_with_land, clutter
+    targets = pd_radar, pd_call, expected_pd, land_contains, land_build, line_of_sight, sight_index_build, pd_radar_with_land, clutter
 }
 criterion_main!(benches);
