@@ -116,7 +116,7 @@ fn positive_part(v: f64) -> f64 {
 /// [`cholesky2`] of four matrices at once, the same bits: the factors, and a mask of the
 /// lanes for which `cholesky2` gives None (their factors are meaningless).
 #[inline(always)]
-pub fn cholesky2_lanes<L: Lanes>(a: L, b: L, b_t: L, c: L) -> (L::Mask, [L; 3]) {
+pub(crate) fn cholesky2_lanes<L: Lanes>(a: L, b: L, b_t: L, c: L) -> (L::Mask, [L; 3]) {
     let zero = L::splat(0.0);
     let scale = a.abs().max(c.abs()).max(L::splat(f64::MIN_POSITIVE));
     let non_finite = L::or(L::or(a.non_finite(), b.non_finite()), L::or(b_t.non_finite(), c.non_finite()));

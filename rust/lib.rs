@@ -18,7 +18,7 @@ pub mod pose;
 pub mod range_bands;
 pub mod sector;
 pub mod sight;
-pub mod simd;
+pub(crate) mod simd;
 #[cfg(test)] mod fuzz;
 
 #[cfg(feature = "python")]

@@ -67,7 +67,7 @@ impl RangeBands {
 
     /// [`Self::at`] for four ranges (r ≥ 0 or NaN), the same bits.
     #[inline(always)]
-    pub fn lanes_at<L: Lanes>(&self, r: L) -> L {
+    pub(crate) fn lanes_at<L: Lanes>(&self, r: L) -> L {
         let mut value = L::splat(self.values[0]);
         for (i, &edge) in self.edges.iter().enumerate() {
             value = L::select(passed(r, L::splat(edge), self.upper_owns[i]), L::splat(self.values[i + 1]), value);
@@ -125,7 +125,7 @@ impl SquaredBands {
 
     /// [`Self::at_squared`] for four squared ranges, the same bits.
     #[inline(always)]
-    pub fn lanes_at_squared<L: Lanes>(&self, r2: L) -> L {
+    pub(crate) fn lanes_at_squared<L: Lanes>(&self, r2: L) -> L {
         // Two edges (both of the paper's sensors) or up to four, unrolled.
         let edges = if self.count <= 2 { 2 } else { SQUARED_EDGES };
         let mut value = L::splat(self.values[0]);

@@ -87,7 +87,7 @@ impl FramedSector {
     /// [`Self::at_squared`] for four offsets, the same bits. Which of the two tests applies
     /// is a property of the sector, so it is chosen once, outside the lanes.
     #[inline(always)]
-    pub fn lanes_at_squared<L: Lanes>(&self, dx: L, dy: L, r2: L) -> L {
+    pub(crate) fn lanes_at_squared<L: Lanes>(&self, dx: L, dy: L, r2: L) -> L {
         let along = dx * L::splat(self.centre[0]) + dy * L::splat(self.centre[1]);
         let bound = r2 * L::splat(self.cos_half) * L::splat(self.cos_half);
         let zero = L::splat(0.0);

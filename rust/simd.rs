@@ -68,6 +68,8 @@ pub enum Backend {
 }
 
 impl Backend {
+    /// What the Python binding reports (`ctxmodels._core.simd_backend()`).
+    #[cfg_attr(not(feature = "python"), allow(dead_code))]
     pub fn name(self) -> &'static str {
         match self {
             Backend::Avx2 => "avx2",
@@ -250,18 +252,17 @@ impl Lanes for Portable {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub use x86::Avx2;
-
-#[cfg(target_arch = "x86_64")]
 mod x86 {
     //! The AVX2 backend. Its values exist only inside [`run_avx2`], which is entered only
     //! after the CPU was found to have AVX2; every method is inlined into that function.
+    //! The module is private to the crate (so are the generic lane functions of the
+    //! factor types), so code outside it has no way to make an `Avx2` value.
     use super::{LaneKernel, Lanes};
     use std::arch::x86_64::*;
     use std::ops::{Add, Mul, Sub};
 
     #[derive(Debug, Clone, Copy)]
-    pub struct Avx2(__m256d);
+    pub(crate) struct Avx2(__m256d);
 
     /// A lane mask: all bits set where the condition holds.
     #[derive(Debug, Clone, Copy)]

@@ -5,6 +5,7 @@ portable build (``CTXMODELS_SIMD=portable``), and their outputs are compared byt
 builds lane by lane where AVX2 exists.)"""
 import json
 import os
+import platform
 import subprocess
 import sys
 
@@ -64,6 +65,26 @@ ranges = np.where(rng.random(n) < 0.3, 1000.0, np.nan)
 values = [context.clutter_spatial_density_array(positions, area),
           context.clutter_spatial_density_array(positions, area, ranges=ranges)]
 digests["clutter"] = hashlib.sha256(b"".join(v.tobytes() for v in values)).hexdigest()
+
+# Bad input: the same error (argument, row, reason) from every build.
+radar = SensorModel(detection=DetectionProbabilityModel(factors=models["radar"]),
+                    clutter=clutter, pd_evaluation="cubature").context((1.0, 2.0, 0.3))
+def error(call):
+    try:
+        call()
+    except ValueError as e:
+        return str(e)
+    return None
+nan_row = states.copy(); nan_row[33_333, 2] = np.nan; nan_row[39_000, 0] = np.inf
+skew = covars.copy(); skew[1_234, 0, 2] += 10.0
+inf_area = area.copy(); inf_area[20_001, 0] = np.inf
+digests["errors"] = [
+    error(lambda: radar.prob_detection_array(nan_row)),
+    error(lambda: radar.prob_detection_array(nan_row, covars)),
+    error(lambda: radar.prob_detection_array(states, skew)),
+    error(lambda: radar.prob_detection_particles(nan_row.T.copy())),
+    error(lambda: context.clutter_spatial_density_array(positions, inf_area)),
+]
 print(json.dumps(digests))
 '''
 
@@ -75,12 +96,27 @@ def _digests(**env):
     return json.loads(result.stdout)
 
 
+def _cpu_has_avx2() -> bool | None:
+    """From /proc/cpuinfo (Linux); None where that cannot be read."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            return any(line.startswith("flags") and " avx2" in line for line in f)
+    except OSError:
+        return None
+
+
 def test_portable_build_gives_the_bits_of_the_dispatched_one():
     portable = _digests(CTXMODELS_SIMD="portable")
-    dispatched = _digests()
+    dispatched = _digests(CTXMODELS_SIMD="")
     assert portable.pop("backend") == "portable"
-    assert dispatched.pop("backend") == core.simd_backend()
-    assert len(portable) == 10
+    backend = dispatched.pop("backend")
+    if platform.machine() in ("x86_64", "AMD64") and _cpu_has_avx2():
+        assert backend == "avx2"  # else this test would compare the portable build with itself
+    assert len(portable) == 11
+    # every error names its argument and the first bad row
+    assert [e.split(":")[0] for e in portable["errors"]] == [
+        "states", "means", "covars", "particles", "metadata"], portable["errors"]
+    assert "33333" in portable["errors"][0] and "1234" in portable["errors"][2]
     assert dispatched == portable
 
 

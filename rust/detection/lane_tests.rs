@@ -9,6 +9,9 @@ use crate::land::Polygon;
 use crate::simd::{run_on, Backend};
 use std::f64::consts::PI;
 
+/// Every build this CPU runs: the AVX2 one only where the CPU has AVX2 (elsewhere these
+/// tests check the portable build alone; tests/test_simd_dispatch.py checks that a CPU
+/// with AVX2 runs the AVX2 build).
 fn backends() -> Vec<Backend> {
     [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()).collect()
 }
@@ -108,8 +111,7 @@ fn a_chunk_starting_mid_array_reads_its_own_rows() {
     let scan = models().remove(0).at_pose(&Pose::new(10.0, -4.0, 2.0).unwrap());
     let cv = rows(40, 4, PositionMapping::default());
     for backend in backends() {
-        let (bits, _) = lanes(&scan, backend, CvRows(&cv), 13, 27);
-        assert_eq!(bits, reference(&scan, CvRows(&cv[13 * 4..]), 27));
+        assert_eq!(lanes(&scan, backend, CvRows(&cv), 13, 27), (reference(&scan, CvRows(&cv[13 * 4..]), 27), None));
     }
 }
 
@@ -124,8 +126,21 @@ fn the_first_non_finite_position_is_found_in_any_lane() {
                 if bad + 2 < n {
                     cv[(bad + 2) * 4] = f64::NAN; // a later one is not reported
                 }
+                // The same states as (n, 6) rows with the position in columns (4, 1), and as
+                // (2, n) columns.
+                let other = PositionMapping::new(4, 1).unwrap();
+                let mut wide = vec![0.0; 6 * n];
+                let mut columns = vec![0.0; 2 * n];
+                for i in 0..n {
+                    [wide[6 * i + 4], wide[6 * i + 1]] = [cv[4 * i], cv[4 * i + 2]];
+                    [columns[i], columns[n + i]] = [cv[4 * i], cv[4 * i + 2]];
+                }
+                let wide_rows = Rows { data: &wide, ncols: 6, mapping: other };
+                let cols = Columns { xs: &columns[..n], ys: &columns[n..] };
                 for backend in backends() {
                     assert_eq!(lanes(&scan, backend, CvRows(&cv), 0, n).1, Some(bad), "{backend:?} n={n} bad={bad} {value}");
+                    assert_eq!(lanes(&scan, backend, wide_rows, 0, n).1, Some(bad), "{backend:?} rows n={n} bad={bad} {value}");
+                    assert_eq!(lanes(&scan, backend, cols, 0, n).1, Some(bad), "{backend:?} columns n={n} bad={bad} {value}");
                 }
             }
         }
