@@ -21,13 +21,24 @@ from .pose import Pose
 from .scan_calls import ScanCalls
 from .sensor import SensorModel
 
-try:  # Subclass the upstream interface once Stone Soup ships it.
+# The upstream interface (dstl/Stone-Soup#1291) where this Stone Soup has it: an abstract
+# class with ``prob_detection`` and ``clutter_spatial_density`` (not a Stone Soup ``Base``),
+# and a ``set`` of detections carrying ``detector_context``. Ours are real subclasses of
+# both, so ``isinstance`` checks in upstream code accept them; without them (Stone Soup
+# 1.9.1) they are a ``Base`` component and a ``set``.
+try:
     from stonesoup.types.detector_context import DetectorContext as _UpstreamContext  # type: ignore
 except ImportError:  # stonesoup 1.9.x
-    _UpstreamContext = Base
+    _UPSTREAM_CONTEXT: tuple = ()
+else:
+    _UPSTREAM_CONTEXT = () if issubclass(Base, _UpstreamContext) else (_UpstreamContext,)
+try:
+    from stonesoup.types.detection import DetectionSet as _UpstreamSet  # type: ignore
+except ImportError:  # stonesoup 1.9.x
+    _UpstreamSet = set
 
 
-class DetectionSet(set):
+class DetectionSet(_UpstreamSet):
     """A scan's detections (a ``set``) with the :class:`DetectorContext` of that scan.
 
     An empty scan is an empty ``DetectionSet`` that still carries its context: that is what
@@ -264,7 +275,7 @@ def require_array_context(detector_context, *methods: str) -> None:
                         f"{' and '.join(methods)}), got {type(detector_context).__name__}")
 
 
-class DetectorContext(_UpstreamContext):
+class DetectorContext(Base, *_UPSTREAM_CONTEXT):
     r"""The observability of one sensor at one scan: :math:`P_D(x; S)` and
     :math:`\lambda(z; S)` for the sensor state :math:`S` (its pose at the scan).
 
