@@ -267,14 +267,6 @@ def _particle_weights(weights, n: int) -> np.ndarray:
     return w
 
 
-def require_array_context(detector_context, *methods: str) -> None:
-    """Drop-ins that evaluate a whole scan need a context with the array methods."""
-    missing = [m for m in methods if not hasattr(detector_context, m)]
-    if missing:
-        raise TypeError(f"detector_context: expected a ctxmodels DetectorContext (with "
-                        f"{' and '.join(methods)}), got {type(detector_context).__name__}")
-
-
 class DetectorContext(Base, *_UPSTREAM_CONTEXT):
     r"""The observability of one sensor at one scan: :math:`P_D(x; S)` and
     :math:`\lambda(z; S)` for the sensor state :math:`S` (its pose at the scan).
@@ -447,6 +439,5 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         return float(self.clutter_spatial_density_detections([detection])[0])
 
 
-__all__ = ["DetectionSet", "DetectorContext", "detection_positions", "measured_ranges",
-           "require_array_context"]
+__all__ = ["DetectionSet", "DetectorContext", "detection_positions", "measured_ranges"]
 

@@ -461,7 +461,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             if context is None:
                 clutter = np.full(len(detections), float(hypothesiser.clutter_spatial_density))
             else:
-                clutter = np.asarray(hypothesiser._scan_clutter(context, detections),
+                clutter = np.asarray(hypothesiser._scan_clutter(context, context, detections),
                                      dtype=np.float64)
             z = np.array([d.state_vector for d in detections], dtype=np.float64)[:, :, 0]
         prob_gate = float(hypothesiser.prob_gate)

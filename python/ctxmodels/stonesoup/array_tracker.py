@@ -51,7 +51,8 @@ from stonesoup.types.state import TaggedWeightedGaussianState
 from stonesoup.types.track import Track
 
 from .. import _core
-from ..context import detection_positions, require_array_context
+from ..context import detection_positions
+from ..foreign import as_array_context
 from .array_plan import _Plan
 from .fast import ObjectFactory, plain_track_lists
 from .ordering import in_stable_order
@@ -239,8 +240,8 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
         if context is not None and not _accepts_context(self.updater):
             context = None
         if context is not None:
-            require_array_context(context, "prob_detection_array",
-                                  "clutter_spatial_density_detections")
+            context = as_array_context(context, "prob_detection_array",
+                                       "clutter_spatial_density_detections")
         ndim = self._ndim()
         if ndim is None:
             return None
@@ -288,8 +289,10 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
         self._predict(plan, arrays, now)
         n = len(arrays)
         if context is not None:
-            model = context.sensor_model
-            covars = arrays.covars() if model.pd_evaluation != "mean" else None
+            # A foreign context (no sensor model) is asked about each Gaussian prediction.
+            model = getattr(context, "sensor_model", None)
+            gaussian = model is None or model.pd_evaluation != "mean"
+            covars = arrays.covars() if gaussian else None
             prob_detection = np.asarray(context.prob_detection_array(arrays.means(), covars),
                                         dtype=np.float64)
             positions = None

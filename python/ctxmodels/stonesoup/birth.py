@@ -39,6 +39,7 @@ from stonesoup.types.array import CovarianceMatrix
 from stonesoup.types.state import TaggedWeightedGaussianState
 
 from ..context import detection_positions
+from ..foreign import as_array_context
 
 #: Table I of the paper: track initialisation covariance for [x, vx, y, vy].
 TABLE_I_BIRTH_COVAR = np.diag([10.0, 15.0, 10.0, 15.0]) ** 2
@@ -162,8 +163,10 @@ class MeasurementDrivenBirth(Base):
     def visible(means: np.ndarray, covars: np.ndarray | None, detector_context) -> np.ndarray:
         """Whether the context gives P_D > 0 at each birth: ``means`` (N, D), ``covars``
         (N, D, D) or None (used when the sensor model takes P_D's expectation over a
-        Gaussian); one array call."""
-        return detector_context.prob_detection_array(means, covars) > 0
+        Gaussian); one array call (a call per birth for a context with only Stone Soup's
+        per-call interface)."""
+        context = as_array_context(detector_context, "prob_detection_array")
+        return context.prob_detection_array(means, covars) > 0
 
     def due(self, births: Sequence[TaggedWeightedGaussianState], timestamp: datetime.datetime,
             detector_context=None) -> tuple[list, list]:

@@ -32,6 +32,8 @@ from stonesoup.types.numeric import Probability
 from stonesoup.types.state import State, StateMutableSequence
 from stonesoup.types.update import Update
 
+from ..foreign import PerCallContext, as_array_context
+
 
 
 def scan_context(detections, kwargs: dict):
@@ -51,13 +53,14 @@ def is_detection_backed(state) -> bool:
 
 
 def _prob_detect_at(context, prediction) -> float:
-    """P_D of one Gaussian prediction as the raw float the model computed: going through
-    ``Probability`` (log space) and back can change the last bit of a value such as 0.35."""
+    """P_D of one prediction from an array context (:func:`~ctxmodels.foreign.as_array_context`)
+    as the raw float the model computed: going through ``Probability`` (log space) and back
+    can change the last bit of a value such as 0.35."""
     vector = getattr(prediction, "state_vector", None)
-    if hasattr(context, "prob_detection_states") and vector is not None \
-            and np.ndim(vector) == 2 and np.shape(vector)[1] == 1:
+    if isinstance(context, PerCallContext) or (
+            vector is not None and np.ndim(vector) == 2 and np.shape(vector)[1] == 1):
         return float(context.prob_detection_states([prediction])[0])
-    return float(context.prob_detection(prediction))  # particles, or a scalar-only context
+    return float(context.prob_detection(prediction))  # ctxmodels, particles
 
 
 def _like(template, value: float):
@@ -105,11 +108,13 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         detection first, then each gated detection. The context is the
         ``detector_context`` keyword or ``detections.detector_context``; without either,
         exactly the stock :class:`~stonesoup.hypothesiser.probability.PDAHypothesiser`."""
-        context = scan_context(detections, kwargs)
-        if context is None:
+        given = scan_context(detections, kwargs)
+        if given is None:
             hypotheses = super().hypothesise(track, detections, timestamp, **kwargs)
             self._record(track, timestamp, float(self.prob_detect))
             return hypotheses
+        context = as_array_context(given, "prob_detection_states",
+                                   "clutter_spatial_density_detections")
 
         detections = list(detections)
         prediction = self.predictor.predict(track, timestamp=timestamp, **kwargs)
@@ -126,7 +131,7 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         if not detections:
             return MultipleHypothesis(hypotheses, normalise=self.normalise)
 
-        clutter = self._scan_clutter(context, detections)
+        clutter = self._scan_clutter(given, context, detections)
         # Predictions at each detection's own time, as the stock class does.
         predictions = [self.predictor.predict(track, timestamp=det.timestamp, **kwargs)
                        for det in detections]
@@ -149,16 +154,17 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         return MultipleHypothesis(hypotheses, normalise=self.normalise)
 
     # --- clutter density per scan ---------------------------------------------------------
-    def _scan_clutter(self, context, detections) -> list:
-        """λ of each detection, evaluated once per (context, detection): the first track of
-        a scan pays one array call, the others read the cache."""
+    def _scan_clutter(self, given, context, detections) -> list:
+        """λ of each detection, evaluated once per (context ``given``, detection) with its
+        array form ``context``: the first track of a scan pays one array call, the others
+        read the cache."""
         values: dict[object, float]
         cache = self.__dict__.get("_clutter_cache")
-        if cache is not None and cache[0] is context:
+        if cache is not None and cache[0] is given:
             values = cache[1]
         else:
             values = {}
-            self.__dict__["_clutter_cache"] = (context, values)
+            self.__dict__["_clutter_cache"] = (given, values)
         missing = [det for det in detections if det not in values]
         if missing:
             lam = np.asarray(self._evaluate_clutter(context, missing), dtype=np.float64)
@@ -172,9 +178,6 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         return [values[det] for det in detections]
 
     def _evaluate_clutter(self, context, detections):
-        if not hasattr(context, "clutter_spatial_density_detections"):
-            # A plain (e.g. upstream Stone Soup) context: one call per detection.
-            return [float(context.clutter_spatial_density(det)) for det in detections]
         clutter = getattr(getattr(context, "sensor_model", None), "clutter", None)
         if clutter is None or not clutter.uses_position \
                 or all(det.measurement_model is not None for det in detections):

@@ -52,7 +52,7 @@ class _ParticleContextMixin:
         callers that do not forward a context, like ``SMCPHDInitiator``). ``None`` is
         allowed: the stock behaviour."""
         if detector_context is not None:
-            _check_context(detector_context)
+            detector_context = as_array_context(detector_context, *_ARRAY_METHODS)
         previous, self._scan_context = self._scan_context, detector_context
         try:
             yield self
@@ -61,8 +61,7 @@ class _ParticleContextMixin:
 
     def _context(self, detector_context):
         if detector_context is not None:
-            _check_context(detector_context)
-            return detector_context
+            return as_array_context(detector_context, *_ARRAY_METHODS)
         if self._active_context is not None:
             return self._active_context
         return self._scan_context
@@ -82,8 +81,7 @@ class _ParticleContextMixin:
         return (log_pd, _log(1 - prob_detection)) if missed else log_pd
 
 
-def _check_context(detector_context) -> None:
-    require_array_context(detector_context, "prob_detection_array", "clutter_spatial_density_detections")
+_ARRAY_METHODS = ("prob_detection_array", "clutter_spatial_density_detections")
 
 
 def _log(values: np.ndarray) -> np.ndarray:
@@ -231,4 +229,4 @@ class SMCPHDUpdater(_ParticleContextMixin, _StockSMCPHDUpdater):
 
 
 __all__ = ["BernoulliParticleUpdater", "SMCPHDUpdater"]
-from ..context import require_array_context
+from ..foreign import as_array_context

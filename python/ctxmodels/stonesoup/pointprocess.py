@@ -44,24 +44,21 @@ from stonesoup.types.update import GaussianMixtureUpdate
 from stonesoup.updater.pointprocess import LCCUpdater as _StockLCCUpdater
 from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
 
-from ..context import require_array_context
 from ..context import DetectorContext
+from ..foreign import as_array_context
 from .birth import MeasurementDrivenBirth
 from .ordering import in_stable_order
 
 _BIRTH = TaggedWeightedGaussianState.BIRTH
 
 
-def _check_context(detector_context) -> None:
-    require_array_context(detector_context, "prob_detection_states", "clutter_spatial_density_detections")
-
-
 class _ScanObservability:
     """P_D of every distinct predicted component and λ of every gating detection of one
     scan, each from one array call into the context."""
 
-    def __init__(self, hypotheses, detector_context: DetectorContext):
-        _check_context(detector_context)
+    def __init__(self, hypotheses, detector_context):
+        detector_context = as_array_context(detector_context, "prob_detection_states",
+                                            "clutter_spatial_density_detections")
         # The hypothesiser's predictor hands every hypothesis of one component the same
         # predicted state vector and covariance, so their identities key the component.
         rows: dict[tuple[int, int], int] = {}
