@@ -17,7 +17,6 @@ use std::sync::OnceLock;
 /// Comparisons are ordered: false when either side is NaN, as in scalar Rust.
 pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> {
     type Mask: Copy;
-    const WIDTH: usize = 4;
 
     fn splat(v: f64) -> Self;
     fn from_array(a: [f64; 4]) -> Self;
@@ -41,7 +40,6 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     fn ge(self, other: Self) -> Self::Mask;
     fn lt(self, other: Self) -> Self::Mask;
     fn le(self, other: Self) -> Self::Mask;
-    fn eq(self, other: Self) -> Self::Mask;
     fn is_nan(self) -> Self::Mask;
     /// Infinite or NaN: every exponent bit set.
     fn non_finite(self) -> Self::Mask;
@@ -214,10 +212,6 @@ impl Lanes for Portable {
         std::array::from_fn(|i| self.0[i] <= o.0[i])
     }
     #[inline(always)]
-    fn eq(self, o: Self) -> [bool; 4] {
-        std::array::from_fn(|i| self.0[i] == o.0[i])
-    }
-    #[inline(always)]
     fn is_nan(self) -> [bool; 4] {
         self.0.map(f64::is_nan)
     }
@@ -275,7 +269,7 @@ mod tests {
                 for lanes in [a + b, a - b, a * b, a.div(b), a.sqrt(), a.abs(), L::max(a, b), x, y] {
                     bits.extend(lanes.to_array().map(f64::to_bits));
                 }
-                for m in [a.gt(b), a.ge(b), a.lt(b), a.le(b), a.eq(b), a.is_nan(), a.non_finite(), L::and(a.gt(b), b.non_finite()), L::or(a.lt(b), a.is_nan()), L::none()] {
+                for m in [a.gt(b), a.ge(b), a.lt(b), a.le(b), a.is_nan(), a.non_finite(), L::and(a.gt(b), b.non_finite()), L::or(a.lt(b), a.is_nan()), L::none()] {
                     bits.extend(mask_bits(m).map(f64::to_bits));
                     bits.push(L::any(m) as u64);
                 }

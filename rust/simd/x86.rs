@@ -139,10 +139,6 @@ impl Lanes for Avx2 {
         self.cmp::<_CMP_LE_OQ>(o)
     }
     #[inline(always)]
-    fn eq(self, o: Self) -> Mask {
-        self.cmp::<_CMP_EQ_OQ>(o)
-    }
-    #[inline(always)]
     fn is_nan(self) -> Mask {
         self.cmp::<_CMP_UNORD_Q>(self)
     }

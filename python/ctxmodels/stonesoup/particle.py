@@ -36,6 +36,8 @@ from stonesoup.types.update import Update
 from stonesoup.updater.particle import BernoulliParticleUpdater as _StockBernoulliUpdater
 from stonesoup.updater.particle import SMCPHDUpdater as _StockSMCPHDUpdater
 
+from ..foreign import as_array_context
+
 
 class _ParticleContextMixin:
     """Context resolution (keyword, then the active update's, then ``scan_context``) and
@@ -229,4 +231,3 @@ class SMCPHDUpdater(_ParticleContextMixin, _StockSMCPHDUpdater):
 
 
 __all__ = ["BernoulliParticleUpdater", "SMCPHDUpdater"]
-from ..foreign import as_array_context
