@@ -188,9 +188,10 @@ impl ClutterModel {
     }
 }
 
-/// λ of detections `first..first + out.len()`, four at a time: positions read as (x, y)
-/// pairs, the range computed (or the measured one taken) and every factor applied in
-/// registers. The index (in `out`) of the first detection without a finite λ > 0.
+/// λ of detections `first..first + out.len()`: factor by factor over the whole chunk, four detections at a time — each pass a tight loop with no branch on
+/// the factor kind — and a last partial block (< 4) through [`ClutterModel::at_one`], whose
+/// bits the passes reproduce. The index (in `out`) of the first detection without a finite
+/// λ > 0.
 struct Densities<'a> {
     model: &'a ClutterModel,
     origin: [f64; 2],
@@ -201,75 +202,109 @@ struct Densities<'a> {
     out: &'a mut [f64],
 }
 
-impl Densities<'_> {
-    /// Entry `column` of the metadata rows of detections `first..first + count`,
-    /// zero-padded.
-    #[inline(always)]
-    fn metadata<L: Lanes>(&self, first: usize, count: usize, column: usize) -> L {
-        let k = self.model.metadata_columns;
-        if count == 4 && k == 1 {
-            return L::load(&self.metadata[first..]);
-        }
-        let at = |i: usize| if i < count { self.metadata[(first + i) * k + column] } else { 0.0 };
-        L::from_array([at(0), at(1), at(2), at(3)])
-    }
-}
-
 impl LaneKernel for Densities<'_> {
     type Output = Option<usize>;
 
     #[inline(always)]
     fn run<L: Lanes>(self) -> Option<usize> {
-        let model = self.model;
-        let (zero, one, nan) = (L::splat(0.0), L::splat(1.0), L::splat(f64::NAN));
-        let (ox, oy) = (L::splat(self.origin[0]), L::splat(self.origin[1]));
-        let mut bad = L::none();
-        let n = self.out.len();
-        let mut b = 0;
-        while b < n {
-            let (first, count) = (self.first + b, (n - b).min(4));
-            let (x, y) = if count == 4 {
-                L::pairs(&self.positions[2 * first..])
-            } else {
-                let at = |i: usize, j: usize| if i < count { self.positions[2 * (first + i) + j] } else { 0.0 };
-                (L::from_array([at(0, 0), at(1, 0), at(2, 0), at(3, 0)]), L::from_array([at(0, 1), at(1, 1), at(2, 1), at(3, 1)]))
-            };
-            let (dx, dy) = (x - ox, y - oy);
-            let mut range = (dx * dx + dy * dy).sqrt();
-            if let Some(measured) = self.ranges {
-                let at = |i: usize| if i < count { measured[first + i] } else { f64::NAN };
-                let measured = L::from_array([at(0), at(1), at(2), at(3)]);
-                range = L::select(measured.is_nan(), range, measured);
-            }
-            let mut density = one;
+        let Densities { model, origin, positions, metadata, ranges, first, out } = self;
+        let k = model.metadata_columns;
+        let full = out.len() / 4 * 4;
+        let (one, nan, zero) = (L::splat(1.0), L::splat(f64::NAN), L::splat(0.0));
+        let (ox, oy) = (L::splat(origin[0]), L::splat(origin[1]));
+        // Exact-size chunks, so the loads need no bounds checks. (No closure returns lanes
+        // here: it would be compiled outside the AVX2 function.)
+        let xy = &positions[2 * first..2 * (first + full)];
+        let rows = &metadata[k * first..k * (first + full)];
+        // λ starts at 1 (NaN where a position the bands read is not finite): in a pass of
+        // its own, or, when the first factor is a range factor, in that factor's pass.
+        let fused_start = matches!(model.factors.first(), Some(ClutterFactor::Range(_)));
+        if !fused_start {
             if model.uses_position {
-                density = L::select(L::or(x.non_finite(), y.non_finite()), nan, one);
-            }
-            for f in &model.factors {
-                density = density
-                    * match f {
-                        ClutterFactor::Constant(v) => L::splat(*v),
-                        ClutterFactor::Range(bands) => bands.lanes_at(range),
-                        ClutterFactor::Metadata(rule) => {
-                            let value: L = self.metadata(first, count, rule.column);
-                            let known = L::select(value.lt(L::splat(rule.threshold)), L::splat(rule.below), L::splat(rule.at_or_above));
-                            let finite = L::select(value.non_finite(), nan, known);
-                            L::select(value.is_nan(), L::splat(rule.missing.unwrap_or(f64::NAN)), finite)
-                        }
-                    };
-            }
-            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
-            if count == 4 {
-                density.store(&mut self.out[b..]);
+                for (o, p) in out[..full].chunks_exact_mut(4).zip(xy.chunks_exact(8)) {
+                    let (x, y) = L::pairs(p);
+                    L::select(L::or(x.non_finite(), y.non_finite()), nan, one).store(o);
+                }
             } else {
-                self.out[b..].copy_from_slice(&density.to_array()[..count]);
+                out[..full].fill(1.0);
             }
-            b += 4;
         }
-        if !L::any(bad) {
+        // Detections without a finite λ > 0, noted in the last factor's pass.
+        let mut bad = L::none();
+        let last = model.factors.len().wrapping_sub(1);
+        for (i, f) in model.factors.iter().enumerate() {
+            let blocks = out[..full].chunks_exact_mut(4);
+            let checks = i == last;
+            match f {
+                ClutterFactor::Constant(v) => {
+                    let v = L::splat(*v);
+                    for o in blocks {
+                        let density = L::load(o) * v;
+                        if checks {
+                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                        }
+                        density.store(o);
+                    }
+                }
+                ClutterFactor::Range(bands) => {
+                    let fresh = i == 0 && fused_start;
+                    for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(8)) {
+                        let (x, y) = L::pairs(p);
+                        let (dx, dy) = (x - ox, y - oy);
+                        let squared = dx * dx + dy * dy;
+                        // With measured ranges the bands read a range; without, the squared
+                        // range through their root thresholds: the same bits, no square root.
+                        let value = match ranges {
+                            Some(measured) => {
+                                let measured = L::load(&measured[first + 4 * j..]);
+                                bands.lanes_at(L::select(measured.is_nan(), squared.sqrt(), measured))
+                            }
+                            None => bands.lanes_at_root(squared),
+                        };
+                        let before = if fresh { L::select(L::or(x.non_finite(), y.non_finite()), nan, one) } else { L::load(o) };
+                        let density = before * value;
+                        if checks {
+                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                        }
+                        density.store(o);
+                    }
+                }
+                ClutterFactor::Metadata(rule) => {
+                    let (threshold, below, above) = (L::splat(rule.threshold), L::splat(rule.below), L::splat(rule.at_or_above));
+                    let missing = L::splat(rule.missing.unwrap_or(f64::NAN));
+                    for (o, r) in blocks.zip(rows.chunks_exact(4 * k)) {
+                        let value = if k == 1 {
+                            L::load(r)
+                        } else {
+                            let at = |i: usize| r[i * k + rule.column];
+                            L::from_array([at(0), at(1), at(2), at(3)])
+                        };
+                        let known = L::select(value.lt(threshold), below, above);
+                        let finite = L::select(value.non_finite(), nan, known);
+                        let density = L::load(o) * L::select(value.is_nan(), missing, finite);
+                        if checks {
+                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                        }
+                        density.store(o);
+                    }
+                }
+            }
+        }
+        if model.factors.is_empty() {
+            for o in out[..full].chunks_exact(4) {
+                let density = L::load(o);
+                bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+            }
+        }
+        for (i, density) in out.iter_mut().enumerate().skip(full) {
+            let row = first + i;
+            let measured = ranges.map_or(f64::NAN, |r| r[row]);
+            *density = model.at_one(origin, [positions[2 * row], positions[2 * row + 1]], &metadata[row * k..(row + 1) * k], measured);
+        }
+        if !L::any(bad) && out[full..].iter().all(|v| v.is_finite() && *v > 0.0) {
             return None;
         }
-        self.out.iter().position(|v| !(v.is_finite() && *v > 0.0))
+        out.iter().position(|v| !(v.is_finite() && *v > 0.0))
     }
 }
 
@@ -347,37 +382,48 @@ mod tests {
     #[test]
     fn every_backend_gives_the_reference_bits() {
         use crate::simd::{run_on, Backend};
-        let model = ClutterModel::new(vec![
-            ClutterFactor::Constant(0.7),
-            ClutterFactor::Range(RangeBands::new(vec![100.0, 1000.0], vec![1e-3, 1e-2, 3e-2], vec![true, false]).unwrap()),
-            ClutterFactor::Metadata(MetadataThreshold { column: 1, threshold: 10.0, below: 1e-1, at_or_above: 1e-3, missing: Some(1e-2) }),
-            ClutterFactor::Metadata(MetadataThreshold { column: 0, threshold: 0.5, below: 2.0, at_or_above: 0.5, missing: None }),
-        ])
-        .unwrap();
+        let bands = |edges: Vec<f64>, values: Vec<f64>, owns: Vec<bool>| ClutterFactor::Range(RangeBands::new(edges, values, owns).unwrap());
+        let rule = |column, threshold, missing| ClutterFactor::Metadata(MetadataThreshold { column, threshold, below: 1e-1, at_or_above: 1e-3, missing });
+        // Each pass order of the kernel: a constant first, a range factor first (its pass
+        // also starts λ), a metadata rule first with range bands later, no factors, no
+        // position at all.
+        let models = [
+            vec![ClutterFactor::Constant(0.7), bands(vec![100.0, 1000.0], vec![1e-3, 1e-2, 3e-2], vec![true, false]), rule(1, 10.0, Some(1e-2)), rule(0, 0.5, None)],
+            vec![bands(vec![1000.0], vec![1e-3, 1e-2], vec![true]), rule(0, 10.0, Some(1e-2))],
+            vec![rule(0, 10.0, Some(1e-2)), bands(vec![100.0], vec![2.0, 3.0], vec![false]), ClutterFactor::Constant(1e-300), ClutterFactor::Constant(1e-300)],
+            vec![],
+            vec![ClutterFactor::Constant(0.25), rule(2, 5.0, Some(4.0))],
+        ];
         let origin = [3.0, -4.0];
-        for m in [1, 3, 4, 5, 9, 130] {
-            let mut positions: Vec<f64> = (0..2 * m).map(|k| ((k as f64) * 0.618_033_988_749_895).sin() * 1500.0).collect();
-            // on the band edges exactly, far away, and one position that cannot be used
-            positions[0] = origin[0] + 100.0;
-            positions[1] = origin[1];
-            if m > 4 {
-                positions[8] = origin[0] + 1000.0;
-                positions[9] = origin[1];
-                positions[6] = 1e300;
-            }
-            let metadata: Vec<f64> = (0..2 * m).map(|k| match k % 7 { 0 => f64::NAN, 1 => 10.0, 2 => 0.5, _ => (k % 23) as f64 }).collect();
-            let ranges: Vec<f64> = (0..m).map(|i| if i % 3 == 0 { 1000.0 } else { f64::NAN }).collect();
-            for ranges in [None, Some(&ranges[..])] {
-                // metadata column 0 must be present (no `missing`): rows with NaN there fail.
-                let reference: Vec<u64> = (0..m)
-                    .map(|i| model.at_one(origin, [positions[2 * i], positions[2 * i + 1]], &metadata[2 * i..2 * i + 2], ranges.map_or(f64::NAN, |r| r[i])).to_bits())
-                    .collect();
-                let first_bad = reference.iter().position(|&v| !(f64::from_bits(v).is_finite() && f64::from_bits(v) > 0.0));
-                for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
-                    let mut out = vec![0.0; m];
-                    let bad = run_on(backend, Densities { model: &model, origin, positions: &positions, metadata: &metadata, ranges, first: 0, out: &mut out });
-                    assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), reference, "{backend:?} m={m}");
-                    assert_eq!(bad, first_bad, "{backend:?} m={m}");
+        for model in models.map(|factors| ClutterModel::new(factors).unwrap()) {
+            let k = model.metadata_columns();
+            for m in [1, 3, 4, 5, 9, 130] {
+                let mut positions: Vec<f64> = (0..2 * m).map(|k| ((k as f64) * 0.618_033_988_749_895).sin() * 1500.0).collect();
+                // on the band edges exactly, far away, and positions that cannot be used
+                positions[0] = origin[0] + 100.0;
+                positions[1] = origin[1];
+                if m > 4 {
+                    positions[8] = origin[0] + 1000.0;
+                    positions[9] = origin[1];
+                    positions[6] = 1e300;
+                }
+                if m > 100 {
+                    positions[2 * 77 + 1] = f64::NAN;
+                    positions[2 * 90] = f64::NEG_INFINITY;
+                }
+                let metadata: Vec<f64> = (0..k * m).map(|k| match k % 7 { 0 => f64::NAN, 1 => 10.0, 2 => 0.5, _ => (k % 23) as f64 }).collect();
+                let ranges: Vec<f64> = (0..m).map(|i| if i % 3 == 0 { 1000.0 } else { f64::NAN }).collect();
+                for ranges in [None, Some(&ranges[..])] {
+                    let reference: Vec<u64> = (0..m)
+                        .map(|i| model.at_one(origin, [positions[2 * i], positions[2 * i + 1]], &metadata[k * i..k * (i + 1)], ranges.map_or(f64::NAN, |r| r[i])).to_bits())
+                        .collect();
+                    let first_bad = reference.iter().position(|&v| !(f64::from_bits(v).is_finite() && f64::from_bits(v) > 0.0));
+                    for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
+                        let mut out = vec![0.0; m];
+                        let bad = run_on(backend, Densities { model: &model, origin, positions: &positions, metadata: &metadata, ranges, first: 0, out: &mut out });
+                        assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), reference, "{backend:?} m={m} {model:?}");
+                        assert_eq!(bad, first_bad, "{backend:?} m={m} {model:?}");
+                    }
                 }
             }
         }

@@ -14,6 +14,9 @@ pub struct RangeBands {
     edges: Vec<f64>,
     values: Vec<f64>,
     upper_owns: Vec<bool>,
+    /// Edge k is passed at range √s ⇔ s ≥ `root_thresholds[k]`: [`Self::at`] of a range
+    /// computed as √s, read from s itself (see [`root_threshold`]).
+    root_thresholds: Vec<f64>,
 }
 
 impl RangeBands {
@@ -43,7 +46,8 @@ impl RangeBands {
                 return Err(ModelError::invalid("values", format!("value {i} must be finite, got {v}")));
             }
         }
-        Ok(RangeBands { edges, values, upper_owns })
+        let root_thresholds = edges.iter().zip(&upper_owns).map(|(&e, &owns)| root_threshold(e, owns)).collect();
+        Ok(RangeBands { edges, values, upper_owns, root_thresholds })
     }
 
     /// All values (for checks such as "every value is a probability").
@@ -57,8 +61,7 @@ impl RangeBands {
         // Edges are few (2–4): a linear scan beats a binary search and stays branch-light.
         let mut value = self.values[0];
         for (i, &edge) in self.edges.iter().enumerate() {
-            let passed = r > edge || (r == edge && self.upper_owns[i]);
-            if passed {
+            if passed_scalar(r, edge, self.upper_owns[i]) {
                 value = self.values[i + 1];
             }
         }
@@ -74,6 +77,42 @@ impl RangeBands {
         }
         value
     }
+
+    /// [`Self::lanes_at`] of the ranges `s.sqrt()`, the same bits, without the square root:
+    /// `s` four squared ranges (sums of squares: ≥ 0, +inf or NaN).
+    #[inline(always)]
+    pub(crate) fn lanes_at_root<L: Lanes>(&self, s: L) -> L {
+        let mut value = L::splat(self.values[0]);
+        for (i, &t) in self.root_thresholds.iter().enumerate() {
+            value = L::select(s.ge(L::splat(t)), L::splat(self.values[i + 1]), value);
+        }
+        value
+    }
+}
+
+/// The least float s ≥ 0 (or +inf) whose square root is past `edge` (finite, ≥ 0).
+///
+/// A correctly rounded square root is monotone, so {s : √s past the edge} is every float
+/// from some threshold up: comparing s with it decides exactly what comparing the computed
+/// range √s with the edge decides — unlike comparing s with e², which can differ by an ulp
+/// next to the edge. e² (rounded) lies within a couple of ulps of the threshold, so the
+/// walk below takes a step or two.
+fn root_threshold(edge: f64, upper_owns: bool) -> f64 {
+    let past = |s: f64| passed_scalar(s.sqrt(), edge, upper_owns);
+    let mut t = edge * edge;
+    while t > 0.0 && past(t.next_down()) {
+        t = t.next_down();
+    }
+    // Ends at +inf at the latest: √inf = inf is past every finite edge.
+    while !past(t) {
+        t = t.next_up();
+    }
+    t
+}
+
+#[inline(always)]
+fn passed_scalar(r: f64, edge: f64, upper_owns: bool) -> bool {
+    r > edge || (r == edge && upper_owns)
 }
 
 /// Whether `r` is past `edge`: beyond it, or on it when the band above owns the edge.
@@ -126,10 +165,18 @@ impl SquaredBands {
     /// [`Self::at_squared`] for four squared ranges, the same bits.
     #[inline(always)]
     pub(crate) fn lanes_at_squared<L: Lanes>(&self, r2: L) -> L {
-        // Two edges (both of the paper's sensors) or up to four, unrolled.
-        let edges = if self.count <= 2 { 2 } else { SQUARED_EDGES };
+        // Two edges (both of the paper's sensors) or up to four, each unrolled.
+        if self.count <= 2 {
+            self.lanes_over::<L, 2>(r2)
+        } else {
+            self.lanes_over::<L, SQUARED_EDGES>(r2)
+        }
+    }
+
+    #[inline(always)]
+    fn lanes_over<L: Lanes, const EDGES: usize>(&self, r2: L) -> L {
         let mut value = L::splat(self.values[0]);
-        for k in 0..edges {
+        for k in 0..EDGES {
             value = L::select(r2.ge(L::splat(self.at_least[k])), L::splat(self.values[k + 1]), value);
         }
         value
@@ -217,6 +264,36 @@ mod tests {
         }
         let many = RangeBands::new(vec![1.0, 2.0, 3.0, 4.0, 5.0], vec![0.0; 6], vec![true; 5]).unwrap();
         assert!(many.squared().is_none());
+    }
+
+    /// The root thresholds decide every squared range exactly as the range would: at the
+    /// threshold and the floats around it, for edges on and off the float grid of their
+    /// squares, both owners, zero and edges whose square overflows.
+    #[test]
+    fn root_thresholds_decide_as_the_square_root_does() {
+        let mut edges = vec![0.0, f64::MIN_POSITIVE, 1e-160, 0.1, 1.0, 3.0, 50.0, 80.0, 1000.0, 1612.0, 1e154, 1.5e154, f64::MAX];
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        for _ in 0..2000 {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            edges.push((state >> 11) as f64 / (1u64 << 53) as f64 * 5000.0);
+        }
+        for &e in &edges {
+            for owns in [false, true] {
+                let bands = RangeBands::new(vec![e], vec![1.0, 2.0], vec![owns]).unwrap();
+                let t = bands.root_thresholds[0];
+                let mut probes = vec![0.0, t, e * e, f64::INFINITY, f64::NAN];
+                let (mut up, mut down) = (t, t);
+                for _ in 0..4 {
+                    up = up.next_up();
+                    down = down.next_down();
+                    probes.extend([up, down.max(0.0)]);
+                }
+                for s in probes {
+                    let lanes = bands.lanes_at_root(crate::simd::Portable::splat(s)).to_array()[0];
+                    assert_eq!(lanes.to_bits(), bands.at(s.sqrt()).to_bits(), "edge {e}, upper owns {owns}, s {s:e}");
+                }
+            }
+        }
     }
 
     #[test]

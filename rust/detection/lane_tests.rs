@@ -41,6 +41,10 @@ fn models() -> Vec<DetectionModel> {
             DetectionFactor::Sight(Arc::new(LineOfSight::new(island))),
         ],
         vec![DetectionFactor::Constant(0.3), sector(0.4, 2.5, 0.7, 0.9), bands(&[10.0, 1e3], &[0.7, 0.9, 0.1], &[false, false])],
+        // Every specialised step sequence of the kernels (lanes::with_fixed_steps) is here:
+        // none, one sector, bands then sector, sector then bands, one set of bands.
+        vec![DetectionFactor::Constant(0.6)],
+        vec![sector(2.0, 1.0, 0.2, 0.8)],
     ]
     .into_iter()
     .map(|f| DetectionModel::new(f).unwrap())

@@ -6,6 +6,8 @@
 
 use super::{ScanDetection, Step};
 use crate::batch::{Positions, Rows};
+use crate::range_bands::SquaredBands;
+use crate::sector::FramedSector;
 use crate::cubature::{cholesky2_lanes, Rule};
 use crate::simd::{LaneKernel, Lanes};
 
@@ -14,25 +16,115 @@ impl Step {
     fn lanes_at<L: Lanes>(&self, dx: L, dy: L, r2: L) -> L {
         match self {
             Step::SquaredBands(bands) => bands.lanes_at_squared(r2),
-            Step::Bands(bands) => bands.lanes_at(r2.sqrt()),
+            // (bands.lanes_at(r2.sqrt()), without the square root: the same bits)
+            Step::Bands(bands) => bands.lanes_at_root(r2),
             Step::Sector(sector) => sector.lanes_at_squared(dx, dy, r2),
         }
     }
 }
 
+/// A scan's range and sector steps with their kinds fixed at compile time, so that a
+/// kernel's loop holds no dispatch on the kind of each step (the common models: the
+/// paper's radar and lidar). `apply` multiplies `pd` by each step's value in order: the
+/// same bits as the general slice of steps.
+trait FixedSteps: Copy {
+    fn apply<L: Lanes>(self, pd: L, dx: L, dy: L, r2: L) -> L;
+}
+
+impl FixedSteps for () {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, pd: L, _: L, _: L, _: L) -> L {
+        pd
+    }
+}
+
+impl FixedSteps for &SquaredBands {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, pd: L, _: L, _: L, r2: L) -> L {
+        pd * self.lanes_at_squared(r2)
+    }
+}
+
+impl FixedSteps for &FramedSector {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, pd: L, dx: L, dy: L, r2: L) -> L {
+        pd * self.lanes_at_squared(dx, dy, r2)
+    }
+}
+
+impl<A: FixedSteps, B: FixedSteps> FixedSteps for (A, B) {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, pd: L, dx: L, dy: L, r2: L) -> L {
+        self.1.apply(self.0.apply(pd, dx, dy, r2), dx, dy, r2)
+    }
+}
+
+/// Any other sequence, dispatched step by step.
+impl FixedSteps for &[Step] {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, mut pd: L, dx: L, dy: L, r2: L) -> L {
+        for step in self {
+            pd = pd * step.lanes_at(dx, dy, r2);
+        }
+        pd
+    }
+}
+
+/// `$body` with `$steps` bound to the scan's steps as a [`FixedSteps`] and the constant
+/// `$indexed` to whether it has land or sight steps: a specialised copy of the body for
+/// each common sequence, the general one for the rest.
+macro_rules! with_fixed_steps {
+    ($scan:expr, $steps:ident, $indexed:ident => $body:expr) => {
+        if $scan.indexed.is_empty() {
+            const $indexed: bool = false;
+            with_fixed_steps!(@steps $scan, $steps => $body)
+        } else {
+            const $indexed: bool = true;
+            with_fixed_steps!(@steps $scan, $steps => $body)
+        }
+    };
+    (@steps $scan:expr, $steps:ident => $body:expr) => {
+        match $scan.steps.as_slice() {
+            [] => {
+                let $steps = ();
+                $body
+            }
+            [Step::SquaredBands(a)] => {
+                let $steps = a;
+                $body
+            }
+            [Step::Sector(a)] => {
+                let $steps = a;
+                $body
+            }
+            [Step::SquaredBands(a), Step::Sector(b)] => {
+                let $steps = (a, b);
+                $body
+            }
+            [Step::Sector(a), Step::SquaredBands(b)] => {
+                let $steps = (a, b);
+                $body
+            }
+            other => {
+                let $steps = other;
+                $body
+            }
+        }
+    };
+}
+
 impl ScanDetection {
     /// [`Self::at_point`] at four world points, and the squared ranges: infinite or NaN
     /// where a position is (or, rarely, where a finite one is very far away).
+    /// `INDEXED`: whether the scan has land or sight steps (`!self.indexed.is_empty()`),
+    /// fixed at compile time so that the common loop carries none of their code.
     #[inline(always)]
-    fn lanes_at<L: Lanes>(&self, x: L, y: L) -> (L, L) {
+    fn lanes_at<L: Lanes, S: FixedSteps, const INDEXED: bool>(&self, steps: S, x: L, y: L) -> (L, L) {
         let [ox, oy] = self.frame.origin;
         let (dx, dy) = (x - L::splat(ox), y - L::splat(oy));
         let r2 = dx * dx + dy * dy;
-        let mut pd = L::splat(self.constant);
-        for step in &self.steps {
-            pd = pd * step.lanes_at(dx, dy, r2);
-        }
-        if self.indexed.is_empty() {
+        let pd = steps.apply(L::splat(self.constant), dx, dy, r2);
+        if !INDEXED {
             return (pd, r2);
         }
         let (xs, ys, mut pds) = (x.to_array(), y.to_array(), pd.to_array());
@@ -57,6 +149,13 @@ impl<P: Positions> LaneKernel for AtStates<'_, P> {
 
     #[inline(always)]
     fn run<L: Lanes>(self) -> Option<usize> {
+        with_fixed_steps!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
+    }
+}
+
+impl<P: Positions> AtStates<'_, P> {
+    #[inline(always)]
+    fn run_with<L: Lanes, S: FixedSteps, const INDEXED: bool>(self, steps: S) -> Option<usize> {
         let AtStates { scan, positions, first, out } = self;
         let n = out.len();
         let full = n - n % 4;
@@ -64,17 +163,16 @@ impl<P: Positions> LaneKernel for AtStates<'_, P> {
         // the chunk searched afterwards (a finite position so far away that r² overflows
         // costs that search and is not reported).
         let mut bad = L::none();
-        let mut b = 0;
-        while b < full {
-            let (x, y) = positions.lanes::<L>(first + b);
-            let (pd, r2) = scan.lanes_at(x, y);
+        // Exact chunks: the stores need no bounds checks.
+        for (j, o) in out[..full].chunks_exact_mut(4).enumerate() {
+            let (x, y) = positions.lanes::<L>(first + 4 * j);
+            let (pd, r2) = scan.lanes_at::<L, S, INDEXED>(steps, x, y);
             bad = L::or(bad, r2.non_finite());
-            pd.store(&mut out[b..]);
-            b += 4;
+            pd.store(o);
         }
         if full < n {
             let (x, y) = positions.partial::<L>(first + full, n - full);
-            let (pd, r2) = scan.lanes_at(x, y);
+            let (pd, r2) = scan.lanes_at::<L, S, INDEXED>(steps, x, y);
             bad = L::or(bad, r2.non_finite());
             out[full..].copy_from_slice(&pd.to_array()[..n - full]);
         }
@@ -141,6 +239,13 @@ impl LaneKernel for Expected<'_> {
 
     #[inline(always)]
     fn run<L: Lanes>(self) -> Self::Output {
+        with_fixed_steps!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
+    }
+}
+
+impl Expected<'_> {
+    #[inline(always)]
+    fn run_with<L: Lanes, S: FixedSteps, const INDEXED: bool>(self, steps: S) -> <Self as LaneKernel>::Output {
         let Expected { scan, gaussians, rule, first, out } = self;
         let mut bad = None;
         let (zero, one) = (L::splat(0.0), L::splat(1.0));
@@ -172,7 +277,7 @@ impl LaneKernel for Expected<'_> {
                 for (u, &w) in rule.points().iter().zip(rule.weights()) {
                     let (u0, u1) = (L::splat(u[0]), L::splat(u[1]));
                     let (x, y) = (mx + l11 * u0, my + l21 * u0 + l22 * u1);
-                    expected = expected + L::splat(w) * scan.lanes_at(x, y).0;
+                    expected = expected + L::splat(w) * scan.lanes_at::<L, S, INDEXED>(steps, x, y).0;
                 }
                 // Rounding can push a weighted sum of values in [0, 1] a hair outside.
                 expected = L::select(expected.lt(zero), zero, L::select(expected.gt(one), one, expected));
