@@ -40,8 +40,13 @@ fn value_error(argument: &str, message: impl std::fmt::Display) -> PyErr {
 /// Runs `f` with the GIL released; a panic becomes a RuntimeError instead of unwinding
 /// into the interpreter.
 fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> crate::Result<T> + Send) -> PyResult<T> {
-    let result = py.detach(|| catch_unwind(AssertUnwindSafe(f)));
-    match result {
+    py.detach(|| guarded(f))
+}
+
+/// Runs `f` on the calling thread (GIL held: small inputs, where releasing it costs more
+/// than the work); a panic becomes a RuntimeError, as in [`detached`].
+fn guarded<T>(f: impl FnOnce() -> crate::Result<T>) -> PyResult<T> {
+    match catch_unwind(AssertUnwindSafe(f)) {
         Ok(inner) => inner.map_err(to_py),
         Err(_) => Err(PyRuntimeError::new_err("ctxmodels internal error (a bug: please report it with the inputs)")),
     }
@@ -490,6 +495,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyLineOfSight>()?;
     m.add_class::<PyDetectionModel>()?;
     m.add_class::<scan::PyDetectionAtPose>()?;
+    m.add_class::<scan::PyClutterAtPose>()?;
     m.add_class::<PyMetadataThreshold>()?;
     m.add_class::<PyClutterModel>()?;
     m.add_function(wrap_pyfunction!(mount, m)?)?;

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 __all__ = [
     "AngularSector",
+    "ClutterAtPose",
     "ClutterModel",
     "DetectionAtPose",
     "DetectionModel",
@@ -160,6 +161,19 @@ class DetectionAtPose:
         computes it) and must be a float64 (D, D) array; the same bits as a row of the
         model's `expected`. None for anything else, or a position or covariance block the
         general path refuses (it then names the fault)."""
+
+@final
+class ClutterAtPose:
+    """A clutter model fixed at one sensor pose (a detector context's thin calls): the
+    common case only, None for anything else."""
+
+    def __new__(cls, model: ClutterModel, pose: _Pose) -> ClutterAtPose: ...
+    def evaluate(
+        self, positions: object, metadata: object | None = None, out: object | None = None
+    ) -> _Floats | None:
+        """λ at world `positions` (M, 2) with `metadata` (M, K) in the model's column order
+        (None when the model reads no metadata), into `out` if given. None (nothing
+        evaluated) unless every array is a C-contiguous, aligned float64 array of its shape."""
 
 @final
 class MetadataThreshold:

@@ -412,6 +412,12 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         """λ for M detections at world ``positions`` (M, 2); ``metadata`` an (M, K) array in
         the clutter model's ``metadata_keys`` order or a sequence of metadata mappings;
         ``ranges`` (M,) measured ranges that range bands read instead (NaN: none)."""
+        if ranges is None:
+            # the common case (float64 arrays, usable out) in one call; else converted here
+            calls = self._scan_calls or self._calls()
+            lam = calls.clutter_at_pose.evaluate(positions, metadata, out)
+            if lam is not None:
+                return lam
         return self.sensor_model.clutter.evaluate(self.pose, positions, metadata, ranges=ranges,
                                                   out=out)
 

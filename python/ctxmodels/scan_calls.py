@@ -1,13 +1,14 @@
-"""What a :class:`~ctxmodels.DetectorContext` prepares once for its scan's P_D calls.
+"""What a :class:`~ctxmodels.DetectorContext` prepares once for its scan's P_D and λ calls.
 
 A tracker asks a scan's context for :math:`P_D` once per hypothesis (Stone Soup's stock
 hypothesisers and updaters) or once per batch of a few states. Each call used to read the
 context's Properties, convert the pose, check the position mapping and wrap the result in
 a new :class:`~stonesoup.types.numeric.Probability`: several microseconds of Python around
 a fraction of a microsecond in the core. :class:`ScanCalls` does that work once per
-context: the core's model at the scan's pose and mapping (and the sensor model's rule for
-the expected P_D of a Gaussian), and one ``Probability`` per
-distinct P_D value (a scan has a handful: products of band, sector and land values).
+context: the core's detection model at the scan's pose and mapping (and the sensor model's
+rule for the expected P_D of a Gaussian), its clutter model at the pose, and one
+``Probability`` per distinct P_D value (a scan has a handful: products of band, sector
+and land values).
 """
 from __future__ import annotations
 
@@ -17,10 +18,10 @@ from . import _core
 
 
 class ScanCalls:
-    """The detection model of ``sensor_model`` fixed at ``pose`` for the thin calls; the
-    values are the general path's, bit for bit (tested)."""
+    """The detection and clutter models of ``sensor_model`` fixed at ``pose`` for the thin
+    calls; the values are the general path's, bit for bit (tested)."""
 
-    __slots__ = ("at_pose", "mean_only", "_probabilities")
+    __slots__ = ("at_pose", "clutter_at_pose", "mean_only", "_probabilities")
 
     #: Distinct P_D values whose Probability is kept (a scan has a handful).
     max_probabilities = 256
@@ -30,6 +31,8 @@ class ScanCalls:
                                              pose.as_tuple(),
                                              tuple(sensor_model.position_mapping),
                                              sensor_model.pd_evaluation, sensor_model.pd_order)
+        self.clutter_at_pose = _core.ClutterAtPose(sensor_model.clutter._compiled(),
+                                                   pose.as_tuple())
         #: P_D is read at the mean of a Gaussian (no integration over its covariance).
         self.mean_only = sensor_model.pd_evaluation == "mean"
         self._probabilities: dict[float, Probability] = {}

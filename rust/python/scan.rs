@@ -1,11 +1,12 @@
-//! A detection model fixed at one sensor pose and position mapping: what a detector
-//! context evaluates, prepared once per scan (pose frame, factor steps), so that each call
-//! converts nothing but its states. The thin entry points of `DetectorContext`: they take
-//! the common case only (a C-contiguous, aligned float64 array; one finite state vector)
-//! and return None for anything else, which the Python layer then converts and checks,
-//! raising its errors that name the argument.
+//! The detection and clutter models fixed at one sensor pose (and position mapping): what
+//! a detector context evaluates, prepared once per scan (pose frame, factor steps), so that
+//! each call converts nothing but its arrays. The thin entry points of `DetectorContext`:
+//! they take the common case only (C-contiguous, aligned float64 arrays; one finite state
+//! vector) and return None for anything else, which the Python layer then converts and
+//! checks, raising its errors that name the argument.
 
-use super::{borrow, detached, mapping_of, output, pose_of, rule_of, slice, value_error, PyDetectionModel};
+use super::{borrow, detached, guarded, mapping_of, output, pose_of, rule_of, slice, value_error, PyClutterModel, PyDetectionModel};
+use crate::pose::Pose;
 use crate::batch::PositionMapping;
 use crate::cubature::Rule;
 use crate::detection::ScanDetection;
@@ -46,13 +47,7 @@ impl PyDetectionAtPose {
             return Ok(None);
         }
         let (n, ncols) = (states.shape()[0], states.shape()[1]);
-        let out = match out {
-            None => None,
-            Some(out) => match out.cast::<PyArray1<f64>>() {
-                Ok(out) if out.len() == n && out.is_c_contiguous() && out.is_aligned() => Some(out.clone()),
-                _ => return Ok(None),
-            },
-        };
+        let Some(out) = common_out(out, n) else { return Ok(None) };
         let states = borrow(states, "states")?;
         let data = slice(&states, "states")?;
         let mut out = output(py, out, n, &[("states", data)])?;
@@ -60,7 +55,7 @@ impl PyDetectionAtPose {
         let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
         let (scan, mapping) = (&self.scan, self.mapping);
         if n < DETACH_ROWS {
-            scan.at_states(data, ncols, mapping, buffer).map_err(super::to_py)?;
+            guarded(|| scan.at_states(data, ncols, mapping, buffer))?;
         } else {
             detached(py, || scan.at_states(data, ncols, mapping, buffer))?;
         }
@@ -110,6 +105,74 @@ impl PyDetectionAtPose {
             Some((flat.get_owned([x])?, flat.get_owned([y])?))
         } else {
             None
+        }
+    }
+}
+
+#[pyclass(name = "ClutterAtPose", module = "ctxmodels._core", frozen)]
+pub struct PyClutterAtPose {
+    model: Py<PyClutterModel>,
+    pose: Pose,
+}
+
+#[pymethods]
+impl PyClutterAtPose {
+    #[new]
+    fn new(model: Py<PyClutterModel>, pose: (f64, f64, f64)) -> PyResult<Self> {
+        Ok(PyClutterAtPose { model, pose: pose_of(pose)? })
+    }
+
+    /// λ at world `positions` (M, 2) with `metadata` (M, K) in the model's column order
+    /// (None when the model reads no metadata), into `out` if given. None (nothing
+    /// evaluated) unless every array is a C-contiguous, aligned float64 array of its shape.
+    #[pyo3(signature = (positions, metadata = None, out = None))]
+    fn evaluate<'py>(
+        &self, py: Python<'py>, positions: &Bound<'py, PyAny>, metadata: Option<&Bound<'py, PyAny>>, out: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
+        let model = &self.model.get().0;
+        let k = model.metadata_columns();
+        let Some(positions) = common_rows(positions, 2) else { return Ok(None) };
+        let n = positions.shape()[0];
+        let metadata = match metadata {
+            None if k == 0 => None,
+            None => return Ok(None),
+            Some(m) => match common_rows(m, k) {
+                Some(m) if m.shape()[0] == n => Some(m),
+                _ => return Ok(None),
+            },
+        };
+        let Some(out) = common_out(out, n) else { return Ok(None) };
+        let positions = borrow(&positions, "positions")?;
+        let p = slice(&positions, "positions")?;
+        let metadata = metadata.map(|m| borrow(&m, "metadata")).transpose()?;
+        let m = metadata.as_ref().map(|m| slice(m, "metadata")).transpose()?.unwrap_or(&[]);
+        let mut out = output(py, out, n, &[("positions", p), ("metadata", m)])?;
+        let result = Bound::clone(&out);
+        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
+        let pose = &self.pose;
+        if n < DETACH_ROWS {
+            guarded(|| model.evaluate(pose, p, m, buffer))?;
+        } else {
+            detached(py, || model.evaluate(pose, p, m, buffer))?;
+        }
+        Ok(Some(result))
+    }
+}
+
+/// `array` as a C-contiguous, aligned float64 (M, `ncols`) array; None otherwise.
+fn common_rows<'py>(array: &Bound<'py, PyAny>, ncols: usize) -> Option<Bound<'py, PyArray2<f64>>> {
+    let rows = array.cast::<PyArray2<f64>>().ok()?;
+    (rows.is_c_contiguous() && rows.is_aligned() && rows.shape()[1] == ncols).then(|| rows.clone())
+}
+
+/// `Some(None)` for no `out`, `Some(out)` for a float64 (n,) C-contiguous aligned array,
+/// None for anything else (the Python layer's check names the fault).
+fn common_out<'py>(out: Option<&Bound<'py, PyAny>>, n: usize) -> Option<Option<Bound<'py, PyArray1<f64>>>> {
+    match out {
+        None => Some(None),
+        Some(out) => {
+            let out = out.cast::<PyArray1<f64>>().ok()?;
+            (out.len() == n && out.is_c_contiguous() && out.is_aligned()).then(|| Some(out.clone()))
         }
     }
 }
