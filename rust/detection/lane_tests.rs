@@ -157,28 +157,32 @@ fn expected_pd_gives_the_reference_bits() {
     let rules = [Rule::mean(), Rule::cubature(), Rule::unscented(), Rule::gauss_hermite(4).unwrap()];
     for model in models() {
         let scan = model.at_pose(&pose);
-        for n in [1, 3, 4, 9, 130] {
-            let means = rows(n, 4, PositionMapping::default());
-            let mut covars = vec![0.0; 16 * n];
-            for i in 0..n {
-                let (sx, sy, rho) = (5.0 + (i % 7) as f64 * 9.0, 3.0 + (i % 5) as f64 * 13.0, ((i % 9) as f64 - 4.0) / 5.0);
-                let c = &mut covars[16 * i..16 * (i + 1)];
-                [c[0], c[2], c[8], c[10]] = [sx * sx, rho * sx * sy, rho * sx * sy, sy * sy];
-            }
-            let gaussians = Gaussians { means: Rows { data: &means, ncols: 4, mapping: PositionMapping::default() }, covars: &covars };
-            for rule in &rules {
-                let expected: Vec<u64> = (0..n)
-                    .map(|i| {
-                        let c = &covars[16 * i..];
-                        let l = cholesky2(c[0], c[2], c[8], c[10]).unwrap();
-                        expected_reference(&scan, [means[4 * i], means[4 * i + 2]], l, rule).to_bits()
-                    })
-                    .collect();
-                for backend in backends() {
-                    let mut out = vec![f64::NAN; n];
-                    let bad = run_on(backend, Expected { scan: &scan, gaussians, rule, first: 0, out: &mut out });
-                    assert_eq!(bad, None);
-                    assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), expected, "{backend:?} n={n}");
+        // Stone Soup's [x, vx, y, vy] rows (read as vectors) and any other layout.
+        for (k, mapping) in [(4, PositionMapping::default()), (6, PositionMapping { x: 3, y: 1 })] {
+            for n in [1, 3, 4, 9, 130] {
+                let means = rows(n, k, mapping);
+                let mut covars = vec![0.0; k * k * n];
+                let (ix, iy) = (mapping.x, mapping.y);
+                for i in 0..n {
+                    let (sx, sy, rho) = (5.0 + (i % 7) as f64 * 9.0, 3.0 + (i % 5) as f64 * 13.0, ((i % 9) as f64 - 4.0) / 5.0);
+                    let c = &mut covars[k * k * i..k * k * (i + 1)];
+                    [c[ix * k + ix], c[ix * k + iy], c[iy * k + ix], c[iy * k + iy]] = [sx * sx, rho * sx * sy, rho * sx * sy, sy * sy];
+                }
+                let gaussians = Gaussians { means: Rows { data: &means, ncols: k, mapping }, covars: &covars };
+                for rule in &rules {
+                    let expected: Vec<u64> = (0..n)
+                        .map(|i| {
+                            let c = &covars[k * k * i..];
+                            let l = cholesky2(c[ix * k + ix], c[ix * k + iy], c[iy * k + ix], c[iy * k + iy]).unwrap();
+                            expected_reference(&scan, [means[k * i + ix], means[k * i + iy]], l, rule).to_bits()
+                        })
+                        .collect();
+                    for backend in backends() {
+                        let mut out = vec![f64::NAN; n];
+                        let bad = run_on(backend, Expected { scan: &scan, gaussians, rule, first: 0, out: &mut out });
+                        assert_eq!(bad, None);
+                        assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), expected, "{backend:?} n={n} k={k}");
+                    }
                 }
             }
         }

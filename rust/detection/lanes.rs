@@ -5,7 +5,7 @@
 //! kernel gives the bits of [`ScanDetection::at_point`] (tested for every backend).
 
 use super::{ScanDetection, Step};
-use crate::batch::{Positions, Rows};
+use crate::batch::{CvRows, PositionMapping, Positions, Rows};
 use crate::range_bands::SquaredBands;
 use crate::sector::FramedSector;
 use crate::cubature::{cholesky2_lanes, Rule};
@@ -204,6 +204,11 @@ impl Gaussians<'_> {
     #[inline(always)]
     fn entry<L: Lanes>(self, first: usize, count: usize, e: usize) -> L {
         let size = self.means.ncols * self.means.ncols;
+        if count == 4 {
+            // One bounds check for the four matrices, none per entry.
+            let c = &self.covars[first * size..(first + 4) * size];
+            return L::from_array([c[e], c[size + e], c[2 * size + e], c[3 * size + e]]);
+        }
         let at = |i: usize| if i < count { self.covars[(first + i) * size + e] } else { 0.0 };
         L::from_array([at(0), at(1), at(2), at(3)])
     }
@@ -215,7 +220,11 @@ impl Gaussians<'_> {
     fn lanes<L: Lanes>(self, first: usize, count: usize) -> (L, L, [L; 3], L::Mask, L::Mask) {
         let k = self.means.ncols;
         let (ix, iy) = (self.means.mapping.x, self.means.mapping.y);
-        let (mx, my) = if count == 4 { self.means.lanes::<L>(first) } else { self.means.partial::<L>(first, count) };
+        let (mx, my) = match count {
+            4 if k == 4 && self.means.mapping == PositionMapping::default() => CvRows(self.means.data).lanes::<L>(first),
+            4 => self.means.lanes::<L>(first),
+            _ => self.means.partial::<L>(first, count),
+        };
         let (a, b) = (self.entry::<L>(first, count, ix * k + ix), self.entry::<L>(first, count, ix * k + iy));
         let (b_t, c) = (self.entry::<L>(first, count, iy * k + ix), self.entry::<L>(first, count, iy * k + iy));
         let (bad_covar, l) = cholesky2_lanes(a, b, b_t, c);

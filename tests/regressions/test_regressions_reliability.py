@@ -66,6 +66,8 @@ def _overlap_cases():
                                                       out)),
         ("ClutterModel.evaluate positions", lambda: [states()[:, 0::2].copy(), RNG.uniform(0, 20, (N, 1))],
          lambda a, out: CLUTTER._compiled().evaluate(POSE.as_tuple(), a[0], a[1], out)),
+        ("ClutterAtPose.evaluate positions", lambda: [states()[:, 0::2].copy(), RNG.uniform(0, 20, (N, 1))],
+         lambda a, out: _core.ClutterAtPose(CLUTTER._compiled(), POSE.as_tuple()).evaluate(a[0], a[1], out)),
         ("DetectionProbabilityModel.evaluate", lambda: [states()],
          lambda a, out: DETECTION.evaluate(POSE, a[0], out=out)),
         ("DetectionProbabilityModel.expected", lambda: [states(), np.tile(np.eye(4), (N, 1, 1))],
