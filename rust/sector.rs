@@ -88,16 +88,31 @@ impl FramedSector {
     /// is a property of the sector, so it is chosen once, outside the lanes.
     #[inline(always)]
     pub(crate) fn lanes_at_squared<L: Lanes>(&self, dx: L, dy: L, r2: L) -> L {
+        if self.is_narrow() {
+            return self.lanes_narrow(dx, dy, r2);
+        }
+        if self.cos_half <= -1.0 {
+            return L::splat(self.inside); // a full circle
+        }
         let along = dx * L::splat(self.centre[0]) + dy * L::splat(self.centre[1]);
         let bound = r2 * L::splat(self.cos_half) * L::splat(self.cos_half);
-        let zero = L::splat(0.0);
-        let inside = if self.cos_half >= 0.0 {
-            L::and(along.ge(zero), (along * along).ge(bound))
-        } else if self.cos_half <= -1.0 {
-            return L::splat(self.inside);
-        } else {
-            L::or(along.ge(zero), (along * along).le(bound))
-        };
+        let inside = L::or(along.ge(L::splat(0.0)), (along * along).le(bound));
+        L::select(inside, L::splat(self.inside), L::splat(self.outside))
+    }
+
+    /// Whether the sector is at most a half-plane wide (cos(width/2) ≥ 0): a blind sector
+    /// behind a radar, say. Kernels choose [`Self::lanes_narrow`] once for such a sector.
+    #[inline(always)]
+    pub(crate) fn is_narrow(&self) -> bool {
+        self.cos_half >= 0.0
+    }
+
+    /// [`Self::lanes_at_squared`] of a sector that [`Self::is_narrow`], without the test.
+    #[inline(always)]
+    pub(crate) fn lanes_narrow<L: Lanes>(&self, dx: L, dy: L, r2: L) -> L {
+        let along = dx * L::splat(self.centre[0]) + dy * L::splat(self.centre[1]);
+        let bound = r2 * L::splat(self.cos_half) * L::splat(self.cos_half);
+        let inside = L::and(along.ge(L::splat(0.0)), (along * along).ge(bound));
         L::select(inside, L::splat(self.inside), L::splat(self.outside))
     }
 

@@ -42,9 +42,12 @@ fn models() -> Vec<DetectionModel> {
         ],
         vec![DetectionFactor::Constant(0.3), sector(0.4, 2.5, 0.7, 0.9), bands(&[10.0, 1e3], &[0.7, 0.9, 0.1], &[false, false])],
         // Every specialised step sequence of the kernels (lanes::with_fixed_steps) is here:
-        // none, one sector, bands then sector, sector then bands, one set of bands.
+        // none, one sector, bands then a narrow or a wide sector, sector then bands, one set
+        // of bands.
         vec![DetectionFactor::Constant(0.6)],
         vec![sector(2.0, 1.0, 0.2, 0.8)],
+        // bands then a sector wider than a half-plane (the radar's is narrower)
+        vec![bands(&[50.0, 1612.0], &[0.0, 0.4, 0.0], &[false, true]), sector(0.5, 250f64.to_radians(), 0.3, 0.9)],
     ]
     .into_iter()
     .map(|f| DetectionModel::new(f).unwrap())

@@ -52,6 +52,17 @@ impl FixedSteps for &FramedSector {
     }
 }
 
+/// A sector at most a half-plane wide ([`FramedSector::is_narrow`]), known to be so.
+#[derive(Clone, Copy)]
+struct Narrow<'a>(&'a FramedSector);
+
+impl FixedSteps for Narrow<'_> {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, pd: L, dx: L, dy: L, r2: L) -> L {
+        pd * self.0.lanes_narrow(dx, dy, r2)
+    }
+}
+
 impl<A: FixedSteps, B: FixedSteps> FixedSteps for (A, B) {
     #[inline(always)]
     fn apply<L: Lanes>(self, pd: L, dx: L, dy: L, r2: L) -> L {
@@ -95,6 +106,10 @@ macro_rules! with_fixed_steps {
             }
             [Step::Sector(a)] => {
                 let $steps = a;
+                $body
+            }
+            [Step::SquaredBands(a), Step::Sector(b)] if b.is_narrow() => {
+                let $steps = (a, Narrow(b));
                 $body
             }
             [Step::SquaredBands(a), Step::Sector(b)] => {
