@@ -208,6 +208,9 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
 
     # --- a scan ---------------------------------------------------------------------------------
     def initiate(self, detections, timestamp, **kwargs):
+        # The tracker's scan context: accepted, as by the component path (which, like the
+        # stock initiator, does not pass it on: holding tracks are gated by distance).
+        kwargs.pop("detector_context", None)
         if type(detections) is not OrderedDetections:  # (already in order: not sorted again)
             detections = in_stable_order(detections)
         if self.skip_non_reversible:

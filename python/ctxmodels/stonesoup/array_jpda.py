@@ -96,7 +96,7 @@ from .fast_association import _copied_properties
 from .hypothesiser import PDAHypothesiser, is_detection_backed, scan_context
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiTargetMixtureTracker
-from .ordering import OrderedDetections, in_stable_order, in_track_order
+from .ordering import OrderedDetections, context_kwargs, in_stable_order, in_track_order
 
 _ASSOCIATORS = (JPDAwithEHM2, JPDAwithEHM, JPDA)
 _HYPOTHESISERS = (_StockPDAHypothesiser, PDAHypothesiser)
@@ -390,15 +390,17 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             self._append_states(time, tracks, priors, scan_result, out, prob_detect,
                                 hypothesiser)
             taken_mask = out["taken"]
-        # deletion, then the initiator on the detections no track took (as the stock loop)
-        self._tracks -= self._delete(self._tracks)
+        # deletion, then the initiator on the detections no track took (as the stock loop),
+        # each handed the scan's context as the component path hands it
+        forwarded = context_kwargs(detections)
+        self._tracks -= self._delete(self._tracks, forwarded)
         free = list(detections) if taken_mask is None else \
             [d for d, taken in zip(detections, taken_mask.tolist()) if not taken]
         if isinstance(self.initiator, ArrayMultiMeasurementInitiator):
             unassociated = OrderedDetections(free)  # still in stable order: not sorted again
         else:
             unassociated = set(free)  # what the stock loop hands over
-        new = self.initiator.initiate(unassociated, time)
+        new = self.initiator.initiate(unassociated, time, **forwarded)
         self._tracks |= new
         self._order.update(dict.fromkeys(in_track_order(new)))
         return time, self.tracks
@@ -652,10 +654,10 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         self._counters[track] = counter
         return counter
 
-    def _delete(self, tracks):
+    def _delete(self, tracks, forwarded):
         plan = self._deletion_plan()
         if plan is None:
-            return self.deleter.delete_tracks(tracks)
+            return self.deleter.delete_tracks(tracks, **forwarded)
         # each member's check, its parameters read once a scan, in the composite's order
         checks = []
         for kind, member, k in plan.members:

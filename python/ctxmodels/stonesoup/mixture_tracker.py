@@ -16,7 +16,11 @@ Gaussian (an update if some detection outweighs the missed detection, else a pre
 delete tracks; hand the detections no track took (those not outweighing the missed
 detection) to the initiator. The scan's ``detector_context`` (a
 :class:`~ctxmodels.DetectionSet`'s) stays with the ordered detections, so context-aware
-hypothesisers read it as before.
+hypothesisers read it as before, and is also handed to the data associator, the deleter
+and the initiator as the keyword ``detector_context`` (through the ``**kwargs`` Stone Soup
+threads through ``associate``, ``delete_tracks`` and ``initiate``; the stock components
+accept and ignore it, the associator passing it on to its hypothesiser), as the upstream
+DetectorContext proposal's trackers do.
 """
 from __future__ import annotations
 
@@ -32,7 +36,7 @@ from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
-from .ordering import in_stable_order, in_track_order
+from .ordering import context_kwargs, in_stable_order, in_track_order
 
 
 class MultiTargetMixtureTracker(_StockMixtureTracker):
@@ -61,7 +65,8 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
     def _scan(self, time, detections) -> tuple[datetime.datetime, set[Track]]:
         """One scan of the stock loop on ``detections`` already in stable order."""
         tracks = self.tracks_in_order
-        associations = self.data_associator.associate(tracks, detections, time)
+        forwarded = context_kwargs(detections)  # the scan's context, to every component
+        associations = self.data_associator.associate(tracks, detections, time, **forwarded)
         taken = set()
         for track in tracks:
             multihypothesis = associations.get(track)
@@ -71,8 +76,9 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
             missed_weight = next(hyp.weight for hyp in multihypothesis if not hyp)
             taken.update(id(hyp.measurement) for hyp in multihypothesis
                          if hyp and hyp.weight > missed_weight)
-        self._tracks -= self.deleter.delete_tracks(self._tracks)
-        new = self.initiator.initiate({d for d in detections if id(d) not in taken}, time)
+        self._tracks -= self.deleter.delete_tracks(self._tracks, **forwarded)
+        new = self.initiator.initiate({d for d in detections if id(d) not in taken}, time,
+                                      **forwarded)
         self._tracks |= new
         self._order.update(dict.fromkeys(in_track_order(new)))
         return time, self.tracks

@@ -176,5 +176,14 @@ def in_track_order(tracks: Iterable) -> list:
     return sorted(tracks, key=track_key)
 
 
-__all__ = ["OrderedDetections", "detection_key", "in_stable_order", "in_track_order",
-           "track_key"]
+def context_kwargs(detections) -> dict:
+    """``{"detector_context": context}`` for a scan whose detections carry a context, else
+    ``{}``: what a tracker adds to the keyword arguments Stone Soup threads through
+    ``hypothesise``, ``associate``, ``initiate`` and ``delete_tracks`` (the stock components
+    take ``**kwargs``; a scan without a context passes nothing, as the stock tracker)."""
+    context = getattr(detections, "detector_context", None)
+    return {} if context is None else {"detector_context": context}
+
+
+__all__ = ["OrderedDetections", "context_kwargs", "detection_key", "in_stable_order",
+           "in_track_order", "track_key"]

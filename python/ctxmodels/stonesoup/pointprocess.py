@@ -47,7 +47,7 @@ from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
 from ..context import DetectorContext
 from ..foreign import as_array_context
 from .birth import MeasurementDrivenBirth
-from .ordering import in_stable_order
+from .ordering import context_kwargs, in_stable_order
 
 _BIRTH = TaggedWeightedGaussianState.BIRTH
 
@@ -284,8 +284,10 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
     Each scan's context is read from ``detections.detector_context`` (a
     :class:`~ctxmodels.DetectionSet`) and passed to an updater whose ``update`` takes a
     ``detector_context`` (:class:`PHDUpdater`, :class:`LCCUpdater`), so a scan with *no*
-    detections still applies the context's P_D to every component. A stock updater, or a
-    plain ``set`` of detections, gives the stock tracker's behaviour exactly.
+    detections still applies the context's P_D to every component. The hypothesiser is
+    handed it too, as the keyword ``detector_context`` (the stock Gaussian-mixture
+    hypothesiser accepts and passes on keyword arguments). A stock updater, or a plain
+    ``set`` of detections, gives the stock tracker's behaviour exactly.
 
     Per scan :math:`k`: (1) the stock ``birth_component`` (if any) and the measurement-driven
     births that are due (see :class:`~ctxmodels.stonesoup.birth.MeasurementDrivenBirth`) join
@@ -404,8 +406,10 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             for component in entering:
                 self.gaussian_mixture.append(component)
 
+        # The scan's context goes to the hypothesiser whatever the updater takes (the
+        # stock ones accept and pass on keyword arguments).
         hypotheses = self.hypothesiser.hypothesise(
-            self.gaussian_mixture.components, detections, time)
+            self.gaussian_mixture.components, detections, time, **context_kwargs(detections))
         if use_context:
             self.gaussian_mixture = self.updater.update(hypotheses, detector_context=context)
         else:

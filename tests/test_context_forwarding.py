@@ -1,0 +1,150 @@
+"""ctxmodels' trackers hand each scan's detector context to every component, as the
+keyword ``detector_context`` that Stone Soup threads through ``hypothesise``,
+``associate``, ``initiate`` and ``delete_tracks`` (as the upstream DetectorContext
+proposal's trackers do): recording components see each scan's context, in scan order,
+and nothing on a scan without one. The numbers do not change (the stock-equivalence tests
+of each tracker run with contexts); the array paths stay array paths."""
+from __future__ import annotations
+
+import functools
+
+import pytest
+from stonesoup.dataassociator.probability import JPDA, JPDAwithEHM2
+from stonesoup.deleter.base import Deleter
+from stonesoup.hypothesiser.gaussianmixture import GaussianMixtureHypothesiser
+
+from ctxmodels import DetectionSet
+from ctxmodels.stonesoup import (ArrayJPDATracker, ArrayMultiMeasurementInitiator,
+                                 ArrayPointProcessTracker, MultiMeasurementInitiator,
+                                 MultiTargetMixtureTracker, PHDUpdater,
+                                 PointProcessMultiTargetTracker, UpdateTimeStepsDeleter)
+from test_stonesoup_jpda import (CLUTTER, PD, _tracker, constant_sensor, hypothesisers,
+                                 track_at)
+from test_stonesoup_jpda import tutorial_scans as jpda_scans
+from test_stonesoup_pointprocess import CLUTTER_DENSITY, constant_context, tutorial_tracker
+from test_stonesoup_pointprocess import tutorial_scans as phd_scans
+
+NONE = "no detector_context keyword"
+
+
+def _recording(base, method):
+    """A subclass of ``base`` whose ``method`` notes the ``detector_context`` keyword it
+    was given (NONE without one) in the instance's ``seen`` list."""
+    @functools.wraps(getattr(base, method))  # keeps the signature trackers inspect
+    def recorded(self, *args, **kwargs):
+        self.__dict__.setdefault("seen", []).append(kwargs.get("detector_context", NONE))
+        return getattr(super(cls, self), method)(*args, **kwargs)
+    cls = type(f"Recording{base.__name__}", (base,), {method: recorded})
+    return cls
+
+
+def _with_contexts(scans, make_context, plain=(2,)):
+    """Each scan as a DetectionSet with its own context object, except the scans at
+    ``plain`` (plain sets); the contexts in scan order (None for a plain scan)."""
+    fed, contexts = [], []
+    for k, (time, detections) in enumerate(scans):
+        if k in plain:
+            fed.append((time, set(detections)))
+            contexts.append(None)
+        else:
+            context = make_context(time)
+            fed.append((time, DetectionSet(detections, detector_context=context)))
+            contexts.append(context)
+    return fed, contexts
+
+
+def _expected(contexts):
+    return [NONE if c is None else c for c in contexts]
+
+
+@pytest.mark.parametrize("tracker_cls", [PointProcessMultiTargetTracker, ArrayPointProcessTracker])
+def test_point_process_trackers_hand_the_context_to_hypothesiser_and_updater(tracker_cls):
+    starts, scans = phd_scans(steps=6)
+    tracker = tutorial_tracker(tracker_cls, PHDUpdater, starts)
+    hypothesiser = tracker.hypothesiser
+    tracker.hypothesiser = _recording(GaussianMixtureHypothesiser, "hypothesise")(
+        hypothesiser.hypothesiser, order_by_detection=True)
+    tracker.updater = _recording(PHDUpdater, "update")(
+        tracker.updater.updater, clutter_spatial_density=CLUTTER_DENSITY,
+        prob_detection=0.9, prob_survival=1 - 0.005)
+    fed, contexts = _with_contexts(scans, lambda t: constant_context(0.9, CLUTTER_DENSITY, t))
+    for time, detections in fed:
+        tracker.update_tracker(time, detections)
+    assert tracker.hypothesiser.seen == _expected(contexts)
+    assert tracker.updater.seen == _expected(contexts)
+    assert len(tracker.tracks) > 0  # it tracked
+
+
+def _mixture_tracker(tracker_cls, initiator_cls, associator):
+    _, ours = hypothesisers(dict(clutter_spatial_density=CLUTTER, prob_detect=PD))
+    deleter = _recording(_NeverDeleter, "delete_tracks")()
+    tracker = _tracker(ours, deleter, associator=associator, tracker_cls=tracker_cls,
+                       initiator_cls=_recording(initiator_cls, "initiate"))
+    return tracker
+
+
+class _NeverDeleter(Deleter):
+    """A deleter no plan of the array tracker knows: it is called as a component."""
+
+    def check_for_deletion(self, track, **kwargs):
+        return False
+
+
+def _run_jpda(tracker):
+    sensor = constant_sensor()
+    fed, contexts = _with_contexts(jpda_scans(steps=8),
+                                   lambda t: sensor.context((0.0, 0.0, 0.0), t))
+    for time, detections in fed:
+        tracker.update_tracker(time, detections)
+    return contexts
+
+
+def test_mixture_tracker_hands_the_context_to_associator_deleter_and_initiator():
+    tracker = _mixture_tracker(MultiTargetMixtureTracker, MultiMeasurementInitiator,
+                               _recording(JPDA, "associate"))
+    contexts = _run_jpda(tracker)
+    expected = _expected(contexts)
+    assert tracker.data_associator.seen == expected
+    assert tracker.deleter.seen == expected
+    assert tracker.initiator.seen == expected
+    assert len(tracker.tracks) > 0
+
+
+def test_array_jpda_tracker_hands_the_context_on_and_stays_on_its_array_paths():
+    tracker = _mixture_tracker(ArrayJPDATracker, ArrayMultiMeasurementInitiator, JPDAwithEHM2)
+    contexts = _run_jpda(tracker)
+    expected = _expected(contexts)
+    assert tracker.deleter.seen == expected
+    assert tracker.initiator.seen == expected
+    # The context reached them on the array paths (one core call per scan), not by
+    # sending the scans to the component path.
+    assert tracker.array_scans == len(contexts) and tracker.component_scans == 0
+    assert tracker.initiator.array_calls == len(contexts)
+    assert tracker.initiator.component_calls == 0
+    assert len(tracker.tracks) > 0
+
+
+def test_stock_components_below_an_associator_take_the_keyword_unchanged():
+    """Forwarded into a stock JPDA over Stone Soup's own PDAHypothesiser, the keyword goes
+    down its predictor and updater calls (all ``**kwargs``) and changes nothing.
+    (ctxmodels' PDAHypothesiser reading it in preference to the detections' own context is
+    tested in test_stonesoup_jpda.)"""
+    stock_h, _ = hypothesisers(dict(clutter_spatial_density=CLUTTER, prob_detect=PD))
+    time, detections = jpda_scans(steps=2)[1]
+    tracks = [track_at(1.0, 1.0), track_at(2.0, 19.0)]
+    context = constant_sensor(pd=0.3).context((0.0, 0.0, 0.0), time)
+    forwarded = JPDA(stock_h).associate(tracks, set(detections), time, detector_context=context)
+    plain = JPDA(stock_h).associate(tracks, set(detections), time)
+    def key(hypotheses):
+        return [(h.measurement if h else "missed", float(h.probability)) for h in hypotheses]
+    for track in tracks:
+        assert key(forwarded[track]) == key(plain[track])
+        assert len(forwarded[track]) > 1  # a detection was in the gate
+
+
+def test_a_deleter_without_keywords_still_works_in_every_tracker():
+    """Forwarding goes through ``**kwargs``; a deleter of ctxmodels (or stock) takes it."""
+    tracker = _mixture_tracker(MultiTargetMixtureTracker, MultiMeasurementInitiator, JPDA)
+    tracker.deleter = UpdateTimeStepsDeleter(3)
+    _run_jpda(tracker)
+    assert len(tracker.tracks) > 0
