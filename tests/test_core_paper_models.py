@@ -205,8 +205,30 @@ def test_lambda_lidar_without_area_is_an_error():
     context = lidar_model().context(Pose(x=0.0, y=0.0), T0)
     model = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
     detection = Detection(StateVector([1.0, 2.0]), timestamp=T0, measurement_model=model, metadata={})
-    with pytest.raises(ValueError, match="metadata"):
+    with pytest.raises(ValueError, match="metadata: detection 0 has no 'area'"):
         context.clutter_spatial_density(detection)
+
+
+def test_experiment_lidar_needs_area_unless_told_what_to_do_without_it():
+    """The experiment's lidar clutter model has no silent default for a detection without
+    ``area`` (it would quietly turn the context-aware tracker into the P_D-aware one): an
+    error naming the key, unless ``lidar_missing_area`` gives its λ."""
+    from ctxmodels.experiment.sensors import paper_sensor_models
+    model = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
+    with_area = Detection(StateVector([1.0, 2.0]), timestamp=T0, measurement_model=model,
+                          metadata={"area": 3.0})
+    without = Detection(StateVector([1.0, 2.0]), timestamp=T0, measurement_model=model,
+                        metadata={"label": "car"})
+    strict = paper_sensor_models()["lidar"].context(Pose(x=0.0, y=0.0), T0)
+    assert strict.clutter_spatial_density(with_area) == 1e-1
+    with pytest.raises(ValueError, match="detection 1 has no 'area'.*set the rule's `missing`"):
+        strict.clutter_spatial_density_detections([with_area, without])
+    told = paper_sensor_models(lidar_missing_area=2e-3)["lidar"].context(Pose(x=0.0, y=0.0), T0)
+    np.testing.assert_array_equal(told.clutter_spatial_density_detections([with_area, without]),
+                                  [1e-1, 2e-3])
+    # The uniform model reads no metadata at all.
+    uniform = paper_sensor_models(clutter="uniform")["lidar"].context(Pose(x=0.0, y=0.0), T0)
+    assert uniform.clutter_spatial_density(without) == 1e-3
 
 
 # --- eq. lambda-radar --------------------------------------------------------------------------

@@ -116,9 +116,15 @@ class ClutterDensityModel(ModelComponent):
             i = mappings.index(False)
             raise TypeError(f"metadata: entry {i} is a {type(metadata[i]).__name__}; give every "
                             f"detection a mapping, or every detection a row")
+        required = {f.key for f in self.factors
+                    if isinstance(f, MetadataThreshold) and f.missing is None}
         rows = np.full((n, len(keys)), np.nan)
         for i, entry in enumerate(metadata):
             for k, key in enumerate(keys):
+                if key not in entry and key in required:
+                    raise ValueError(f"metadata: detection {i} has no {key!r}, and the clutter "
+                                     f"rule on {key!r} has no `missing` density; give every "
+                                     f"detection {key!r}, or set the rule's `missing`")
                 if key in entry:
                     value = entry[key]
                     if isinstance(value, (bool, np.bool_)) or not isinstance(

@@ -46,10 +46,16 @@ def radar_clutter() -> ClutterDensityModel:
     return ClutterDensityModel(factors=[RangeBands(edges=(1000.0,), values=(1e-3, 1e-2))])
 
 
-def lidar_clutter() -> ClutterDensityModel:
-    """eq. lambda-lidar: 1e-1 for segments with area < 10 m², 1e-3 otherwise."""
+def lidar_clutter(missing_area: float | None = None) -> ClutterDensityModel:
+    """eq. lambda-lidar: 1e-1 for segments with area < 10 m², 1e-3 otherwise.
+
+    The rule reads each detection's ``metadata['area']`` (m²), which the paper's lidar
+    reports for every segment (and the simulated one does). A detection without it has no
+    λ under the paper's equation: a ValueError naming ``'area'``, unless ``missing_area``
+    gives the λ to use for it. There is no silent default: one would quietly make the
+    context-aware tracker the P_D-aware one on data without areas."""
     return ClutterDensityModel(factors=[MetadataThreshold(
-        key="area", threshold=10.0, below=1e-1, at_or_above=1e-3, missing=1e-3)])
+        key="area", threshold=10.0, below=1e-1, at_or_above=1e-3, missing=missing_area)])
 
 
 def uniform_detection(pd: float = UNIFORM_PD) -> DetectionProbabilityModel:
@@ -62,18 +68,22 @@ def uniform_clutter(density: float = UNIFORM_CLUTTER) -> ClutterDensityModel:
 
 def paper_sensor_models(pd: str = "context", clutter: str = "context",
                         land: Sequence[np.ndarray] = (),
-                        pd_evaluation: str = "mean") -> dict[str, SensorModel]:
+                        pd_evaluation: str = "mean",
+                        lidar_missing_area: float | None = None) -> dict[str, SensorModel]:
     """Radar and lidar models of one tracker configuration.
 
     ``pd``/``clutter``: ``'uniform'`` (Table I constants) or ``'context'`` (the paper's
     equations). ``land`` adds land masking and line of sight to the radar's P_D (ours).
+    ``lidar_missing_area``: λ for a lidar detection without ``metadata['area']`` under the
+    context clutter model; None (the default) makes such a detection an error (see
+    :func:`lidar_clutter`).
     """
     if pd not in ("uniform", "context") or clutter not in ("uniform", "context"):
         raise ValueError(f"pd/clutter: must be 'uniform' or 'context', got {pd!r}/{clutter!r}")
     radar_pd = radar_detection(land) if pd == "context" else uniform_detection()
     lidar_pd = lidar_detection() if pd == "context" else uniform_detection()
     radar_lambda = radar_clutter() if clutter == "context" else uniform_clutter()
-    lidar_lambda = lidar_clutter() if clutter == "context" else uniform_clutter()
+    lidar_lambda = lidar_clutter(lidar_missing_area) if clutter == "context" else uniform_clutter()
     return {
         "radar": SensorModel(detection=radar_pd, clutter=radar_lambda, name="radar",
                              pd_evaluation=pd_evaluation),
