@@ -111,3 +111,14 @@ def test_dependency_range_admits_development_builds_of_1_9():
                 for v in ("1.8.3", "1.9.dev347", "1.9", "1.9.1", "1.12.0", "2.0.dev1", "2.0")}
     assert admitted == {"1.8.3": False, "1.9.dev347": True, "1.9": True, "1.9.1": True,
                         "1.12.0": True, "2.0.dev1": False, "2.0": False}
+
+
+def test_metadata_names_the_interfaces_it_plugs_into():
+    """Project URLs: Stone Soup and its DetectorContext pull request (no homepage is
+    claimed: the project has none yet)."""
+    from importlib.metadata import metadata
+
+    urls = dict(entry.split(", ", 1) for entry in metadata("ctxmodels").get_all("Project-URL"))
+    assert urls == {"Stone Soup": "https://stonesoup.readthedocs.io",
+                    "Stone Soup DetectorContext proposal":
+                        "https://github.com/dstl/Stone-Soup/pull/1291"}
