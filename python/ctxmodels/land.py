@@ -1,6 +1,8 @@
 """Land: polygon land masks (P_D 0 on land) and line-of-sight occlusion (radar shadow)."""
 from __future__ import annotations
 
+import json
+import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -80,6 +82,36 @@ class LandMask(ModelComponent):
         return self._cached("core", lambda: _core.LandMask(
             [(p["shell"], list(p["holes"])) for p in self.polygons]))
 
+    @classmethod
+    def from_geojson(cls, source, origin=None) -> "LandMask":
+        """Land from GeoJSON: a file path, a JSON string or a parsed mapping holding a
+        FeatureCollection, Feature, GeometryCollection, Polygon or MultiPolygon (every
+        polygon with its holes; other geometry types raise, naming where they are).
+
+        GeoJSON positions are [longitude, latitude] degrees (RFC 7946): give ``origin``
+        (longitude, latitude) and they are mapped to east/north metres around it
+        (:func:`ctxmodels.geo.lonlat_to_local`). Without ``origin`` the positions are taken
+        as x/y metres already (a projected file)."""
+        return cls(polygons=_project(_geojson_polygons(_read_geojson(source)), origin))
+
+    @classmethod
+    def from_shapely(cls, geometry, origin=None) -> "LandMask":
+        """Land from a shapely Polygon, MultiPolygon or GeometryCollection of polygons, with
+        holes. An invalid geometry raises :class:`ValueError` with shapely's reason. With
+        ``origin`` (longitude, latitude) the coordinates are longitude/latitude degrees,
+        mapped to east/north metres as in :meth:`from_geojson`."""
+        try:
+            import shapely
+        except ImportError:  # pragma: no cover - shapely is what the caller passes
+            raise TypeError("geometry: from_shapely needs shapely installed") from None
+        if not isinstance(geometry, shapely.Geometry):
+            raise TypeError(f"geometry: expected a shapely geometry, got "
+                            f"{type(geometry).__name__}")
+        if not geometry.is_valid:
+            from shapely.validation import explain_validity
+            raise ValueError(f"geometry: invalid ({explain_validity(geometry)})")
+        return cls(polygons=_project(_geojson_polygons(geometry.__geo_interface__), origin))
+
     @property
     def vertex_count(self) -> int:
         return self._compiled().vertex_count
@@ -88,6 +120,63 @@ class LandMask(ModelComponent):
         """Whether each (x, y) row of ``points`` is on land (boundary included). A NaN or
         infinite row raises :class:`ValueError`."""
         return self._compiled().contains(as_rows(points, "points", ncols=2))
+
+
+def _read_geojson(source) -> Mapping:
+    if isinstance(source, Mapping):
+        return source
+    if isinstance(source, (str, os.PathLike)):
+        text = str(source)
+        if isinstance(source, str) and text.lstrip().startswith("{"):
+            return json.loads(text)
+        with open(source, encoding="utf-8") as stream:
+            return json.load(stream)
+    raise TypeError(f"source: expected a GeoJSON path, string or mapping, got "
+                    f"{type(source).__name__}")
+
+
+def _geojson_polygons(geojson: Mapping, where: str = "source") -> list[list]:
+    """Every polygon of a GeoJSON object as a list of rings (shell first), in file order."""
+    kind = geojson.get("type") if isinstance(geojson, Mapping) else None
+    if kind == "FeatureCollection":
+        return [p for i, feature in enumerate(geojson.get("features", []))
+                for p in _geojson_polygons(feature, f"{where} feature {i}")]
+    if kind == "Feature":
+        geometry = geojson.get("geometry")
+        return [] if geometry is None else _geojson_polygons(geometry, where)
+    if kind == "GeometryCollection":
+        return [p for i, g in enumerate(geojson.get("geometries", []))
+                for p in _geojson_polygons(g, f"{where} geometry {i}")]
+    if kind == "Polygon":
+        return [geojson["coordinates"]]
+    if kind == "MultiPolygon":
+        return list(geojson["coordinates"])
+    raise ValueError(f"{where}: expected Polygon or MultiPolygon land (or a Feature, "
+                     f"FeatureCollection or GeometryCollection of them), got {kind!r}")
+
+
+def _project(polygons: list[list], origin) -> list[dict]:
+    """Rings as (K, 2) x/y arrays (the first two coordinates of each position), mapped
+    from longitude/latitude around ``origin`` when one is given."""
+    from .geo import lonlat_to_local
+
+    out = []
+    for i, rings in enumerate(polygons):
+        if not rings:
+            raise ValueError(f"polygons: polygon {i} has no rings")
+        arrays = []
+        for k, ring in enumerate(rings):
+            try:
+                xy = np.array([position[:2] for position in ring], dtype=np.float64)
+            except (TypeError, ValueError, IndexError):
+                raise ValueError(f"polygons: polygon {i} ring {k} is not a list of "
+                                 f"[x, y] positions") from None
+            if xy.ndim != 2 or xy.shape[1] != 2:
+                raise ValueError(f"polygons: polygon {i} ring {k} is not a list of "
+                                 f"[x, y] positions")
+            arrays.append(xy if origin is None else lonlat_to_local(xy, origin))
+        out.append({"shell": arrays[0], "holes": arrays[1:]})
+    return out
 
 
 class LineOfSight(ModelComponent):
