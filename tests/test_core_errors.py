@@ -176,9 +176,10 @@ def test_non_finite_clutter_inputs_name_their_argument_and_row():
     assert "row 40000" in raises(ValueError, "positions", CLUTTER.evaluate, POSE, positions, metadata)
     metadata[33_000] = np.nan  # missing, and the rule has no `missing` value
     assert "row 33000" in raises(ValueError, "metadata", CLUTTER.evaluate, POSE, positions, metadata)
-    # A missing key in a detection's metadata mapping is the same error.
+    # A missing key in a detection's metadata mapping: the same argument, the detection and
+    # the key named.
     message = raises(ValueError, "metadata", CLUTTER.evaluate, POSE, np.zeros((2, 2)), [{"area": 1.0}, {}])
-    assert "row 1" in message
+    assert "detection 1 has no 'area'" in message
 
 
 def test_clutter_reports_the_first_bad_row_whatever_the_problem():
