@@ -58,6 +58,16 @@ class SensorModel(ModelComponent):
         """The sensor's own pose on a platform at ``platform_pose``."""
         return platform_pose if self.mounting is None else self.mounting.apply(platform_pose)
 
+    @classmethod
+    def from_stonesoup(cls, sensor, prob_detection: float, clutter_density: float,
+                       *, name: str = "") -> "SensorModel":
+        """The model of a Stone Soup radar's coverage (range limit, rotating field of view)
+        with P_D ``prob_detection`` inside it and λ ``clutter_density``; its pose at a scan
+        is :func:`ctxmodels.stonesoup.sensor_pose`. See
+        :mod:`ctxmodels.stonesoup.sensor_adapter`."""
+        from .stonesoup.sensor_adapter import sensor_model_from_stonesoup
+        return sensor_model_from_stonesoup(sensor, prob_detection, clutter_density, name=name)
+
     def context(self, pose: Pose | Sequence[float], timestamp: datetime.datetime | None = None):
         """The :class:`~ctxmodels.DetectorContext` of a scan taken with the *platform* at
         ``pose`` (a :class:`Pose` or an (x, y, heading) triple)."""

@@ -43,6 +43,7 @@ from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracke
 from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
 from .pointprocess import CircularRegion, LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
+from .sensor_adapter import sensor_model_from_stonesoup, sensor_pose
 from .transition import CachedCombinedLinearGaussianTransitionModel
 
 __all__ = [
@@ -68,4 +69,6 @@ __all__ = [
     "UpdateTimeStepsDeleter",
     "in_stable_order",
     "in_track_order",
+    "sensor_model_from_stonesoup",
+    "sensor_pose",
 ]

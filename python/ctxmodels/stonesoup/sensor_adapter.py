@@ -1,0 +1,104 @@
+r"""Context models from Stone Soup's own sensors: coverage read off a radar, pose off its
+platform.
+
+A Stone Soup radar decides what it can detect with ``is_detectable(state)``: the target's
+range from the sensor at most ``max_range`` and, for the rotating radars, its bearing from
+the antenna within :math:`\pm` ``fov_angle``/2. :func:`sensor_model_from_stonesoup` turns
+that into a :class:`~ctxmodels.SensorModel` — P_D :math:`= p` inside the coverage and 0
+outside,
+
+.. math::
+    P_D(x; S) = p \cdot [\,r \le r_{\max}\,] \cdot
+        [\,|\beta - \beta_{\text{antenna}}| \le \theta_{\text{fov}}/2\,],
+
+with the range band owning its edge and the field of view its boundary, as
+``is_detectable`` does — and :func:`sensor_pose` reads the sensor's pose :math:`S` now:
+its position (platform position plus the rotated mounting offset) and heading (the
+platform's yaw plus the sensor's rotation offset, plus the dwell centre for a rotating
+radar, whose field of view turns with it). Ask for the pose at each scan, when the
+simulator or the platform has moved the sensor.
+
+Coverage is planar: a 3-D sensor (``RadarElevationBearingRange``) is read on the x/y
+plane of its ``position_mapping``, exact for targets at the sensor's height; roll or
+pitch would tilt the coverage out of the plane and raise. The clutter density is the
+caller's: Stone Soup's clutter models are generators, not densities in the detections'
+measurement space.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..clutter import ClutterDensityModel
+from ..detection import DetectionProbabilityModel
+from ..pose import Pose
+from ..range_bands import RangeBands
+from ..sector import AngularSector
+from ..sensor import SensorModel
+
+#: The Stone Soup sensor classes read here (by name, so the module imports without them).
+SUPPORTED = ("RadarBearingRange", "RadarRotatingBearingRange", "RadarBearing",
+             "RadarRotatingBearing", "RadarElevationBearingRange")
+
+
+def _kind(sensor) -> str:
+    for cls in type(sensor).__mro__:
+        if cls.__name__ in SUPPORTED and cls.__module__.startswith("stonesoup."):
+            return cls.__name__
+    raise TypeError(f"sensor: {type(sensor).__name__} is not a Stone Soup sensor read here; "
+                    f"supported: {', '.join(SUPPORTED)}")
+
+
+def _rotating(sensor) -> bool:
+    return _kind(sensor) in ("RadarRotatingBearingRange", "RadarRotatingBearing")
+
+
+def _planar_yaw(orientation, argument: str) -> float:
+    roll, pitch, yaw = (float(v) for v in np.asarray(orientation, dtype=float).ravel()[:3])
+    if roll != 0.0 or pitch != 0.0:
+        raise ValueError(f"{argument}: roll {roll} and pitch {pitch} rad tilt the coverage "
+                         f"out of the x/y plane; only a yaw is read")
+    return yaw
+
+
+def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: float,
+                                *, name: str = "") -> SensorModel:
+    """The :class:`~ctxmodels.SensorModel` of a Stone Soup radar: P_D ``prob_detection``
+    within its ``max_range`` (and rotating field of view), 0 outside; λ the constant
+    ``clutter_density``. Use it with :func:`sensor_pose` at each scan."""
+    _kind(sensor)
+    p = float(prob_detection)
+    if not 0.0 <= p <= 1.0:
+        raise ValueError(f"prob_detection: must lie in [0, 1], got {prob_detection!r}")
+    factors: list = [p]
+    max_range = float(sensor.max_range)
+    if math.isnan(max_range) or max_range < 0:
+        raise ValueError(f"sensor: max_range must be >= 0, got {sensor.max_range!r}")
+    if math.isfinite(max_range):
+        # r <= max_range is detectable: the edge belongs to the band below.
+        factors.append(RangeBands(edges=(max_range,), values=(1.0, 0.0), upper_owns=(False,)))
+    if _rotating(sensor):
+        fov = float(sensor.fov_angle)
+        if not fov > 0:
+            raise ValueError(f"sensor: fov_angle must be > 0, got {sensor.fov_angle!r}")
+        if fov < 2 * math.pi:
+            factors.append(AngularSector.field_of_view(0.0, fov))
+    mapping = tuple(int(m) for m in sensor.position_mapping[:2])
+    return SensorModel(detection=DetectionProbabilityModel(factors=factors),
+                       clutter=ClutterDensityModel(factors=[float(clutter_density)]),
+                       position_mapping=mapping, name=name)
+
+
+def sensor_pose(sensor) -> Pose:
+    """The pose of a Stone Soup sensor now: x/y of its position and the heading of its
+    boresight (the antenna's, for a rotating radar), counter-clockwise from +x."""
+    _kind(sensor)
+    position = np.asarray(sensor.position, dtype=float).ravel()
+    heading = _planar_yaw(sensor.orientation, "sensor orientation")
+    if _rotating(sensor):
+        heading += float(np.asarray(sensor.dwell_centre, dtype=float).ravel()[0])
+    return Pose(x=float(position[0]), y=float(position[1]), heading=heading)
+
+
+__all__ = ["SUPPORTED", "sensor_model_from_stonesoup", "sensor_pose"]
