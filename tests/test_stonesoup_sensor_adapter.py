@@ -21,7 +21,8 @@ from stonesoup.types.groundtruth import GroundTruthState
 from stonesoup.types.state import State
 
 from ctxmodels import SensorModel
-from ctxmodels.stonesoup import sensor_model_from_stonesoup, sensor_pose
+from ctxmodels.stonesoup import (PlatformContextFeeder, SensorPose, sensor_model_from_stonesoup,
+                                 sensor_pose)
 
 T0 = datetime.datetime(2026, 1, 1)
 N = 10_000
@@ -133,3 +134,68 @@ def test_what_cannot_be_read_raises_naming_it():
     _fixed(tilted)
     with pytest.raises(ValueError, match="roll .* tilt the coverage"):
         sensor_pose(tilted)
+
+
+def _simulation(steps=40, seed=7):
+    """Stone Soup's own simulation: targets from MultiTargetGroundTruthSimulator, a fixed
+    radar and a rotating one on a moving platform."""
+    from stonesoup.simulator.platform import PlatformDetectionSimulator
+    from stonesoup.simulator.simple import MultiTargetGroundTruthSimulator
+    from stonesoup.types.state import GaussianState
+
+    transition = CombinedLinearGaussianTransitionModel([ConstantVelocity(0.5)] * 2)
+    truths = MultiTargetGroundTruthSimulator(
+        transition_model=transition,
+        initial_state=GaussianState([[0], [0], [0], [0]], np.diag([400.0, 4.0, 400.0, 4.0]) ** 2,
+                                    timestamp=T0),
+        timestep=datetime.timedelta(seconds=1), number_steps=steps, birth_rate=0.4,
+        death_probability=0.02, seed=seed)
+    fixed = RadarBearingRange(ndim_state=4, position_mapping=(0, 2), noise_covar=np.eye(2),
+                              max_range=600, **MOUNT)
+    rotating = RadarRotatingBearingRange(ndim_state=4, position_mapping=(0, 2),
+                                         noise_covar=np.eye(2), dwell_centre=StateVector([0.0]),
+                                         rpm=10, fov_angle=math.radians(90), max_range=900)
+    fixed_platform = FixedPlatform(states=[State(StateVector([100.0, 0, -50.0, 0]), timestamp=T0)],
+                                   position_mapping=(0, 2), orientation=StateVector([0, 0, 0.7]),
+                                   sensors=[fixed])
+    moving_platform = _moving(rotating, steps=0)
+    simulator = PlatformDetectionSimulator(groundtruth=truths,
+                                           platforms=[fixed_platform, moving_platform])
+    return simulator, truths, [fixed, rotating]
+
+
+def test_platform_feeder_gives_each_scan_its_own_sensors_context():
+    """Every scan of Stone Soup's PlatformDetectionSimulator comes with the context of the
+    sensor that made it, at its pose then: P_D > 0 exactly at the live truths that sensor
+    could detect at that time; SensorPose reads the same pose."""
+    simulator, truths, sensors = _simulation()
+    models = [SensorModel.from_stonesoup(s, 0.8, 1e-5) for s in sensors]
+    feeder = PlatformContextFeeder(reader=simulator, sensor_models=models)
+    scans, checked, detected = [0, 0], 0, 0
+    for k, (time, scan) in enumerate(feeder):
+        sensor = sensors[k % 2]
+        scans[k % 2] += 1
+        assert scan.detector_context.pose == sensor_pose(sensor) == \
+            SensorPose(sensor=sensor).pose_at(time)
+        assert scan.detector_context.sensor_model is models[k % 2]
+        _, paths = truths.current
+        for path in paths:
+            state = path[-1]
+            assert state.timestamp == time
+            pd = scan.detector_context.prob_detection_array(
+                np.asarray(state.state_vector, dtype=float).reshape(1, -1))[0]
+            visible = bool(np.all(sensor.is_detectable(state)))
+            assert (pd > 0) == visible
+            checked, detected = checked + 1, detected + visible
+    assert scans == [40, 40] and checked > 100 and 0 < detected < checked  # 40 steps
+    with pytest.raises(ValueError, match="timestamp: the sensor's platform is at"):
+        SensorPose(sensor=sensors[1]).pose_at(T0)
+
+
+def test_platform_feeder_needs_one_model_per_sensor():
+    simulator, _, sensors = _simulation(steps=2)
+    with pytest.raises(ValueError, match="sensor_models: expected 2 SensorModels"):
+        PlatformContextFeeder(reader=simulator,
+                              sensor_models=[SensorModel.from_stonesoup(sensors[0], 0.8, 1e-5)])
+    with pytest.raises(TypeError, match="reader: expected a Stone Soup PlatformDetectionSimulator"):
+        PlatformContextFeeder(reader=[], sensor_models=[])

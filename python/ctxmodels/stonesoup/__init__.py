@@ -43,7 +43,8 @@ from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracke
 from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
 from .pointprocess import CircularRegion, LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
-from .sensor_adapter import sensor_model_from_stonesoup, sensor_pose
+from .sensor_adapter import (PlatformContextFeeder, SensorPose, sensor_model_from_stonesoup,
+                             sensor_pose)
 from .transition import CachedCombinedLinearGaussianTransitionModel
 
 __all__ = [
@@ -69,6 +70,8 @@ __all__ = [
     "UpdateTimeStepsDeleter",
     "in_stable_order",
     "in_track_order",
+    "PlatformContextFeeder",
+    "SensorPose",
     "sensor_model_from_stonesoup",
     "sensor_pose",
 ]

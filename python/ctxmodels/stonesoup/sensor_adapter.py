@@ -27,12 +27,18 @@ measurement space.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+from stonesoup.base import Property
+from stonesoup.buffered_generator import BufferedGenerator
+from stonesoup.feeder.base import DetectionFeeder
 
 from ..clutter import ClutterDensityModel
+from ..context import DetectionSet
 from ..detection import DetectionProbabilityModel
-from ..pose import Pose
+from ..pose import Pose, PoseSource
 from ..range_bands import RangeBands
 from ..sector import AngularSector
 from ..sensor import SensorModel
@@ -101,4 +107,66 @@ def sensor_pose(sensor) -> Pose:
     return Pose(x=float(position[0]), y=float(position[1]), heading=heading)
 
 
-__all__ = ["SUPPORTED", "sensor_model_from_stonesoup", "sensor_pose"]
+class SensorPose(PoseSource):
+    """The pose of a Stone Soup sensor at each scan, read off its platform as it moves: the
+    pose source of a :class:`~ctxmodels.stonesoup.ContextFeeder` over a Stone Soup
+    simulator, which moves the platform to a scan's time before it yields the scan. A scan
+    at another time than the platform's latest state raises (the pose there is unknown)."""
+
+    sensor: Any = Property(doc="A supported Stone Soup sensor, mounted on a platform.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        _kind(self.sensor)
+
+    def pose_at(self, timestamp=None) -> Pose:
+        platform_time = _platform_time(self.sensor)
+        if timestamp is not None and platform_time is not None and platform_time != timestamp:
+            raise ValueError(f"timestamp: the sensor's platform is at {platform_time}, not at "
+                             f"the scan time {timestamp}; read the pose when the simulator "
+                             f"yields the scan")
+        return sensor_pose(self.sensor)
+
+
+def _platform_time(sensor):
+    states = getattr(getattr(sensor, "movement_controller", None), "states", None)
+    return states[-1].timestamp if states else None
+
+
+class PlatformContextFeeder(DetectionFeeder):
+    r"""The scans of Stone Soup's :class:`~stonesoup.simulator.platform.PlatformDetectionSimulator`
+    (one per sensor per time step, platform by platform, sensor by sensor) as
+    :class:`~ctxmodels.DetectionSet`\ s, each with the context of the sensor that made it:
+    its ``sensor_models`` entry at the sensor's pose then (:func:`sensor_pose`)."""
+
+    sensor_models: Sequence[SensorModel] = Property(
+        doc="One model per sensor, in the simulator's order (its platforms, then each "
+            "platform's sensors); e.g. ``SensorModel.from_stonesoup(sensor, p, λ)``.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        sensors = self._sensors()
+        models = list(self.sensor_models)
+        if len(models) != len(sensors) or not all(isinstance(m, SensorModel) for m in models):
+            raise ValueError(f"sensor_models: expected {len(sensors)} SensorModels (one per "
+                             f"sensor of the simulator's platforms), got {len(models)}")
+        for sensor in sensors:
+            _kind(sensor)
+
+    def _sensors(self) -> list:
+        platforms = getattr(self.reader, "platforms", None)
+        if platforms is None:
+            raise TypeError(f"reader: expected a Stone Soup PlatformDetectionSimulator, got "
+                            f"{type(self.reader).__name__}")
+        return [sensor for platform in platforms for sensor in platform.sensors]
+
+    @BufferedGenerator.generator_method
+    def data_gen(self):
+        sensors, models = self._sensors(), list(self.sensor_models)
+        for k, (time, detections) in enumerate(self.reader):
+            sensor, model = sensors[k % len(sensors)], models[k % len(sensors)]
+            yield time, DetectionSet(detections, model.context(sensor_pose(sensor), time))
+
+
+__all__ = ["PlatformContextFeeder", "SUPPORTED", "SensorPose", "sensor_model_from_stonesoup",
+           "sensor_pose"]
