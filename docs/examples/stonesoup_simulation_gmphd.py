@@ -50,7 +50,9 @@ transition = CombinedLinearGaussianTransitionModel([ConstantVelocity(0.05)] * 2)
 
 
 def simulation():
-    """A fresh, seeded simulation (each tracker gets its own, the same one)."""
+    """A fresh, seeded simulation for each tracker. (Stone Soup's simulators hand the noise
+    draws to a *set* of paths, iterated in memory order, so the numbers below move a little
+    from process to process; the picture does not.)"""
     truths = MultiTargetGroundTruthSimulator(
         transition_model=transition,
         initial_state=GaussianState([[0], [0], [0], [0]], np.diag([900, 2, 900, 2]) ** 2,
@@ -60,7 +62,7 @@ def simulation():
     radar = RadarRotatingBearingRange(
         ndim_state=4, position_mapping=(0, 2), noise_covar=np.diag([math.radians(0.5), 5.0]) ** 2,
         dwell_centre=StateVector([0.0]), rpm=10, fov_angle=math.radians(60), max_range=5000,
-        seed=7)  # its measurement noise, seeded: the same run every time
+        seed=7)  # its measurement noise, seeded
     platform = FixedPlatform(states=[State(StateVector([-2500.0, 0, 0.0, 0]), timestamp=start)],
                              position_mapping=(0, 2), sensors=[radar])
     return truths, radar, PlatformDetectionSimulator(groundtruth=truths, platforms=[platform])
