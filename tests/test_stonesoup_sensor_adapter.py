@@ -134,6 +134,25 @@ def test_what_cannot_be_read_raises_naming_it():
     _fixed(tilted)
     with pytest.raises(ValueError, match="roll .* tilt the coverage"):
         sensor_pose(tilted)
+    # A subclass of a supported radar may add coverage rules (a rotating 3-D radar's field
+    # of view): refused, not read as its parent.
+    from stonesoup.sensor.radar.radar import RadarRotatingElevationBearingRange
+    rotating_3d = RadarRotatingElevationBearingRange(
+        ndim_state=6, position_mapping=(0, 2, 4), noise_covar=np.eye(3), max_range=800,
+        dwell_centre=StateVector([0.0]), tilt_centre=StateVector([0.0]), rpm=20,
+        vertical_extent=math.radians(10),
+        fov_angle=math.radians(60))
+    with pytest.raises(TypeError, match="RadarRotatingElevationBearingRange is not a Stone"):
+        sensor_model_from_stonesoup(rotating_3d, 0.9, 1e-4)
+    unmounted = RadarBearingRange(ndim_state=4, position_mapping=(0, 2), noise_covar=np.eye(2),
+                                  max_range=800)
+    with pytest.raises(ValueError, match="sensor: has no position or orientation"):
+        sensor_pose(unmounted)
+    blocked = _fixed(RadarBearingRange(ndim_state=4, position_mapping=(0, 2),
+                                       noise_covar=np.eye(2), max_range=800))
+    blocked.obstacles = ["a wall"]  # any obstacle: its occlusion would be dropped
+    with pytest.raises(ValueError, match="sensor: has obstacles"):
+        sensor_model_from_stonesoup(blocked, 0.9, 1e-4)
 
 
 def _simulation(steps=40, seed=7):
@@ -199,3 +218,9 @@ def test_platform_feeder_needs_one_model_per_sensor():
                               sensor_models=[SensorModel.from_stonesoup(sensors[0], 0.8, 1e-5)])
     with pytest.raises(TypeError, match="reader: expected a Stone Soup PlatformDetectionSimulator"):
         PlatformContextFeeder(reader=[], sensor_models=[])
+    from ctxmodels import Mounting
+    mounted = [SensorModel.from_stonesoup(s, 0.8, 1e-5) for s in sensors]
+    mounted[1] = SensorModel(detection=mounted[1].detection, clutter=mounted[1].clutter,
+                             mounting=Mounting(forward=5.0))
+    with pytest.raises(ValueError, match="sensor_models: the sensors' poses already hold"):
+        PlatformContextFeeder(reader=simulator, sensor_models=mounted)

@@ -392,15 +392,15 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             taken_mask = out["taken"]
         # deletion, then the initiator on the detections no track took (as the stock loop),
         # each handed the scan's context as the component path hands it
-        forwarded = context_kwargs(detections)
-        self._tracks -= self._delete(self._tracks, forwarded)
+        self._tracks -= self._delete(self._tracks, detections)
         free = list(detections) if taken_mask is None else \
             [d for d, taken in zip(detections, taken_mask.tolist()) if not taken]
         if isinstance(self.initiator, ArrayMultiMeasurementInitiator):
             unassociated = OrderedDetections(free)  # still in stable order: not sorted again
         else:
             unassociated = set(free)  # what the stock loop hands over
-        new = self.initiator.initiate(unassociated, time, **forwarded)
+        new = self.initiator.initiate(unassociated, time,
+                                      **context_kwargs(detections, self.initiator.initiate))
         self._tracks |= new
         self._order.update(dict.fromkeys(in_track_order(new)))
         return time, self.tracks
@@ -654,10 +654,12 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         self._counters[track] = counter
         return counter
 
-    def _delete(self, tracks, forwarded):
+    def _delete(self, tracks, detections):
         plan = self._deletion_plan()
         if plan is None:
-            return self.deleter.delete_tracks(tracks, **forwarded)
+            deleter = self.deleter
+            return deleter.delete_tracks(tracks,
+                                         **context_kwargs(detections, deleter.delete_tracks))
         # each member's check, its parameters read once a scan, in the composite's order
         checks = []
         for kind, member, k in plan.members:

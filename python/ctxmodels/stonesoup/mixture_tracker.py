@@ -17,10 +17,9 @@ delete tracks; hand the detections no track took (those not outweighing the miss
 detection) to the initiator. The scan's ``detector_context`` (a
 :class:`~ctxmodels.DetectionSet`'s) stays with the ordered detections, so context-aware
 hypothesisers read it as before, and is also handed to the data associator, the deleter
-and the initiator as the keyword ``detector_context`` (through the ``**kwargs`` Stone Soup
-threads through ``associate``, ``delete_tracks`` and ``initiate``; the stock components
-accept and ignore it, the associator passing it on to its hypothesiser), as the upstream
-DetectorContext proposal's trackers do.
+and the initiator as the keyword ``detector_context`` when they declare that parameter
+(see :func:`~ctxmodels.stonesoup.ordering.context_kwargs`), as the upstream
+DetectorContext proposal's trackers hand it on; stock components are called as stock.
 """
 from __future__ import annotations
 
@@ -65,8 +64,10 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
     def _scan(self, time, detections) -> tuple[datetime.datetime, set[Track]]:
         """One scan of the stock loop on ``detections`` already in stable order."""
         tracks = self.tracks_in_order
-        forwarded = context_kwargs(detections)  # the scan's context, to every component
-        associations = self.data_associator.associate(tracks, detections, time, **forwarded)
+        associator, deleter, initiator = self.data_associator, self.deleter, self.initiator
+        # the scan's context, to each component that declares a detector_context parameter
+        associations = associator.associate(tracks, detections, time,
+                                            **context_kwargs(detections, associator.associate))
         taken = set()
         for track in tracks:
             multihypothesis = associations.get(track)
@@ -76,9 +77,10 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
             missed_weight = next(hyp.weight for hyp in multihypothesis if not hyp)
             taken.update(id(hyp.measurement) for hyp in multihypothesis
                          if hyp and hyp.weight > missed_weight)
-        self._tracks -= self.deleter.delete_tracks(self._tracks, **forwarded)
-        new = self.initiator.initiate({d for d in detections if id(d) not in taken}, time,
-                                      **forwarded)
+        self._tracks -= deleter.delete_tracks(
+            self._tracks, **context_kwargs(detections, deleter.delete_tracks))
+        new = initiator.initiate({d for d in detections if id(d) not in taken}, time,
+                                 **context_kwargs(detections, initiator.initiate))
         self._tracks |= new
         self._order.update(dict.fromkeys(in_track_order(new)))
         return time, self.tracks

@@ -18,6 +18,8 @@ model, so they are interchangeable: which comes first changes no number.
 """
 from __future__ import annotations
 
+import inspect
+
 from collections.abc import Iterable
 
 import numpy as np
@@ -176,14 +178,38 @@ def in_track_order(tracks: Iterable) -> list:
     return sorted(tracks, key=track_key)
 
 
-def context_kwargs(detections) -> dict:
-    """``{"detector_context": context}`` for a scan whose detections carry a context, else
-    ``{}``: what a tracker adds to the keyword arguments Stone Soup threads through
-    ``hypothesise``, ``associate``, ``initiate`` and ``delete_tracks`` (the stock components
-    take ``**kwargs``; a scan without a context passes nothing, as the stock tracker)."""
+def context_kwargs(detections, method) -> dict:
+    """``{"detector_context": context}`` when the scan's detections carry a context and the
+    component ``method`` (a bound ``hypothesise``, ``associate``, ``initiate`` or
+    ``delete_tracks``) declares a ``detector_context`` parameter; else ``{}``.
+
+    A component opts in by naming the parameter. Stock Stone Soup components, which take
+    only ``**kwargs``, are called as the stock tracker calls them: their keyword arguments
+    travel on into predictors, transition and measurement models, and some of those were
+    not written for it (1.9.1's ``CompositeHypothesiser`` takes no ``**kwargs``; cached
+    transition models and ``predict_lru_cache`` would key on the context)."""
     context = getattr(detections, "detector_context", None)
-    return {} if context is None else {"detector_context": context}
+    if context is None or not declares_context(method):
+        return {}
+    return {"detector_context": context}
 
 
-__all__ = ["OrderedDetections", "context_kwargs", "detection_key", "in_stable_order",
-           "in_track_order", "track_key"]
+_DECLARES: dict = {}
+
+
+def declares_context(method) -> bool:
+    """Whether ``method``'s signature names a ``detector_context`` parameter (cached per
+    function)."""
+    function = getattr(method, "__func__", method)
+    found = _DECLARES.get(function)
+    if found is None:
+        try:
+            found = "detector_context" in inspect.signature(function).parameters
+        except (TypeError, ValueError):
+            found = False
+        _DECLARES[function] = found
+    return found
+
+
+__all__ = ["OrderedDetections", "context_kwargs", "declares_context", "detection_key",
+           "in_stable_order", "in_track_order", "track_key"]

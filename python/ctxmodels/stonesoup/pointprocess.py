@@ -284,10 +284,9 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
     Each scan's context is read from ``detections.detector_context`` (a
     :class:`~ctxmodels.DetectionSet`) and passed to an updater whose ``update`` takes a
     ``detector_context`` (:class:`PHDUpdater`, :class:`LCCUpdater`), so a scan with *no*
-    detections still applies the context's P_D to every component. The hypothesiser is
-    handed it too, as the keyword ``detector_context`` (the stock Gaussian-mixture
-    hypothesiser accepts and passes on keyword arguments). A stock updater, or a plain
-    ``set`` of detections, gives the stock tracker's behaviour exactly.
+    detections still applies the context's P_D to every component. A hypothesiser whose
+    ``hypothesise`` declares a ``detector_context`` parameter is handed it too. A stock
+    updater, or a plain ``set`` of detections, gives the stock tracker's behaviour exactly.
 
     Per scan :math:`k`: (1) the stock ``birth_component`` (if any) and the measurement-driven
     births that are due (see :class:`~ctxmodels.stonesoup.birth.MeasurementDrivenBirth`) join
@@ -406,10 +405,11 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             for component in entering:
                 self.gaussian_mixture.append(component)
 
-        # The scan's context goes to the hypothesiser whatever the updater takes (the
-        # stock ones accept and pass on keyword arguments).
-        hypotheses = self.hypothesiser.hypothesise(
-            self.gaussian_mixture.components, detections, time, **context_kwargs(detections))
+        # The scan's context goes to a hypothesiser that declares detector_context.
+        hypothesiser = self.hypothesiser
+        hypotheses = hypothesiser.hypothesise(
+            self.gaussian_mixture.components, detections, time,
+            **context_kwargs(detections, hypothesiser.hypothesise))
         if use_context:
             self.gaussian_mixture = self.updater.update(hypotheses, detector_context=context)
         else:

@@ -49,10 +49,16 @@ SUPPORTED = ("RadarBearingRange", "RadarRotatingBearingRange", "RadarBearing",
 
 
 def _kind(sensor) -> str:
-    for cls in type(sensor).__mro__:
-        if cls.__name__ in SUPPORTED and cls.__module__.startswith("stonesoup."):
-            return cls.__name__
-    raise TypeError(f"sensor: {type(sensor).__name__} is not a Stone Soup sensor read here; "
+    """The sensor's class name, which must be one of :data:`SUPPORTED` exactly: a subclass
+    (``RadarRotatingElevationBearingRange``, a range-rate radar, a user's own) may add
+    coverage rules these models would silently drop."""
+    cls = type(sensor)
+    if cls.__name__ in SUPPORTED and cls.__module__.startswith("stonesoup."):
+        if getattr(sensor, "obstacles", None):
+            raise ValueError("sensor: has obstacles, whose occlusion is not read here; use a "
+                             "ctxmodels LandMask/LineOfSight for what blocks the view")
+        return cls.__name__
+    raise TypeError(f"sensor: {cls.__name__} is not a Stone Soup sensor read here; "
                     f"supported: {', '.join(SUPPORTED)}")
 
 
@@ -100,6 +106,8 @@ def sensor_pose(sensor) -> Pose:
     """The pose of a Stone Soup sensor now: x/y of its position and the heading of its
     boresight (the antenna's, for a rotating radar), counter-clockwise from +x."""
     _kind(sensor)
+    if sensor.position is None or sensor.orientation is None:
+        raise ValueError("sensor: has no position or orientation; mount it on a platform")
     position = np.asarray(sensor.position, dtype=float).ravel()
     heading = _planar_yaw(sensor.orientation, "sensor orientation")
     if _rotating(sensor):
@@ -111,7 +119,9 @@ class SensorPose(PoseSource):
     """The pose of a Stone Soup sensor at each scan, read off its platform as it moves: the
     pose source of a :class:`~ctxmodels.stonesoup.ContextFeeder` over a Stone Soup
     simulator, which moves the platform to a scan's time before it yields the scan. A scan
-    at another time than the platform's latest state raises (the pose there is unknown)."""
+    at another time than the platform's latest state raises (the pose there is unknown).
+    It is the *sensor's* pose, mounting included: pair it with a sensor model without a
+    ``mounting``."""
 
     sensor: Any = Property(doc="A supported Stone Soup sensor, mounted on a platform.")
 
@@ -150,6 +160,9 @@ class PlatformContextFeeder(DetectionFeeder):
         if len(models) != len(sensors) or not all(isinstance(m, SensorModel) for m in models):
             raise ValueError(f"sensor_models: expected {len(sensors)} SensorModels (one per "
                              f"sensor of the simulator's platforms), got {len(models)}")
+        if any(m.mounting is not None for m in models):
+            raise ValueError("sensor_models: the sensors' poses already hold their mounting "
+                             "offsets; give models without a mounting")
         for sensor in sensors:
             _kind(sensor)
 
