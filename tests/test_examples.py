@@ -40,3 +40,8 @@ def test_example_runs(example, tmp_path):
         for text in (output, _run(example, tmp_path, hash_seed="4242")):
             stock, context, truth = map(float, re.findall(r"(\d+\.\d+)", text.splitlines()[-1]))
             assert truth == 4.0 and context >= 3.0 and stock <= 1.0, text  # seen: 3.57–4.03, 0–0.17
+    if example.stem == "coastline_from_geojson":
+        lines = output.splitlines()
+        assert lines[0] == "2 polygons, 108 vertices, 1 hole", output
+        hidden = float(re.search(r"(\d+\.\d+)%", lines[1]).group(1))
+        assert 5.0 < hidden < 20.0, output  # land and shadow of two islands within 2 km
