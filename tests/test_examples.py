@@ -40,6 +40,15 @@ def test_example_runs(example, tmp_path):
         for text in (output, _run(example, tmp_path, hash_seed="4242")):
             stock, context, truth = map(float, re.findall(r"(\d+\.\d+)", text.splitlines()[-1]))
             assert truth == 4.0 and context >= 3.0 and stock <= 1.0, text  # seen: 3.57–4.03, 0–0.17
+    if example.stem == "paper_sensor_models":
+        assert output.splitlines() == [
+            "500 m ahead: radar 0.40, lidar 0.00, either 0.400",
+            "500 m astern: radar 0.00, lidar 0.00, either 0.000",
+            "30 m ahead: radar 0.00, lidar 0.95, either 0.950",
+            "60 m ahead: radar 0.40, lidar 0.20, either 0.520",
+            "lidar λ for areas 2.5 and 30 m²: 0.1, 0.001"], output
+    if example.stem == "monte_carlo_on_dask":
+        assert output.splitlines()[0] == "6 runs; identical to the process pool's: True", output
     if example.stem == "coastline_from_geojson":
         lines = output.splitlines()
         assert lines[0] == "2 polygons, 108 vertices, 1 hole", output
