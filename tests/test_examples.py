@@ -49,6 +49,12 @@ def test_example_runs(example, tmp_path):
             "lidar λ for areas 2.5 and 30 m²: 0.1, 0.001"], output
     if example.stem == "monte_carlo_on_dask":
         assert output.splitlines()[0] == "6 runs; identical to the process pool's: True", output
+    if example.stem == "jpda_expected_misses":
+        assert output.splitlines() == [
+            "stock: 2 track(s) over the run, 1 alive at the end, started at 28 s, 2 m from the target",
+            "expected misses: 1 track(s) over the run, 1 alive at the end, started at 3 s, "
+            "2 m from the target"], output
+        assert _run(example, tmp_path, hash_seed="4242") == output  # ctxmodels' order: by value
     if example.stem == "coastline_from_geojson":
         lines = output.splitlines()
         assert lines[0] == "2 polygons, 108 vertices, 1 hole", output
