@@ -55,6 +55,12 @@ def test_example_runs(example, tmp_path):
             "expected misses: 1 track(s) over the run, 1 alive at the end, started at 3 s, "
             "2 m from the target"], output
         assert _run(example, tmp_path, hash_seed="4242") == output  # ctxmodels' order: by value
+    if example.stem == "bernoulli_particles":
+        assert output.splitlines() == [
+            "existence probability 9 s after leaving coverage: P_D 0.95 everywhere 0.001, "
+            "with the coverage 0.990",
+            "context-aware estimate 3 m from the target, 78 m from the sensor"], output
+        assert _run(example, tmp_path, hash_seed="4242") == output
     if example.stem == "coastline_from_geojson":
         lines = output.splitlines()
         assert lines[0] == "2 polygons, 108 vertices, 1 hole", output
