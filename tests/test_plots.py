@@ -2,13 +2,12 @@
 the matplotlib Figure before saving; that each writes a PNG, on small synthetic inputs."""
 import math
 
+import matplotlib  # noqa: F401 (a test dependency: without it these tests fail, not skip)
 import numpy as np
 import pytest
 
-pytest.importorskip("matplotlib")
-
-from ctxmodels.experiment import plots, summary_plots  # noqa: E402
-from ctxmodels.experiment.plots import Polyline, classify_tracks, inlier_mask  # noqa: E402
+from ctxmodels.experiment import plots, summary_plots
+from ctxmodels.experiment.plots import Polyline, classify_tracks, inlier_mask
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

@@ -55,8 +55,8 @@ from ..context import detection_positions
 from ..foreign import as_array_context
 from .array_plan import _Plan
 from .fast import ObjectFactory, plain_track_lists
-from .ordering import in_stable_order
-from .pointprocess import CircularRegion, PointProcessMultiTargetTracker, _accepts_context
+from .ordering import declares_context, in_stable_order
+from .pointprocess import CircularRegion, PointProcessMultiTargetTracker
 
 _BIRTH_NAME = TaggedWeightedGaussianState.BIRTH
 _BIRTH = 0  # the core's birth tag
@@ -237,7 +237,7 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
         when the core cannot run this scan."""
         context = getattr(detections, "detector_context", None)
         ordered = in_stable_order(detections)
-        if context is not None and not _accepts_context(self.updater):
+        if context is not None and not declares_context(self.updater.update):
             context = None
         if context is not None:
             context = as_array_context(context, "prob_detection_array",

@@ -18,6 +18,7 @@ model, so they are interchangeable: which comes first changes no number.
 """
 from __future__ import annotations
 
+import functools
 import inspect
 
 from collections.abc import Iterable
@@ -194,21 +195,17 @@ def context_kwargs(detections, method) -> dict:
     return {"detector_context": context}
 
 
-_DECLARES: dict = {}
-
-
 def declares_context(method) -> bool:
-    """Whether ``method``'s signature names a ``detector_context`` parameter (cached per
-    function)."""
-    function = getattr(method, "__func__", method)
-    found = _DECLARES.get(function)
-    if found is None:
-        try:
-            found = "detector_context" in inspect.signature(function).parameters
-        except (TypeError, ValueError):
-            found = False
-        _DECLARES[function] = found
-    return found
+    """Whether ``method``'s signature names a ``detector_context`` parameter."""
+    return _names_context(getattr(method, "__func__", method))
+
+
+@functools.lru_cache(maxsize=None)
+def _names_context(function) -> bool:
+    try:
+        return "detector_context" in inspect.signature(function).parameters
+    except (TypeError, ValueError):
+        return False
 
 
 __all__ = ["OrderedDetections", "context_kwargs", "declares_context", "detection_key",

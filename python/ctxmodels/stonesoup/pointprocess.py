@@ -26,8 +26,6 @@ gates at least one component in one
 from __future__ import annotations
 
 import datetime
-import functools
-import inspect
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -47,7 +45,7 @@ from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
 from ..context import DetectorContext
 from ..foreign import as_array_context
 from .birth import MeasurementDrivenBirth
-from .ordering import context_kwargs, in_stable_order
+from .ordering import context_kwargs, declares_context, in_stable_order
 
 _BIRTH = TaggedWeightedGaussianState.BIRTH
 
@@ -266,18 +264,6 @@ class CircularRegion(Base):
         return np.einsum("ij,ij->i", offsets, offsets) <= self.radius ** 2
 
 
-@functools.lru_cache(maxsize=None)
-def _update_takes_context(updater_type: type) -> bool:
-    try:
-        return "detector_context" in inspect.signature(updater_type.update).parameters
-    except (TypeError, ValueError):
-        return False
-
-
-def _accepts_context(updater) -> bool:
-    return _update_takes_context(type(updater))
-
-
 class PointProcessMultiTargetTracker(_StockPointProcessTracker):
     r"""The stock GM point-process tracker (GM-PHD / GM-LCC), fed scan contexts.
 
@@ -393,7 +379,7 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         # Detections in value order, not set (address) order: hypothesis order, and so the
         # merge order among equal weights, is then the same in every process.
         detections = in_stable_order(detections)
-        use_context = context is not None and _accepts_context(self.updater)
+        use_context = context is not None and declares_context(self.updater.update)
         if not use_context:
             context = None
 

@@ -62,8 +62,8 @@ def _kind(sensor) -> str:
                     f"supported: {', '.join(SUPPORTED)}")
 
 
-def _rotating(sensor) -> bool:
-    return _kind(sensor) in ("RadarRotatingBearingRange", "RadarRotatingBearing")
+#: The supported sensors whose field of view turns with the antenna's dwell centre.
+ROTATING = ("RadarRotatingBearingRange", "RadarRotatingBearing")
 
 
 def _planar_yaw(orientation, argument: str) -> float:
@@ -79,7 +79,7 @@ def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: 
     """The :class:`~ctxmodels.SensorModel` of a Stone Soup radar: P_D ``prob_detection``
     within its ``max_range`` (and rotating field of view), 0 outside; λ the constant
     ``clutter_density``. Use it with :func:`sensor_pose` at each scan."""
-    _kind(sensor)
+    kind = _kind(sensor)
     p = float(prob_detection)
     if not 0.0 <= p <= 1.0:
         raise ValueError(f"prob_detection: must lie in [0, 1], got {prob_detection!r}")
@@ -90,7 +90,7 @@ def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: 
     if math.isfinite(max_range):
         # r <= max_range is detectable: the edge belongs to the band below.
         factors.append(RangeBands(edges=(max_range,), values=(1.0, 0.0), upper_owns=(False,)))
-    if _rotating(sensor):
+    if kind in ROTATING:
         fov = float(sensor.fov_angle)
         if not fov > 0:
             raise ValueError(f"sensor: fov_angle must be > 0, got {sensor.fov_angle!r}")
@@ -105,12 +105,12 @@ def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: 
 def sensor_pose(sensor) -> Pose:
     """The pose of a Stone Soup sensor now: x/y of its position and the heading of its
     boresight (the antenna's, for a rotating radar), counter-clockwise from +x."""
-    _kind(sensor)
+    kind = _kind(sensor)
     if sensor.position is None or sensor.orientation is None:
         raise ValueError("sensor: has no position or orientation; mount it on a platform")
     position = np.asarray(sensor.position, dtype=float).ravel()
     heading = _planar_yaw(sensor.orientation, "sensor orientation")
-    if _rotating(sensor):
+    if kind in ROTATING:
         heading += float(np.asarray(sensor.dwell_centre, dtype=float).ravel()[0])
     return Pose(x=float(position[0]), y=float(position[1]), heading=heading)
 
