@@ -420,7 +420,7 @@ def test_array_initiator_on_the_scenarios_radar_and_lidar_scans_bit_for_bit():
     reference = _component(trackers.build_tracker(trackers.TRACKERS["jpda"], run)).initiator
     ours = _array_initiator(reference)
     released = 0
-    for time, detections in trackers._detector(trackers.TRACKERS["jpda"], run):
+    for time, detections in trackers.build_tracker(trackers.TRACKERS["jpda"], run).detector:
         a, b = ours.initiate(set(detections), time), reference.initiate(set(detections), time)
         assert [_states(t) for t in in_track_order(a)] == [_states(t) for t in in_track_order(b)]
         released += len(a)

@@ -31,14 +31,17 @@ indefinite; the radar's bearing–range model has its closed-form Jacobian.
 
 GM-PHD (all variants): gate Mahalanobis < 3, measurement-driven birth with weight 1e-4,
 survival 1, prune 1e-6, merge at Mahalanobis < 4 (squared distance 16), extraction 0.85,
-a circular surveillance region (radar range + 500 m around the ego's path) so that
-components outside all coverage (P_D = 0, never decaying) cannot accumulate, and a bound on
+a surveillance region that follows the ego (at each scan, the disc of the radar's reach,
+1612 m, plus 500 m around it: :class:`~ctxmodels.stonesoup.PoseCentredRegion`) so that
+components outside all coverage (P_D = 0, never decaying) cannot accumulate — the margin
+keeps a target that has just left the radar's reach for as long as it could still return
+(at ≤ 10 m/s relative speed, ~50 s, about when the uncertainty bound drops it), and a bound on
 position uncertainty (RMS x/y σ ≤ 200 m) so that components unseen inside it (blind sector)
 cannot grow into ghosts that the reducer merges real tracks into (see
 :class:`~ctxmodels.stonesoup.PointProcessMultiTargetTracker`). They differ
 only in P_D and λ: uniform (0.4, 1e-3 for both sensors, stock components on plain
 detection sets), radar-only (the same on radar scans only), P_D-aware (eqs. pd-lidar,
-pd-radar; λ 1e-3), context-aware (eqs. pd-* and lambda-*) and, on the islands scenario,
+pd-radar; λ 1e-3), context-aware (eqs. ``pd-*`` and ``lambda-*``) and, on the islands scenario,
 line-of-sight-aware (context-aware plus land mask and radar shadow in the radar's P_D).
 
 Reported tracks are Stone Soup's: a GM-PHD track is created when a component's weight
@@ -47,6 +50,8 @@ component survives; the metrics look at the states at radar timestamps.
 """
 from __future__ import annotations
 
+import math
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,8 +68,10 @@ from stonesoup.types.state import GaussianState
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 from stonesoup.updater.pointprocess import PHDUpdater as StockPHDUpdater
 
-from ..pose import NavigationTrack
-from .sensors import UNIFORM_CLUTTER, UNIFORM_PD, paper_sensor_models
+from .. import LandMask, LineOfSight, RangeBands, SensorModel
+from ..pose import NavigationTrack, PoseSource
+from ..stonesoup.region import PoseCentredRegion
+from .sensors import UNIFORM_CLUTTER, UNIFORM_PD, paper_sensor_models, uniform_clutter
 
 SIGMA_ACC = 0.8
 INIT_STD = np.array([10.0, 15.0, 10.0, 15.0])
@@ -97,7 +104,8 @@ class TrackerSpec:
     label: str
     description: str
     family: str  # "jpda" | "gmphd"
-    sensors: tuple[str, ...] = ("radar", "lidar")
+    #: Tracks on the primary (long-range) sensor's scans only (the radar-only baseline).
+    primary_only: bool = False
     pd: str = "uniform"  # "uniform" | "context"
     clutter: str = "uniform"
     line_of_sight: bool = False
@@ -121,7 +129,7 @@ TRACKERS: dict[str, TrackerSpec] = {spec.name: spec for spec in (
     TrackerSpec("gmphd-uniform", "GM-PHD (uniform)", "global P_D 0.4, λ 1e-3 for both sensors",
                 "gmphd", cost=1.0),
     TrackerSpec("gmphd-radar-only", "GM-PHD (radar-only)", "radar scans only, global P_D/λ",
-                "gmphd", sensors=("radar",), cost=0.6),
+                "gmphd", primary_only=True, cost=0.6),
     TrackerSpec("gmphd-pd-aware", "GM-PHD (P_D-aware)", "P_D per eqs. pd-lidar/pd-radar, λ 1e-3",
                 "gmphd", pd="context", cost=4.5),
     TrackerSpec("gmphd-context", "GM-PHD (context-aware)", "P_D and λ per the paper's equations",
@@ -169,41 +177,126 @@ class _ScanReader:
         return ((scan.timestamp, set(scan.detections)) for scan in self.scans)
 
 
-def _detector(spec: TrackerSpec, run):
-    """The tracker's input: both sensors' scans in time order — with each scan's context
-    for context-aware trackers, as plain sets for the uniform ones (stock behaviour)."""
-    from ..stonesoup import ContextFeeder, MultiSensorFeeder
-    readers = {"radar": _ScanReader(run.radar_scans), "lidar": _ScanReader(run.lidar_scans)}
-    if not spec.uses_context:
-        feeds = [readers[s] for s in spec.sensors]
-    else:
-        models = paper_sensor_models(pd=spec.pd, clutter=spec.clutter,
-                                     land=run.land if spec.line_of_sight else ())
-        navigation = NavigationTrack(timestamps=run.ego.timestamps, positions=run.ego.positions,
-                                     headings=run.ego.headings)
-        feeds = [ContextFeeder(reader=readers[s], sensor_model=models[s], pose_source=navigation)
-                 for s in spec.sensors]
-    return MultiSensorFeeder(feeders=feeds)
-
-
-def _surveillance_region(run):
-    from ..stonesoup.pointprocess import CircularRegion
-    centre = run.ego.positions.mean(axis=0)
-    spread = float(np.max(np.hypot(*(run.ego.positions - centre).T)))
-    return CircularRegion(centre=tuple(centre), radius=1612.0 + REGION_MARGIN + spread)
-
-
 def build_tracker(spec: TrackerSpec, run, fast: bool = True):
-    """A Stone Soup tracker for ``spec`` over the scans of ``run`` (iterate it)."""
+    """A Stone Soup tracker for ``spec`` over the scans of a simulated ``run`` (iterate it):
+    :func:`paper_tracker` on the run's radar and lidar streams and the ego's navigation."""
+    streams = {"radar": _ScanReader(run.radar_scans), "lidar": _ScanReader(run.lidar_scans)}
+    navigation = NavigationTrack(timestamps=run.ego.timestamps, positions=run.ego.positions,
+                                 headings=run.ego.headings)
+    models = paper_sensor_models(land=run.land if spec.line_of_sight else ())
+    return paper_tracker(spec.name, streams, models, navigation, primary="radar", fast=fast)
+
+
+def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Mapping[str, SensorModel],
+                  pose_source: PoseSource, *, primary: str | None = None, fast: bool = True,
+                  region_radius: float | None = None):
+    r"""One of the study's trackers (:data:`TRACKERS`) on anyone's sensor data.
+
+    Iterate the returned Stone Soup tracker for ``(time, tracks)`` per scan, as any tracker.
+
+    ``streams``: sensor name → an iterable of ``(time, detections)`` scans in time order
+    (a Stone Soup detector or reader, or a list), empty scans included — an empty scan is
+    what tells a context-aware tracker that the sensor looked and saw nothing. Each
+    detection carries its own measurement model. Scans of different sensors are merged in
+    time order; at equal times they go in the order of ``streams``.
+
+    ``sensor_models``: sensor name → its :class:`~ctxmodels.SensorModel` (P_D and λ; the
+    context-aware trackers read them, the ``pd-aware`` ones read P_D and use λ = 1e-3, the
+    uniform ones read neither). For ``gmphd-sight`` give models with land and line of sight
+    in P_D (:func:`~ctxmodels.experiment.sensors.radar_detection` with ``land``).
+
+    ``pose_source``: the platform's pose at each scan's time (a
+    :class:`~ctxmodels.NavigationTrack`, a :class:`~ctxmodels.stonesoup.SensorPose`, …).
+    Every GM-PHD's surveillance region follows it (:class:`~ctxmodels.stonesoup.PoseCentredRegion`):
+    a disc of ``region_radius`` around the platform at each scan, by default the farthest
+    reach of any sensor's P_D (its outermost range band with P_D > 0, plus its mounting's
+    lever arm) plus :data:`REGION_MARGIN`.
+
+    ``primary``: the sensor kept by the single-sensor tracker (``gmphd-radar-only``).
+    ``fast``: the trackers that compute each scan in the Rust core (False: the component
+    path, the readable reference with the same results).
+    """
+    spec = TRACKERS.get(name) if isinstance(name, str) else None
+    if spec is None:
+        raise ValueError(f"name: unknown tracker {name!r}; choose from {list(TRACKERS)}")
+    streams, sensor_models = dict(streams), dict(sensor_models)
+    if not streams:
+        raise ValueError("streams: no sensor streams given")
+    missing = [sensor for sensor in streams if not isinstance(sensor_models.get(sensor), SensorModel)]
+    if missing:
+        raise ValueError(f"sensor_models: need a SensorModel for every stream; missing or not a "
+                         f"SensorModel for {missing}")
+    if not callable(getattr(pose_source, "pose_at", None)):
+        raise TypeError("pose_source: expected an object with pose_at(timestamp), got "
+                        f"{type(pose_source).__name__}")
+    if spec.primary_only:
+        if primary not in streams:
+            raise ValueError(f"primary: {name} keeps one sensor; name it (one of "
+                             f"{list(streams)}), got {primary!r}")
+        streams = {primary: streams[primary]}
+    if spec.line_of_sight and not any(_sees_land(sensor_models[s]) for s in streams):
+        raise ValueError(f"sensor_models: {name} needs land in some sensor's P_D "
+                         "(LandMask / LineOfSight factors); none has any")
+    if spec.pd == "context" and spec.clutter == "uniform":
+        sensor_models = {s: _with_clutter(m, uniform_clutter()) for s, m in sensor_models.items()}
+    region = None
+    if spec.family == "gmphd":
+        radius = (_region_radius([sensor_models[s] for s in streams]) if region_radius is None
+                  else region_radius)
+        region = PoseCentredRegion(pose_source=pose_source, radius=radius)
     predictor = KalmanPredictor(motion_model())
     # Symmetrised posteriors: the standard-form update P − K S Kᵀ lets round-off asymmetry
     # grow about 40-fold per 200 updates of a long-tracked target (measured, stock and core
     # alike), until covariances turn indefinite (a 240 s run, scan ~1900).
     updater = ExtendedKalmanUpdater(measurement_model=None, force_symmetric_covariance=True)
-    detector = _detector(spec, run)
+    detector = _detector(spec, streams, sensor_models, pose_source)
     if spec.family == "jpda":
         return _jpda(spec, predictor, updater, detector, fast)
-    return _gmphd(spec, run, predictor, updater, detector, fast)
+    return _gmphd(spec, region, predictor, updater, detector, fast)
+
+
+def _detector(spec: TrackerSpec, streams, sensor_models, pose_source):
+    """The tracker's input: the sensors' scans in time order — with each scan's context
+    for context-aware trackers, as plain sets for the uniform ones (stock behaviour)."""
+    from ..stonesoup import ContextFeeder, MultiSensorFeeder
+    if not spec.uses_context:
+        return MultiSensorFeeder(feeders=list(streams.values()))
+    return MultiSensorFeeder(feeders=[
+        ContextFeeder(reader=reader, sensor_model=sensor_models[sensor], pose_source=pose_source)
+        for sensor, reader in streams.items()])
+
+
+def _with_clutter(model: SensorModel, clutter) -> SensorModel:
+    properties = {name: getattr(model, name) for name in type(model).properties}
+    return type(model)(**{**properties, "clutter": clutter})
+
+
+def _sees_land(model: SensorModel) -> bool:
+    return any(isinstance(f, (LandMask, LineOfSight)) for f in model.detection.factors)
+
+
+def _reach(model: SensorModel) -> float:
+    """How far from the platform the sensor's P_D can be > 0: the least outer edge of its
+    range bands' last band with P_D > 0 (inf without such bands), plus the lever arm."""
+    reach = math.inf
+    for factor in model.detection.factors:
+        if isinstance(factor, RangeBands):
+            seen = [i for i, value in enumerate(factor.values) if value > 0]
+            if not seen:
+                return 0.0
+            if seen[-1] < len(factor.edges):
+                reach = min(reach, float(factor.edges[seen[-1]]))
+    mounting = model.mounting
+    arm = 0.0 if mounting is None else math.hypot(mounting.forward, mounting.left)
+    return reach + arm
+
+
+def _region_radius(models) -> float:
+    reach = max(_reach(model) for model in models)
+    if not math.isfinite(reach):
+        raise ValueError("region_radius: a sensor's P_D has no outer range band with P_D = 0, "
+                         "so its reach is unbounded; give the surveillance region's radius")
+    return reach + REGION_MARGIN
 
 
 def position_std_deleter():
@@ -248,7 +341,7 @@ def _jpda(spec, predictor, updater, detector, fast):
         data_associator=JPDAwithEHM2(hypothesiser), updater=updater)
 
 
-def _gmphd(spec, run, predictor, updater, detector, fast):
+def _gmphd(spec, region, predictor, updater, detector, fast):
     from ..stonesoup.birth import MeasurementDrivenBirth
     from ..stonesoup.array_tracker import ArrayPointProcessTracker
     from ..stonesoup.pointprocess import PHDUpdater, PointProcessMultiTargetTracker
@@ -267,4 +360,4 @@ def _gmphd(spec, run, predictor, updater, detector, fast):
     return tracker_class(
         detector=detector, hypothesiser=hypothesiser, updater=phd, reducer=reducer,
         extraction_threshold=spec.extraction_threshold, birth=birth,
-        surveillance_region=_surveillance_region(run), max_position_std=MAX_POSITION_STD)
+        surveillance_region=region, max_position_std=MAX_POSITION_STD)

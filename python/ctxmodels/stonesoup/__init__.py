@@ -11,7 +11,8 @@
 * GM-PHD / LCC: :class:`PHDUpdater`, :class:`LCCUpdater` (P_D per component, λ per
   detection, one array call each per scan) and :class:`PointProcessMultiTargetTracker`, which
   passes each scan's context to the updater and adds measurement-driven birth
-  (:class:`MeasurementDrivenBirth`) and a surveillance region (:class:`CircularRegion`).
+  (:class:`MeasurementDrivenBirth`) and a surveillance region (:class:`CircularRegion`, or :class:`PoseCentredRegion`
+  following the platform).
 * Particle filters: :class:`BernoulliParticleUpdater`, :class:`SMCPHDUpdater` (P_D over all
   particles in one array call).
 * Whole scans in the Rust core: :class:`ArrayPointProcessTracker` (GM-PHD) and
@@ -42,7 +43,8 @@ from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracker
 from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
-from .pointprocess import CircularRegion, LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
+from .pointprocess import LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
+from .region import CircularRegion, PoseCentredRegion
 from .sensor_adapter import (PlatformContextFeeder, SensorPose, sensor_model_from_stonesoup,
                              sensor_pose)
 from .transition import CachedCombinedLinearGaussianTransitionModel
@@ -59,6 +61,7 @@ __all__ = [
     "MeasurementDrivenBirth",
     "PHDUpdater",
     "PointProcessMultiTargetTracker",
+    "PoseCentredRegion",
     "SMCPHDUpdater",
     "ContextFeeder",
     "FastGNNWith2DAssignment",

@@ -56,7 +56,8 @@ from ..foreign import as_array_context
 from .array_plan import _Plan
 from .fast import ObjectFactory, plain_track_lists
 from .ordering import declares_context, in_stable_order
-from .pointprocess import CircularRegion, PointProcessMultiTargetTracker
+from .pointprocess import PointProcessMultiTargetTracker
+from .region import CircularRegion, scan_region
 
 _BIRTH_NAME = TaggedWeightedGaussianState.BIRTH
 _BIRTH = 0  # the core's birth tag
@@ -210,7 +211,7 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
     def _within_region(self, arrays) -> None:
         """Drops the components outside the surveillance region (a CircularRegion in the
         core, any other region through its ``contains`` or call)."""
-        region = self.surveillance_region
+        region = self._region
         if region is None or not len(arrays):
             return
         mapping = tuple(int(i) for i in self.position_mapping)
@@ -223,6 +224,8 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
     def __next__(self) -> tuple[datetime.datetime, set[Track]]:
         time, detections = next(self.detector_iter)
         plan = _Plan.of(self)
+        if plan is not None:  # (the component path sets it itself)
+            self._region = scan_region(self.surveillance_region, time)
         scan = self._scan_inputs(plan, time, detections) if plan is not None else None
         if scan is None:
             return self._component_scan(time, detections)

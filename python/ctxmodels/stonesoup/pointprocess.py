@@ -46,6 +46,7 @@ from ..context import DetectorContext
 from ..foreign import as_array_context
 from .birth import MeasurementDrivenBirth
 from .ordering import context_kwargs, declares_context, in_stable_order
+from .region import CircularRegion, scan_region  # noqa: F401 (CircularRegion: its old home)
 
 _BIRTH = TaggedWeightedGaussianState.BIRTH
 
@@ -237,33 +238,6 @@ class LCCUpdater(_ContextPointProcessUpdate, _StockLCCUpdater):
         return np.float64(l1)
 
 
-class CircularRegion(Base):
-    """A disc of world x/y: the simplest surveillance region for
-    :class:`PointProcessMultiTargetTracker`."""
-
-    centre: Sequence[float] = Property(doc="Centre (x, y), metres.")
-    radius: float = Property(doc="Radius, metres (> 0).")
-
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        centre = np.asarray(self.centre, dtype=np.float64).ravel()
-        if centre.shape != (2,) or not np.all(np.isfinite(centre)):
-            raise ValueError(f"centre: must be a finite (x, y) pair, got {self.centre!r}")
-        try:
-            radius = float(self.radius)
-        except (TypeError, ValueError):
-            raise TypeError(f"radius: expected a number, got {self.radius!r}") from None
-        if not np.isfinite(radius) or radius <= 0:
-            raise ValueError(f"radius: must be finite and > 0, got {self.radius!r}")
-        self.centre, self.radius = (float(centre[0]), float(centre[1])), radius
-
-    def contains(self, points) -> np.ndarray:
-        """Whether each (x, y) row of ``points`` lies in the disc (boundary included)."""
-        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        offsets = points - np.asarray(self.centre)
-        return np.einsum("ij,ij->i", offsets, offsets) <= self.radius ** 2
-
-
 class PointProcessMultiTargetTracker(_StockPointProcessTracker):
     r"""The stock GM point-process tracker (GM-PHD / GM-LCC), fed scan contexts.
 
@@ -291,7 +265,9 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
     region is a :class:`CircularRegion`, any object with ``contains(points) -> bool array``
     (e.g. a :class:`~ctxmodels.LandMask` built from the region's polygon: inside = kept),
     or a callable ``f(points) -> bool array``; ``points`` are the (N, 2) world x/y of the
-    component means (``position_mapping``).
+    component means (``position_mapping``). A region with an ``at(timestamp)`` method gives
+    each scan's region from it, so a region can follow a moving platform
+    (:class:`~ctxmodels.stonesoup.PoseCentredRegion`).
 
     **Why a bound on position uncertainty.** The same missed-detection factor of 1 lets a
     component that stays unseen *inside* the region (a radar blind sector, beyond the lidar
@@ -314,7 +290,8 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         default=None,
         doc="Region outside which components are dropped after each update: a "
             "CircularRegion, an object with ``contains(points)``, or a callable on (N, 2) "
-            "positions returning a boolean mask. None: no bound (stock).")
+            "positions returning a boolean mask; an object with ``at(timestamp)`` gives the "
+            "scan's region (PoseCentredRegion). None: no bound (stock).")
     max_position_std: float = Property(
         default=None,
         doc="Components whose RMS x/y position standard deviation "
@@ -330,9 +307,10 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             raise TypeError(f"birth: expected a MeasurementDrivenBirth, "
                             f"got {type(self.birth).__name__}")
         region = self.surveillance_region
-        if region is not None and not (hasattr(region, "contains") or callable(region)):
+        if region is not None and not (hasattr(region, "contains") or callable(region)
+                                       or callable(getattr(region, "at", None))):
             raise TypeError("surveillance_region: expected an object with contains(points) or "
-                            f"a callable, got {type(region).__name__}")
+                            f"at(timestamp), or a callable, got {type(region).__name__}")
         mapping = tuple(self.position_mapping)
         if len(mapping) != 2 or not all(isinstance(i, (int, np.integer)) and i >= 0
                                         for i in mapping) or mapping[0] == mapping[1]:
@@ -343,10 +321,11 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             raise ValueError(
                 f"max_position_std: must be a finite number > 0 or None, got {limit!r}")
         self._pending_births: list[TaggedWeightedGaussianState] = []
+        self._region = None  # this scan's region (see scan_region)
 
     def _inside_mask(self, points: np.ndarray) -> np.ndarray:
-        """Whether each (x, y) row of ``points`` lies in the surveillance region."""
-        region = self.surveillance_region
+        """Whether each (x, y) row of ``points`` lies in this scan's surveillance region."""
+        region = self._region
         mask = region.contains(points) if hasattr(region, "contains") else region(points)
         mask = np.asarray(mask, dtype=bool).ravel()
         if mask.shape != (len(points),):
@@ -383,6 +362,7 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         if not use_context:
             context = None
 
+        self._region = scan_region(self.surveillance_region, time)
         if self.birth_component is not None:
             self.birth_component.timestamp = time
             self.gaussian_mixture.append(self.birth_component)
@@ -415,4 +395,4 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         return time, self.tracks
 
 
-__all__ = ["CircularRegion", "LCCUpdater", "PHDUpdater", "PointProcessMultiTargetTracker"]
+__all__ = ["LCCUpdater", "PHDUpdater", "PointProcessMultiTargetTracker"]

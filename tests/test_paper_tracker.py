@@ -1,0 +1,192 @@
+"""The study's trackers on anyone's data (``paper_tracker``): plain ``(time, detections)``
+streams under any sensor names, a SensorModel per sensor and a pose source give the
+experiment runner's results bit for bit, and the surveillance region follows the platform
+(asked for each scan's time only, never for a time ahead of the scans)."""
+import dataclasses
+import datetime
+
+import numpy as np
+import pytest
+from stonesoup.types.detection import Detection
+from stonesoup.models.measurement.linear import LinearGaussian
+
+from ctxmodels import (ClutterDensityModel, ConstantPose, DetectionProbabilityModel, Mounting,
+                       NavigationTrack, Pose, RangeBands, SensorModel)
+from ctxmodels.experiment.runner import Job, run_job
+from ctxmodels.experiment.scenarios import make_scenario
+from ctxmodels.experiment.scoring import score_run, tracks_digest
+from ctxmodels.experiment.sensors import paper_sensor_models
+from ctxmodels.experiment.trackers import TRACKERS, applicable, paper_tracker
+from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, PoseCentredRegion,
+                                 PointProcessMultiTargetTracker, in_track_order)
+
+DURATION, SEED = 40.0, 2
+
+
+class RecordingPoses:
+    """A pose source that remembers which times it was asked for."""
+
+    def __init__(self, navigation):
+        self.navigation, self.asked = navigation, []
+
+    def pose_at(self, timestamp):
+        self.asked.append(timestamp)
+        return self.navigation.pose_at(timestamp)
+
+
+def _renamed(model: SensorModel, name: str) -> SensorModel:
+    properties = {key: getattr(model, key) for key in type(model).properties}
+    return SensorModel(**{**properties, "name": name})
+
+
+def _own_data_result(tracker: str, scenario: str, fast: bool = True):
+    """The tracker built the way a user with their own data builds it: lists of
+    (time, set of detections) named 'masthead' and 'bow', and a navigation log."""
+    run = make_scenario(scenario, SEED, DURATION)
+    streams = {"masthead": [(scan.timestamp, set(scan.detections)) for scan in run.radar_scans],
+               "bow": [(scan.timestamp, set(scan.detections)) for scan in run.lidar_scans]}
+    paper = paper_sensor_models(land=run.land if TRACKERS[tracker].line_of_sight else ())
+    models = {"masthead": _renamed(paper["radar"], "masthead"),
+              "bow": _renamed(paper["lidar"], "bow")}
+    poses = RecordingPoses(NavigationTrack(timestamps=run.ego.timestamps,
+                                           positions=run.ego.positions, headings=run.ego.headings))
+    built = paper_tracker(tracker, streams, models, poses, primary="masthead", fast=fast)
+    used = [streams["masthead"]] + ([] if TRACKERS[tracker].primary_only else [streams["bow"]])
+    tracks, scans = set(), 0
+    for time, current in built:
+        tracks |= current
+        scans += 1
+        # Poses are asked for as the scans come (a merge looks one scan ahead per sensor),
+        # never for a time further on: no trajectory is needed in advance.
+        horizon = max(next((t for t, _ in stream if t > time), time) for stream in used)
+        assert not poses.asked or max(poses.asked) <= horizon
+    reported = [track for track in in_track_order(tracks) if len(track)]
+    return run, scans, reported, poses
+
+
+CASES = [(name, scenario) for name in TRACKERS for scenario in ("mixed-range", "islands")
+         if applicable(name, scenario) and (scenario == "islands") == (name == "gmphd-sight")]
+
+
+@pytest.mark.parametrize("tracker,scenario", CASES)
+def test_every_tracker_on_own_streams_gives_the_runners_results(tracker, scenario):
+    runner = run_job(Job(scenario, SEED, tracker, DURATION, digest=True))
+    run, scans, reported, poses = _own_data_result(tracker, scenario)
+    assert scans == runner.scans
+    assert tracks_digest(reported) == runner.digest
+    assert runner.track_count > 0  # the comparison compares something
+    score = score_run(run, reported)
+    for ours, theirs in ((score.hota, runner.hota), (score.gospa, runner.gospa)):
+        for field in dataclasses.fields(theirs):
+            np.testing.assert_array_equal(getattr(ours, field.name), getattr(theirs, field.name))
+    if TRACKERS[tracker].uses_context or TRACKERS[tracker].family == "gmphd":
+        # contexts and the GM-PHD's region ask for the platform's pose at scan times only
+        scan_times = {scan.timestamp for scan in run.radar_scans}
+        if not TRACKERS[tracker].primary_only:
+            scan_times |= {scan.timestamp for scan in run.lidar_scans}
+        assert set(poses.asked) == scan_times
+
+
+def _models():
+    paper = paper_sensor_models()
+    return {"a": paper["radar"], "b": paper["lidar"]}
+
+
+def test_clear_errors_naming_the_argument():
+    pose = ConstantPose(pose=Pose(x=0.0, y=0.0))
+    streams = {"a": [], "b": []}
+    with pytest.raises(ValueError, match="^name: unknown tracker 'kalman'"):
+        paper_tracker("kalman", streams, _models(), pose)
+    with pytest.raises(ValueError, match="^streams: no sensor streams"):
+        paper_tracker("gmphd-context", {}, _models(), pose)
+    with pytest.raises(ValueError, match=r"^sensor_models: .*\['c'\]"):
+        paper_tracker("gmphd-context", {"a": [], "c": []}, _models(), pose)
+    with pytest.raises(TypeError, match="^pose_source: "):
+        paper_tracker("gmphd-context", streams, _models(), object())
+    with pytest.raises(ValueError, match="^primary: gmphd-radar-only keeps one sensor"):
+        paper_tracker("gmphd-radar-only", streams, _models(), pose)
+    with pytest.raises(ValueError, match="^sensor_models: gmphd-sight needs land"):
+        paper_tracker("gmphd-sight", streams, _models(), pose)
+    unbounded = {"a": SensorModel(detection=DetectionProbabilityModel(factors=[0.9]),
+                                  clutter=ClutterDensityModel(factors=[1e-4]))}
+    with pytest.raises(ValueError, match="^region_radius: "):
+        paper_tracker("gmphd-context", {"a": []}, unbounded, pose)
+    # ... and with the radius given, it builds.
+    paper_tracker("gmphd-context", {"a": []}, unbounded, pose, region_radius=3000.0)
+
+
+def test_default_region_radius_is_the_farthest_reach_plus_the_margin():
+    pose = ConstantPose(pose=Pose(x=0.0, y=0.0))
+    tracker = paper_tracker("gmphd-context", {"a": [], "b": []}, _models(), pose)
+    assert tracker.surveillance_region.radius == 1612.0 + 500.0
+    # the lever arm of a mounted sensor counts; the P_D-free uniform trackers get the same
+    lidar = SensorModel(detection=DetectionProbabilityModel(factors=[RangeBands(
+        edges=(3000.0,), values=(0.5, 0.0))]), clutter=ClutterDensityModel(factors=[1e-3]),
+        mounting=Mounting(forward=3.0, left=4.0))
+    for name in ("gmphd-context", "gmphd-uniform"):
+        tracker = paper_tracker(name, {"a": [], "b": []}, {**_models(), "b": lidar}, pose)
+        assert tracker.surveillance_region.radius == 3000.0 + 5.0 + 500.0
+
+
+# --- the region itself -------------------------------------------------------------------
+
+def _navigation():
+    start = datetime.datetime(2026, 1, 1)
+    times = [start + datetime.timedelta(seconds=s) for s in (0.0, 10.0)]
+    return NavigationTrack(timestamps=times, positions=[[0.0, 0.0], [100.0, 0.0]],
+                           headings=[0.0, 0.0]), start
+
+
+def test_pose_centred_region_is_a_disc_around_the_platform_at_the_scan():
+    navigation, start = _navigation()
+    region = PoseCentredRegion(pose_source=navigation, radius=30.0)
+    at5 = region.at(start + datetime.timedelta(seconds=5))
+    assert isinstance(at5, CircularRegion) and at5.centre == (50.0, 0.0) and at5.radius == 30.0
+    assert at5.contains([[20.0, 0.0], [19.99, 0.0], [50.0, 30.0]]).tolist() == [True, False, True]
+    with pytest.raises(ValueError, match="^radius: "):
+        PoseCentredRegion(pose_source=navigation, radius=0.0)
+    with pytest.raises(TypeError, match="^pose_source: "):
+        PoseCentredRegion(pose_source=None, radius=1.0)
+
+
+@pytest.mark.parametrize("tracker_class", [PointProcessMultiTargetTracker,
+                                           ArrayPointProcessTracker])
+def test_trackers_drop_what_the_moving_region_leaves_behind(tracker_class):
+    """A target seen near the start, then no detections while the platform moves 100 m
+    east: the disc of 30 m around the platform leaves the target's component behind after
+    scan 5 (platform at 50 m), on the component and the array path alike."""
+    from stonesoup.hypothesiser.distance import DistanceHypothesiser
+    from stonesoup.hypothesiser.gaussianmixture import GaussianMixtureHypothesiser
+    from stonesoup.measures import Mahalanobis
+    from stonesoup.mixturereducer.gaussianmixture import GaussianMixtureReducer
+    from stonesoup.models.transition.linear import (CombinedLinearGaussianTransitionModel,
+                                                    ConstantVelocity)
+    from stonesoup.predictor.kalman import KalmanPredictor
+    from stonesoup.updater.kalman import KalmanUpdater
+    from ctxmodels.stonesoup import MeasurementDrivenBirth, PHDUpdater
+
+    navigation, start = _navigation()
+    model = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
+    scans = []
+    for k in range(11):
+        time = start + datetime.timedelta(seconds=k)
+        seen = {Detection([[10.0], [0.0]], timestamp=time, measurement_model=model)} if k < 3 else set()
+        scans.append((time, seen))
+    predictor = KalmanPredictor(CombinedLinearGaussianTransitionModel(
+        [ConstantVelocity(0.01), ConstantVelocity(0.01)]))
+    updater = KalmanUpdater(measurement_model=None)
+    tracker = tracker_class(
+        detector=scans, hypothesiser=GaussianMixtureHypothesiser(DistanceHypothesiser(
+            predictor, updater, Mahalanobis(), missed_distance=3), order_by_detection=True),
+        updater=PHDUpdater(updater, clutter_spatial_density=1e-6, prob_detection=0.3),
+        reducer=GaussianMixtureReducer(prune_threshold=1e-9, merge_threshold=16),
+        extraction_threshold=0.5,
+        birth=MeasurementDrivenBirth(birth_weight=0.5, birth_covar=np.diag([1.0, 1.0, 1.0, 1.0])),
+        surveillance_region=PoseCentredRegion(pose_source=navigation, radius=30.0))
+    alive = []
+    for time, _ in tracker:
+        means = [c.state_vector[0, 0] for c in tracker.gaussian_mixture.components]
+        alive.append(len(means))
+        centre = navigation.pose_at(time).x
+        assert all(abs(x - centre) <= 30.0 for x in means)
+    assert alive[3] > 0 and alive[-1] == 0
