@@ -1,6 +1,6 @@
 """
 A rotating radar in Stone Soup's own simulation: context-aware vs stock GM-PHD
-=============================================================================
+==============================================================================
 
 A radar whose antenna turns 60° per second with a 60° field of view sees each target one
 scan in six. A GM-PHD with one global detection probability reads the five other scans as

@@ -64,7 +64,9 @@ Public API
     Generate any :class:`SceneLayout` (build your own with :class:`PathBuilder`,
     :class:`PathMotion`, :class:`WeaveMotion`, :class:`FormationMotion`,
     :class:`DriftMotion`, :class:`TargetSpec`, :class:`StaticObject`).
-``SCENARIOS``: ``{name: ScenarioSpec}``; ``ScenarioSpec.layout()`` builds its layout.
+``SCENARIOS``
+    ``{name: ScenarioSpec}``; ``ScenarioSpec.layout()`` builds its layout.
+
 :class:`ScenarioRun` fields: ``name, seed, duration, truths`` (set of
 ``GroundTruthPath``, stable ``id``, a state at every radar and lidar timestamp while
 the vessel exists), ``static_objects, land, ego`` (:class:`EgoNavigation` at every scan
