@@ -1,4 +1,4 @@
-"""The reference paper's four sensor equations, built the way the README builds them, checked
+"""The reference paper's four sensor equations, built the way docs/guide.md builds them, checked
 case by case at their edges and against a literal transcription of the equations.
 
 eq. pd-lidar      P_D = 0.95 (r < 50), 0.2 (50 ≤ r < 80), 0 (r ≥ 80)

@@ -1,5 +1,5 @@
 """The study on a cluster: ``run_experiment`` with a Dask ``LocalCluster`` (two worker
-processes) and with Ray (the README's few-line executor) gives the process pool's results,
+processes) and with Ray (the few-line executor of docs/study.md) gives the process pool's results,
 job by job and bit for bit."""
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ def test_dask_local_cluster_gives_the_process_pools_results(pool_results):
 
 
 class RayExecutor(concurrent.futures.Executor):
-    """The README's executor: a remote task's ``ObjectRef.future()`` is a
+    """The executor of docs/study.md: a remote task's ``ObjectRef.future()`` is a
     ``concurrent.futures.Future``."""
 
     def submit(self, fn, /, *args, **kwargs):

@@ -1,21 +1,29 @@
-"""The README's Python examples run as written."""
+"""The README's and the guide's Python examples run as written."""
 import pathlib
 import re
 
-README = pathlib.Path(__file__).resolve().parent.parent / "README.md"
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+README, GUIDE = ROOT / "README.md", ROOT / "docs" / "guide.md"
 
 
-def python_blocks():
-    return re.findall(r"```python\n(.*?)```", README.read_text(), re.S)
+def python_blocks(path):
+    return re.findall(r"```python\n(.*?)```", path.read_text(), re.S)
 
 
-def test_readme_has_examples():
-    assert len(python_blocks()) >= 2
+def test_readme_quick_start_fits_and_tracks_the_target(capsys):
+    blocks = python_blocks(README)
+    assert len(blocks) == 1
+    lines = [line for line in blocks[0].splitlines() if line.strip()]
+    assert len(lines) <= 25  # the quick start stays short
+    exec(compile(blocks[0], str(README), "exec"), {"__name__": "readme"})
+    assert "1 track at [[600.0, 300.0]]" in capsys.readouterr().out
 
 
-def test_readme_examples_run(capsys):
-    for block in python_blocks():
-        exec(compile(block, str(README), "exec"), {"__name__": "readme"})
+def test_guide_examples_run(capsys):
+    blocks = python_blocks(GUIDE)
+    assert len(blocks) >= 2
+    for block in blocks:
+        exec(compile(block, str(GUIDE), "exec"), {"__name__": "guide"})
     printed = capsys.readouterr().out
     assert "[0.4 0. ]" in printed
     assert "GM-PHD:" in printed and "JPDA:" in printed
