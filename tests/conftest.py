@@ -22,8 +22,9 @@ import pytest  # noqa: E402
 @pytest.fixture
 def stock_in_stable_order(monkeypatch):
     """Stock Stone Soup's Gaussian-mixture reducer visits shared tags in the order of a
-    ``set`` of random uuid strings, which changes with the process. ctxmodels visits them in
-    first-appearance order; with this fixture the stock reducer does the same, so the two
-    can be compared bit for bit ("the stock pipeline under the same stable order")."""
+    ``set`` of random uuid strings, which changes with the process. ctxmodels' trackers
+    visit them in first-appearance order (the core, and ``reduce_mixture`` on the component
+    path); with this fixture the stock reducer does the same, so stock Stone Soup trackers
+    and ours can be compared bit for bit ("the stock pipeline under the same stable order")."""
     import stonesoup.mixturereducer.gaussianmixture as module
     monkeypatch.setattr(module, "set", lambda items: list(dict.fromkeys(items)), raising=False)

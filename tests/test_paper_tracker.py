@@ -39,10 +39,10 @@ def _renamed(model: SensorModel, name: str) -> SensorModel:
     return SensorModel(**{**properties, "name": name})
 
 
-def _own_data_result(tracker: str, scenario: str, fast: bool = True):
+def _own_data_result(tracker: str, scenario: str, fast: bool = True, duration: float = DURATION):
     """The tracker built the way a user with their own data builds it: lists of
     (time, set of detections) named 'masthead' and 'bow', and a navigation log."""
-    run = make_scenario(scenario, SEED, DURATION)
+    run = make_scenario(scenario, SEED, duration)
     streams = {"masthead": [(scan.timestamp, set(scan.detections)) for scan in run.radar_scans],
                "bow": [(scan.timestamp, set(scan.detections)) for scan in run.lidar_scans]}
     paper = paper_sensor_models(land=run.land if TRACKERS[tracker].line_of_sight else ())
@@ -85,6 +85,14 @@ def test_every_tracker_on_own_streams_gives_the_runners_results(tracker, scenari
         if not TRACKERS[tracker].primary_only:
             scan_times |= {scan.timestamp for scan in run.lidar_scans}
         assert set(poses.asked) == scan_times
+
+
+def test_the_component_path_matches_too():
+    # (12 s: the component path is the slow, readable reference)
+    runner = run_job(Job("mixed-range", SEED, "gmphd-context", 12.0, stock=True, digest=True))
+    _, _, reported, _ = _own_data_result("gmphd-context", "mixed-range", fast=False, duration=12.0)
+    assert runner.track_count > 0
+    assert tracks_digest(reported) == runner.digest
 
 
 def _models():

@@ -46,6 +46,7 @@ from ..context import DetectorContext
 from ..foreign import as_array_context
 from .birth import MeasurementDrivenBirth
 from .ordering import context_kwargs, declares_context, in_stable_order
+from .reduction import reduce_mixture
 from .region import CircularRegion, scan_region  # noqa: F401 (CircularRegion: its old home)
 
 _BIRTH = TaggedWeightedGaussianState.BIRTH
@@ -385,7 +386,9 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         if self.max_position_std is not None:
             self.gaussian_mixture.components = self._certain_enough(
                 self.gaussian_mixture.components)
-        self.gaussian_mixture.components = self.reducer.reduce(self.gaussian_mixture.components)
+        # The stock reduction, its mixture in a reproducible order (see reduce_mixture)
+        self.gaussian_mixture.components = reduce_mixture(self.reducer,
+                                                          self.gaussian_mixture.components)
         self.update_tracks()
         self.end_tracks()
 
