@@ -79,7 +79,9 @@ def test_every_tracker_on_own_streams_gives_the_runners_results(tracker, scenari
     for ours, theirs in ((score.hota, runner.hota), (score.gospa, runner.gospa)):
         for field in dataclasses.fields(theirs):
             np.testing.assert_array_equal(getattr(ours, field.name), getattr(theirs, field.name))
-    if TRACKERS[tracker].uses_context or TRACKERS[tracker].family == "gmphd":
+    if not TRACKERS[tracker].uses_context and TRACKERS[tracker].family == "jpda":
+        assert poses.asked == []  # stock JPDA: no contexts, no region
+    else:
         # contexts and the GM-PHD's region ask for the platform's pose at scan times only
         scan_times = {scan.timestamp for scan in run.radar_scans}
         if not TRACKERS[tracker].primary_only:
@@ -93,6 +95,32 @@ def test_the_component_path_matches_too():
     _, _, reported, _ = _own_data_result("gmphd-context", "mixed-range", fast=False, duration=12.0)
     assert runner.track_count > 0
     assert tracks_digest(reported) == runner.digest
+
+
+def test_what_each_tracker_reads():
+    """Built from the same models, each tracker reads what its row of Table I says: the
+    uniform ones plain scans (no contexts), P_D-aware the models' P_D with λ = 1e-3, the
+    context-aware ones the models as given; radar-only the primary sensor's scans only."""
+    from ctxmodels.experiment.sensors import uniform_clutter
+    from ctxmodels.stonesoup import ContextFeeder
+    pose = ConstantPose(pose=Pose(x=0.0, y=0.0))
+    streams = {"a": [], "b": []}
+    models = _models()
+    for name, spec in TRACKERS.items():
+        if spec.line_of_sight:
+            continue
+        feeders = paper_tracker(name, streams, models, pose, primary="b").detector.feeders
+        expected = ["b"] if spec.primary_only else ["a", "b"]
+        if not spec.uses_context:
+            assert len(feeders) == len(expected)
+            assert all(f is streams[s] for f, s in zip(feeders, expected))
+            continue
+        assert all(isinstance(f, ContextFeeder) and f.pose_source is pose for f in feeders)
+        for feeder, sensor in zip(feeders, expected, strict=True):
+            assert feeder.sensor_model.detection == models[sensor].detection
+            clutter = models[sensor].clutter if spec.clutter == "context" else uniform_clutter()
+            assert feeder.sensor_model.clutter == clutter
+            assert feeder.sensor_model.name == models[sensor].name
 
 
 def _models():
@@ -113,6 +141,11 @@ def test_clear_errors_naming_the_argument():
         paper_tracker("gmphd-context", streams, _models(), object())
     with pytest.raises(ValueError, match="^primary: gmphd-radar-only keeps one sensor"):
         paper_tracker("gmphd-radar-only", streams, _models(), pose)
+    with pytest.raises(ValueError, match="^primary: 'c' is not a stream"):
+        paper_tracker("gmphd-context", streams, _models(), pose, primary="c")
+    for radius in (-1.0, float("nan"), "far", True):
+        with pytest.raises(ValueError, match="^region_radius: must be a finite number"):
+            paper_tracker("gmphd-context", streams, _models(), pose, region_radius=radius)
     with pytest.raises(ValueError, match="^sensor_models: gmphd-sight needs land"):
         paper_tracker("gmphd-sight", streams, _models(), pose)
     unbounded = {"a": SensorModel(detection=DetectionProbabilityModel(factors=[0.9]),
@@ -198,3 +231,61 @@ def test_trackers_drop_what_the_moving_region_leaves_behind(tracker_class):
         centre = navigation.pose_at(time).x
         assert all(abs(x - centre) <= 30.0 for x in means)
     assert alive[3] > 0 and alive[-1] == 0
+
+
+def test_both_paths_agree_when_births_wait_while_the_region_moves():
+    """A birth queued inside the region at t = 0 waits for a scan that can see it; at
+    t = 0.5 the platform has moved 5 m away (the birth now 62 m off, outside the 60 m disc),
+    and it is back at t = 1. The birth met its own scan's region, so it still enters at
+    t = 1 on both paths (the array path used to drop it when filtering the queue again)."""
+    from stonesoup.hypothesiser.distance import DistanceHypothesiser
+    from stonesoup.hypothesiser.gaussianmixture import GaussianMixtureHypothesiser
+    from stonesoup.measures import Mahalanobis
+    from stonesoup.mixturereducer.gaussianmixture import GaussianMixtureReducer
+    from stonesoup.models.transition.linear import (CombinedLinearGaussianTransitionModel,
+                                                    ConstantVelocity)
+    from stonesoup.predictor.kalman import KalmanPredictor
+    from stonesoup.updater.kalman import KalmanUpdater
+    from ctxmodels.stonesoup import (ContextFeeder, MeasurementDrivenBirth, MultiSensorFeeder,
+                                     PHDUpdater)
+
+    start = datetime.datetime(2026, 1, 1)
+    at = lambda s: start + datetime.timedelta(seconds=s)
+    navigation = NavigationTrack(timestamps=[at(0), at(0.5), at(1), at(2)],
+                                 positions=[[0, 0], [5, 0], [0, 0], [0, 0]], headings=[0] * 4)
+    model = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
+    seen = lambda x, s: {Detection([[x], [0.0]], timestamp=at(s), measurement_model=model)}
+    far_scans = [(at(0), seen(-57.0, 0)), (at(1), seen(-57.0, 1)), (at(2), seen(-57.0, 2))]
+    near_scans = [(at(0.5), seen(6.0, 0.5)), (at(1.5), set())]
+
+    def sensor(reach):
+        return SensorModel(detection=DetectionProbabilityModel(factors=[RangeBands(
+            edges=(reach,), values=(0.9, 0.0))]), clutter=ClutterDensityModel(factors=[1e-4]))
+
+    def run(tracker_class):
+        predictor = KalmanPredictor(CombinedLinearGaussianTransitionModel(
+            [ConstantVelocity(0.01), ConstantVelocity(0.01)]))
+        updater = KalmanUpdater(measurement_model=None)
+        tracker = tracker_class(
+            detector=MultiSensorFeeder(feeders=[
+                ContextFeeder(reader=far_scans, sensor_model=sensor(100.0), pose_source=navigation),
+                ContextFeeder(reader=near_scans, sensor_model=sensor(5.0), pose_source=navigation)]),
+            hypothesiser=GaussianMixtureHypothesiser(DistanceHypothesiser(
+                predictor, updater, Mahalanobis(), missed_distance=3), order_by_detection=True),
+            updater=PHDUpdater(updater, clutter_spatial_density=1e-4, prob_detection=0.9),
+            reducer=GaussianMixtureReducer(prune_threshold=1e-9, merge_threshold=16),
+            extraction_threshold=0.5,
+            birth=MeasurementDrivenBirth(birth_weight=0.5, birth_covar=np.eye(4)),
+            surveillance_region=PoseCentredRegion(pose_source=navigation, radius=60.0))
+        mixtures = [[(c.state_vector.ravel().tolist(), float(c.weight))
+                     for c in tracker.gaussian_mixture.components] for _ in tracker]
+        return tracker, mixtures
+
+    component, reference = run(PointProcessMultiTargetTracker)
+    array, ours = run(ArrayPointProcessTracker)
+    assert array.array_path
+    assert [len(m) for m in ours] == [len(m) for m in reference] == [0, 0, 1, 1, 1]
+    for a, b in zip(ours, reference):
+        for (mean_a, weight_a), (mean_b, weight_b) in zip(a, b):
+            np.testing.assert_allclose(mean_a, mean_b, rtol=1e-9, atol=1e-9)
+            assert weight_a == pytest.approx(weight_b, rel=1e-9)

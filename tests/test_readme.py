@@ -26,4 +26,7 @@ def test_guide_examples_run(capsys):
         exec(compile(block, str(GUIDE), "exec"), {"__name__": "guide"})
     printed = capsys.readouterr().out
     assert "[0.4 0. ]" in printed
-    assert "GM-PHD:" in printed and "JPDA:" in printed
+    found = re.search(r"GM-PHD: \d+ components, (\d+) tracks", printed)
+    assert found and int(found.group(1)) > 0
+    found = re.search(r"JPDA: (\d+) tracks", printed)
+    assert found and int(found.group(1)) > 0

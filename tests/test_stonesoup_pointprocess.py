@@ -31,7 +31,8 @@ from stonesoup.updater.pointprocess import PHDUpdater as StockPHD
 import ctxmodels
 from ctxmodels import ClutterDensityModel, DetectionProbabilityModel, DetectionSet, SensorModel
 from ctxmodels.stonesoup.birth import TABLE_I_BIRTH_COVAR, MeasurementDrivenBirth
-from ctxmodels.stonesoup.pointprocess import (CircularRegion, LCCUpdater, PHDUpdater,
+from ctxmodels.stonesoup import CircularRegion
+from ctxmodels.stonesoup.pointprocess import (LCCUpdater, PHDUpdater,
                                               PointProcessMultiTargetTracker)
 
 # Stock runs compared bit for bit with ctxmodels visit shared tags in first-appearance order.

@@ -1,4 +1,5 @@
-"""The compared trackers (paper Table I), built for one simulated run.
+"""The compared trackers (paper Table I), built for a simulated run or anyone's sensor data
+(:func:`paper_tracker`).
 
 Common to all: constant-velocity motion with σ_acc = 0.8 (Stone Soup's ``ConstantVelocity``
 noise coefficient q = σ² = 0.64 per axis), state [x, vx, y, vy], track/birth covariance
@@ -84,6 +85,8 @@ JPDA_PROB_GATE = 0.95
 JPDA_MIN_POINTS = 3
 JPDA_DELETE_AFTER = 30
 JPDA_EXPECTED_MISSES = 3.0
+#: Added to the sensors' farthest P_D reach for the GM-PHD's surveillance region (m): a target
+#: that has just left the radar's reach can return for ~50 s at ≤ 10 m/s relative speed.
 REGION_MARGIN = 500.0
 #: Components (GM-PHD) and context-aware JPDA tracks unseen long enough to be this uncertain
 #: (RMS x/y σ, m) are dropped: a settled track survives ≈ 55 s unseen, about a crossing of the
@@ -123,6 +126,7 @@ class TrackerSpec:
         return self.pd == "context" or self.clutter == "context"
 
 
+#: The study's trackers by name (``ctxmodels list``).
 TRACKERS: dict[str, TrackerSpec] = {spec.name: spec for spec in (
     TrackerSpec("jpda", "JPDA", "global P_D/λ, M-of-N logic (3 to confirm, 30 misses to delete)",
                 "jpda", only_scenarios=PAPER_SCENARIOS, cost=11.0),
@@ -215,6 +219,11 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
     ``primary``: the sensor kept by the single-sensor tracker (``gmphd-radar-only``).
     ``fast``: the trackers that compute each scan in the Rust core (False: the component
     path, the readable reference with the same results).
+
+    The streams are read once, as the tracker runs: give lists or readers, not generators,
+    to build several trackers from the same data. The pose source must cover every scan's
+    time (contexts and the region ask it at each scan). One pose source serves all sensors:
+    mounting offsets go in each ``SensorModel.mounting``.
     """
     spec = TRACKERS.get(name) if isinstance(name, str) else None
     if spec is None:
@@ -229,10 +238,12 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
     if not callable(getattr(pose_source, "pose_at", None)):
         raise TypeError("pose_source: expected an object with pose_at(timestamp), got "
                         f"{type(pose_source).__name__}")
+    if primary is not None and primary not in streams:
+        raise ValueError(f"primary: {primary!r} is not a stream (one of {list(streams)})")
     if spec.primary_only:
-        if primary not in streams:
+        if primary is None:
             raise ValueError(f"primary: {name} keeps one sensor; name it (one of "
-                             f"{list(streams)}), got {primary!r}")
+                             f"{list(streams)})")
         streams = {primary: streams[primary]}
     if spec.line_of_sight and not any(_sees_land(sensor_models[s]) for s in streams):
         raise ValueError(f"sensor_models: {name} needs land in some sensor's P_D "
@@ -242,7 +253,7 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
     region = None
     if spec.family == "gmphd":
         radius = (_region_radius([sensor_models[s] for s in streams]) if region_radius is None
-                  else region_radius)
+                  else _given_radius(region_radius))
         region = PoseCentredRegion(pose_source=pose_source, radius=radius)
     predictor = KalmanPredictor(motion_model())
     # Symmetrised posteriors: the standard-form update P − K S Kᵀ lets round-off asymmetry
@@ -280,6 +291,8 @@ def _reach(model: SensorModel) -> float:
     range bands' last band with P_D > 0 (inf without such bands), plus the lever arm."""
     reach = math.inf
     for factor in model.detection.factors:
+        if isinstance(factor, (int, float)) and factor == 0:
+            return 0.0
         if isinstance(factor, RangeBands):
             seen = [i for i, value in enumerate(factor.values) if value > 0]
             if not seen:
@@ -291,11 +304,19 @@ def _reach(model: SensorModel) -> float:
     return reach + arm
 
 
+def _given_radius(value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not (math.isfinite(value) and value > 0):
+        raise ValueError(f"region_radius: must be a finite number of metres > 0, got {value!r}")
+    return float(value)
+
+
 def _region_radius(models) -> float:
     reach = max(_reach(model) for model in models)
     if not math.isfinite(reach):
-        raise ValueError("region_radius: a sensor's P_D has no outer range band with P_D = 0, "
-                         "so its reach is unbounded; give the surveillance region's radius")
+        raise ValueError("region_radius: a sensor's P_D has no outer range band with P_D = 0 "
+                         "(a constant P_D, say), so its reach is unbounded; give the "
+                         "surveillance region's radius (m)")
     return reach + REGION_MARGIN
 
 

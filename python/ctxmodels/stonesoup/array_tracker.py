@@ -187,10 +187,14 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
         covar = np.asarray(birth.birth_covar, dtype=np.float64)
         if self._pending is None:
             self._pending = _core.GaussianMixtureArrays(means.shape[1])
-        self._pending.extend(means, np.ascontiguousarray(np.broadcast_to(
+        fresh = _core.GaussianMixtureArrays(means.shape[1])
+        fresh.extend(means, np.ascontiguousarray(np.broadcast_to(
             covar, (len(means),) + covar.shape)), np.full(len(means), float(birth.birth_weight)),
             [_BIRTH] * len(means), [time] * len(means))
-        self._within_region(self._pending)
+        # Only this scan's births meet this scan's region: the queued ones met their own
+        # scan's (a region that moves may have left them behind since, as on the component path).
+        self._within_region(fresh)
+        self._pending.take_from(fresh, [True] * len(fresh))
 
     def _enter_due_births(self, arrays, time: int, context) -> None:
         """Moves the queued births that enter this scan into the mixture (see

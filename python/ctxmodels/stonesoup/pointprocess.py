@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 from scipy.stats import multivariate_normal
-from stonesoup.base import Base, Property
+from stonesoup.base import Property
 from stonesoup.tracker.pointprocess import \
     PointProcessMultiTargetTracker as _StockPointProcessTracker
 from stonesoup.types.numeric import Probability
@@ -47,7 +47,9 @@ from ..foreign import as_array_context
 from .birth import MeasurementDrivenBirth
 from .ordering import context_kwargs, declares_context, in_stable_order
 from .reduction import reduce_mixture
-from .region import CircularRegion, scan_region  # noqa: F401 (CircularRegion: its old home)
+# CircularRegion lived here: YAML written with !ctxmodels.stonesoup.pointprocess.CircularRegion
+# still loads through this import.
+from .region import CircularRegion, scan_region  # noqa: F401
 
 _BIRTH = TaggedWeightedGaussianState.BIRTH
 
@@ -335,7 +337,7 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         return mask
 
     def _inside(self, components) -> list:
-        if self.surveillance_region is None or not components:
+        if self._region is None or not components:
             return list(components)
         mapping = list(self.position_mapping)
         points = np.array([np.asarray(c.state_vector, dtype=np.float64).ravel()[mapping]
@@ -381,7 +383,7 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             self.gaussian_mixture = self.updater.update(hypotheses, detector_context=context)
         else:
             self.gaussian_mixture = self.updater.update(hypotheses)
-        if self.surveillance_region is not None:
+        if self._region is not None:
             self.gaussian_mixture.components = self._inside(self.gaussian_mixture.components)
         if self.max_position_std is not None:
             self.gaussian_mixture.components = self._certain_enough(
