@@ -1,12 +1,15 @@
 //! Clutter spatial density λ(z; S): a product of factors evaluated per detection.
 //!
-//! Factors: constants, range bands over the detection's range from the sensor, and
-//! threshold rules on one column of detection metadata (the paper's lidar: segment
-//! `area < 10` → 1e-1, otherwise 1e-3). λ is a density in the detection's measurement
+//! Factors: constants, range bands over the detection's range from the sensor, threshold
+//! rules on one column of detection metadata (the paper's lidar: segment `area < 10` →
+//! 1e-1, otherwise 1e-3), and learned clutter maps ([`ClutterMap`], shared with the
+//! estimator that updates them between scans). λ is a density in the detection's measurement
 //! space, so it must be strictly positive: trackers divide by it.
 
 use crate::batch::for_each_chunk;
+use crate::clutter_map::ClutterMap;
 use crate::error::{ModelError, Result};
+use std::sync::{Arc, RwLock, RwLockReadGuard};
 use crate::pose::Pose;
 use crate::range_bands::RangeBands;
 use crate::simd::{dispatch, LaneKernel, Lanes};
@@ -22,11 +25,34 @@ pub struct MetadataThreshold {
     pub missing: Option<f64>,
 }
 
-#[derive(Debug, Clone, PartialEq)]
+/// A learned map, shared between the models that read it and the estimator that updates it.
+pub type SharedMap = Arc<RwLock<ClutterMap>>;
+
+/// Reads a shared map (a panic while it was being written cannot have left it half-updated:
+/// [`ClutterMap::update`] checks its inputs before changing anything).
+pub fn read_map(map: &SharedMap) -> RwLockReadGuard<'_, ClutterMap> {
+    map.read().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+#[derive(Debug, Clone)]
 pub enum ClutterFactor {
     Constant(f64),
     Range(RangeBands),
     Metadata(MetadataThreshold),
+    /// λ from the map as it stands when the model is evaluated.
+    Map(SharedMap),
+}
+
+impl PartialEq for ClutterFactor {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (ClutterFactor::Constant(a), ClutterFactor::Constant(b)) => a == b,
+            (ClutterFactor::Range(a), ClutterFactor::Range(b)) => a == b,
+            (ClutterFactor::Metadata(a), ClutterFactor::Metadata(b)) => a == b,
+            (ClutterFactor::Map(a), ClutterFactor::Map(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -53,6 +79,8 @@ impl ClutterModel {
         for (i, f) in factors.iter().enumerate() {
             match f {
                 ClutterFactor::Constant(v) => check_density(i, *v)?,
+                // its values are posterior means with a prior > 0: finite and > 0
+                ClutterFactor::Map(_) => uses_position = true,
                 ClutterFactor::Range(b) => {
                     uses_position = true;
                     for &v in b.values() {
@@ -114,11 +142,10 @@ impl ClutterModel {
         if metadata.len() != k * m {
             return Err(ModelError::shape("metadata", format!("must be ({m}, {k}), got {} values", metadata.len())));
         }
-        let origin = [pose.x, pose.y];
         // The first row that cannot be evaluated, with the argument and the problem.
         let problems = std::sync::Mutex::new(Vec::<(usize, &'static str, String)>::new());
         let bad = for_each_chunk(out, |first, chunk| {
-            let bad = dispatch(Densities { model: self, origin, positions, metadata, ranges, first, out: chunk })?;
+            let bad = dispatch(Densities { model: self, pose, positions, metadata, ranges, first, out: chunk })?;
             let row = first + bad;
             let (argument, message) = self.problem(positions, metadata, row, chunk[bad]);
             problems.lock().unwrap().push((row, argument, message));
@@ -135,13 +162,14 @@ impl ClutterModel {
     /// λ of one detection at (x, y) with its metadata row and measured range (NaN: none),
     /// one factor after another: the readable reference the lane kernel must match bit for
     /// bit. NaN when the detection cannot be evaluated.
-    pub fn at_one(&self, origin: [f64; 2], [x, y]: [f64; 2], metadata: &[f64], measured: f64) -> f64 {
-        let range = if measured.is_nan() { ((x - origin[0]).powi(2) + (y - origin[1]).powi(2)).sqrt() } else { measured };
+    pub fn at_one(&self, pose: &Pose, [x, y]: [f64; 2], metadata: &[f64], measured: f64) -> f64 {
+        let range = if measured.is_nan() { ((x - pose.x).powi(2) + (y - pose.y).powi(2)).sqrt() } else { measured };
         let mut density = if self.uses_position && !(x.is_finite() && y.is_finite()) { f64::NAN } else { 1.0 };
         for f in &self.factors {
             density *= match f {
                 ClutterFactor::Constant(v) => *v,
                 ClutterFactor::Range(bands) => bands.at(range),
+                ClutterFactor::Map(map) => read_map(map).value_at(pose, x, y, measured),
                 ClutterFactor::Metadata(rule) => {
                     let value = metadata[rule.column];
                     if value.is_nan() {
@@ -194,7 +222,7 @@ impl ClutterModel {
 /// λ > 0.
 struct Densities<'a> {
     model: &'a ClutterModel,
-    origin: [f64; 2],
+    pose: &'a Pose,
     positions: &'a [f64],
     metadata: &'a [f64],
     ranges: Option<&'a [f64]>,
@@ -207,11 +235,11 @@ impl LaneKernel for Densities<'_> {
 
     #[inline(always)]
     fn run<L: Lanes>(self) -> Option<usize> {
-        let Densities { model, origin, positions, metadata, ranges, first, out } = self;
+        let Densities { model, pose, positions, metadata, ranges, first, out } = self;
         let k = model.metadata_columns;
         let full = out.len() / 4 * 4;
         let (one, nan, zero) = (L::splat(1.0), L::splat(f64::NAN), L::splat(0.0));
-        let (ox, oy) = (L::splat(origin[0]), L::splat(origin[1]));
+        let (ox, oy) = (L::splat(pose.x), L::splat(pose.y));
         // Exact-size chunks, so the loads need no bounds checks. (No closure returns lanes
         // here: it would be compiled outside the AVX2 function.)
         let xy = &positions[2 * first..2 * (first + full)];
@@ -269,6 +297,21 @@ impl LaneKernel for Densities<'_> {
                         density.store(o);
                     }
                 }
+                ClutterFactor::Map(map) => {
+                    // a gather per detection: the map is read once for the whole pass
+                    let map = read_map(map);
+                    for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(8)) {
+                        let at = |i: usize| {
+                            let measured = ranges.map_or(f64::NAN, |r| r[first + 4 * j + i]);
+                            map.value_at(pose, p[2 * i], p[2 * i + 1], measured)
+                        };
+                        let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);
+                        if checks {
+                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                        }
+                        density.store(o);
+                    }
+                }
                 ClutterFactor::Metadata(rule) => {
                     let (threshold, below, above) = (L::splat(rule.threshold), L::splat(rule.below), L::splat(rule.at_or_above));
                     let missing = L::splat(rule.missing.unwrap_or(f64::NAN));
@@ -299,7 +342,7 @@ impl LaneKernel for Densities<'_> {
         for (i, density) in out.iter_mut().enumerate().skip(full) {
             let row = first + i;
             let measured = ranges.map_or(f64::NAN, |r| r[row]);
-            *density = model.at_one(origin, [positions[2 * row], positions[2 * row + 1]], &metadata[row * k..(row + 1) * k], measured);
+            *density = model.at_one(pose, [positions[2 * row], positions[2 * row + 1]], &metadata[row * k..(row + 1) * k], measured);
         }
         if !L::any(bad) && out[full..].iter().all(|v| v.is_finite() && *v > 0.0) {
             return None;
@@ -379,6 +422,39 @@ mod tests {
         assert!(ClutterModel::new(vec![ClutterFactor::Constant(-1e-3)]).is_err());
     }
 
+    fn learned_map() -> ClutterFactor {
+        use crate::clutter_map::MapSpace;
+        let bearings: Vec<f64> = (0..=12).map(|i| -std::f64::consts::PI + i as f64 * std::f64::consts::PI / 6.0).collect();
+        let mut map = ClutterMap::new(MapSpace::BearingRange, [bearings, vec![0.0, 300.0, 1000.0, 1600.0]], 1e-3, 3.0, 0.95).unwrap();
+        let pose = Pose::new(3.0, -4.0, 0.7).unwrap();
+        let clutter: Vec<f64> = (0..80).map(|k| ((k as f64) * 1.618_033_988_749_895).sin() * 1500.0).collect();
+        for scan in 0..5 {
+            map.update(&pose, &clutter[8 * scan..8 * scan + 16], None).unwrap();
+        }
+        ClutterFactor::Map(Arc::new(RwLock::new(map)))
+    }
+
+    #[test]
+    fn a_model_reads_its_map_as_it_stands() {
+        let factor = learned_map();
+        let ClutterFactor::Map(shared) = &factor else { unreachable!() };
+        let model = ClutterModel::new(vec![ClutterFactor::Constant(2.0), factor.clone()]).unwrap();
+        assert!(model.uses_position());
+        let pose = Pose::new(3.0, -4.0, 0.7).unwrap();
+        let at = [500.0, 300.0];
+        let mut before = [0.0];
+        model.evaluate(&pose, &at, &[], &mut before).unwrap();
+        assert_eq!(before[0], 2.0 * read_map(shared).value_at(&pose, at[0], at[1], f64::NAN));
+        shared.write().unwrap().update(&pose, &[at, at, at].concat(), None).unwrap();
+        let mut after = [0.0];
+        model.evaluate(&pose, &at, &[], &mut after).unwrap();
+        assert!(after[0] > before[0]);
+        assert_eq!(after[0], 2.0 * read_map(shared).value_at(&pose, at[0], at[1], f64::NAN));
+        // equal models share the map itself
+        assert_eq!(model, ClutterModel::new(vec![ClutterFactor::Constant(2.0), factor]).unwrap());
+        assert_ne!(model, ClutterModel::new(vec![ClutterFactor::Constant(2.0), learned_map()]).unwrap());
+    }
+
     #[test]
     fn every_backend_gives_the_reference_bits() {
         use crate::simd::{run_on, Backend};
@@ -393,8 +469,12 @@ mod tests {
             vec![rule(0, 10.0, Some(1e-2)), bands(vec![100.0], vec![2.0, 3.0], vec![false]), ClutterFactor::Constant(1e-300), ClutterFactor::Constant(1e-300)],
             vec![],
             vec![ClutterFactor::Constant(0.25), rule(2, 5.0, Some(4.0))],
+            // a learned map with some evidence, between a range factor and a rule
+            vec![bands(vec![1000.0], vec![1e-3, 1e-2], vec![true]), learned_map(), rule(0, 10.0, Some(1e-2))],
+            vec![learned_map()],
         ];
         let origin = [3.0, -4.0];
+        let pose = Pose::new(origin[0], origin[1], 0.7).unwrap();
         for model in models.map(|factors| ClutterModel::new(factors).unwrap()) {
             let k = model.metadata_columns();
             for m in [1, 3, 4, 5, 9, 130] {
@@ -415,12 +495,12 @@ mod tests {
                 let ranges: Vec<f64> = (0..m).map(|i| if i % 3 == 0 { 1000.0 } else { f64::NAN }).collect();
                 for ranges in [None, Some(&ranges[..])] {
                     let reference: Vec<u64> = (0..m)
-                        .map(|i| model.at_one(origin, [positions[2 * i], positions[2 * i + 1]], &metadata[k * i..k * (i + 1)], ranges.map_or(f64::NAN, |r| r[i])).to_bits())
+                        .map(|i| model.at_one(&pose, [positions[2 * i], positions[2 * i + 1]], &metadata[k * i..k * (i + 1)], ranges.map_or(f64::NAN, |r| r[i])).to_bits())
                         .collect();
                     let first_bad = reference.iter().position(|&v| !(f64::from_bits(v).is_finite() && f64::from_bits(v) > 0.0));
                     for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
                         let mut out = vec![0.0; m];
-                        let bad = run_on(backend, Densities { model: &model, origin, positions: &positions, metadata: &metadata, ranges, first: 0, out: &mut out });
+                        let bad = run_on(backend, Densities { model: &model, pose: &pose, positions: &positions, metadata: &metadata, ranges, first: 0, out: &mut out });
                         assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), reference, "{backend:?} m={m} {model:?}");
                         assert_eq!(bad, first_bad, "{backend:?} m={m} {model:?}");
                     }

@@ -343,6 +343,10 @@ proptest! {
                 ClutterFactor::Constant(v) => vec![*v],
                 ClutterFactor::Range(b) => b.values().to_vec(),
                 ClutterFactor::Metadata(r) => [r.below, r.at_or_above].into_iter().chain(r.missing).collect(),
+                ClutterFactor::Map(m) => {
+                    let map = crate::clutter::read_map(m);
+                    map.intensities().into_iter().chain([map.prior_intensity()]).collect()
+                }
             };
             lo *= values.iter().fold(f64::INFINITY, |a, v| a.min(v.abs()));
             hi *= values.iter().fold(0.0f64, |a, v| a.max(v.abs()));

@@ -7,6 +7,7 @@
 
 pub mod batch;
 pub mod clutter;
+pub mod clutter_map;
 pub mod cubature;
 pub mod detection;
 pub mod distinct;

@@ -24,6 +24,7 @@ use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
 
+mod clutter_map;
 mod jpda;
 mod mixture;
 mod particles;
@@ -412,11 +413,13 @@ impl PyClutterModel {
                 ClutterFactor::Range(b.get().0.clone())
             } else if let Ok(m) = f.cast::<PyMetadataThreshold>() {
                 ClutterFactor::Metadata(m.get().0.clone())
+            } else if let Ok(map) = f.cast::<clutter_map::PyClutterMap>() {
+                ClutterFactor::Map(map.get().0.clone())
             } else if let Ok(v) = f.extract::<f64>() {
                 ClutterFactor::Constant(v)
             } else {
                 return Err(PyTypeError::new_err(format!(
-                    "factors: factor {i} is a {}, expected a float, RangeBands or MetadataThreshold",
+                    "factors: factor {i} is a {}, expected a float, RangeBands, MetadataThreshold or ClutterMap",
                     f.get_type().name()?
                 )));
             });
@@ -498,6 +501,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scan::PyClutterAtPose>()?;
     m.add_class::<PyMetadataThreshold>()?;
     m.add_class::<PyClutterModel>()?;
+    m.add_class::<clutter_map::PyClutterMap>()?;
     m.add_function(wrap_pyfunction!(mount, m)?)?;
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;
     m.add_function(wrap_pyfunction!(simd_backend, m)?)?;

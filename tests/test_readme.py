@@ -26,6 +26,7 @@ def test_guide_examples_run(capsys):
         exec(compile(block, str(GUIDE), "exec"), {"__name__": "guide"})
     printed = capsys.readouterr().out
     assert "[0.4 0. ]" in printed
+    assert "ahead 0.090, behind 9.5e-05" in printed  # the learned clutter map
     found = re.search(r"GM-PHD: \d+ components, (\d+) tracks", printed)
     assert found and int(found.group(1)) > 0
     found = re.search(r"JPDA: (\d+) tracks", printed)

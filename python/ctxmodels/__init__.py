@@ -7,6 +7,7 @@ and handed to Stone Soup trackers as per-scan :class:`DetectorContext` objects.
 """
 from ._core import rule_points
 from .clutter import ClutterDensityModel, MetadataThreshold
+from .clutter_map import ClutterMap
 from .context import DetectionSet, DetectorContext, detection_positions, measured_ranges
 from .detection import DetectionProbabilityModel
 from .land import LandMask, LineOfSight
@@ -20,6 +21,7 @@ __version__ = "0.1.0"
 __all__ = [
     "AngularSector",
     "ClutterDensityModel",
+    "ClutterMap",
     "ConstantPose",
     "DetectionProbabilityModel",
     "DetectionSet",

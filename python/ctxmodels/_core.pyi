@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 __all__ = [
     "AngularSector",
     "ClutterAtPose",
+    "ClutterMap",
     "ClutterModel",
     "DetectionAtPose",
     "DetectionModel",
@@ -193,9 +194,12 @@ class MetadataThreshold:
 class ClutterModel:
     """λ as the product of its factors (each finite and > 0)."""
 
-    def __new__(cls, factors: Sequence[float | RangeBands | MetadataThreshold]) -> ClutterModel:
-        """`factors`: floats (constants), RangeBands (over range from the sensor) and
-        MetadataThreshold rules. λ is their product."""
+    def __new__(
+        cls, factors: Sequence[float | RangeBands | MetadataThreshold | ClutterMap]
+    ) -> ClutterModel:
+        """`factors`: floats (constants), RangeBands (over range from the sensor),
+        MetadataThreshold rules and ClutterMaps (shared, read as they stand). λ is their
+        product."""
     @property
     def metadata_columns(self) -> int: ...
     @property
@@ -210,6 +214,37 @@ class ClutterModel:
     ) -> _Floats:
         """λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing;
         range bands read `ranges[i]` (a measured range) where given and not NaN."""
+
+@final
+class ClutterMap:
+    """A clutter-intensity map learned online (Gamma posterior per cell, forgetting)."""
+
+    def __new__(
+        cls,
+        space: Literal["bearing-range", "body-xy", "world-xy"],
+        edges0: Sequence[float],
+        edges1: Sequence[float],
+        prior_intensity: float,
+        prior_scans: float,
+        forgetting: float,
+        counts: Sequence[float] | None = None,
+        exposure: float = 0.0,
+        scale: float = 1.0,
+    ) -> ClutterMap:
+        """`space`: "bearing-range", "body-xy" or "world-xy"; `edges0`, `edges1`: the grid's
+        edges on each axis (bearing or x, then range or y); the prior's intensity and weight
+        in scans; the forgetting factor per scan; optionally a saved state."""
+    @property
+    def shape(self) -> tuple[int, int]: ...
+    def update(self, pose: _Pose, positions: _Floats, ranges: _Floats | None = None) -> None:
+        """One scan's clutter detections: world `positions` (M, 2), measured `ranges` (M,) or
+        None (NaN entries: from the position)."""
+    def intensity(self, pose: _Pose, positions: _Floats, ranges: _Floats | None = None) -> _Floats:
+        """λ of the map alone at world `positions` (M, 2) (the prior outside the grid)."""
+    def intensities(self) -> _Floats:
+        """The posterior mean λ of every cell, (n0 · n1,) row-major."""
+    def state(self) -> tuple[_Floats, float, float]:
+        """(counts, exposure, scale): the state an update changes, as stored (see the core)."""
 
 def mount(pose: _Pose, forward: float, left: float, yaw: float) -> _Pose:
     """The pose (x, y, heading) of a sensor mounted on a platform at `pose`."""

@@ -8,6 +8,7 @@ from stonesoup.base import Property
 
 from . import _core
 from ._component import ModelComponent, as_array, as_float, as_rows, as_sequence, check_out
+from .clutter_map import ClutterMap
 from .pose import Pose
 from .range_bands import RangeBands
 
@@ -43,7 +44,7 @@ class MetadataThreshold(ModelComponent):
                                        as_float(self.at_or_above, "at_or_above"), missing)
 
 
-ClutterFactor = float | RangeBands | MetadataThreshold
+ClutterFactor = float | RangeBands | MetadataThreshold | ClutterMap
 
 
 class ClutterDensityModel(ModelComponent):
@@ -55,8 +56,9 @@ class ClutterDensityModel(ModelComponent):
     in the units of the detection's *measurement space* — what Stone Soup's
     ``clutter_spatial_density`` means: per m² for a Cartesian (x, y) sensor, per rad·m for
     a bearing–range radar. Factors: constants, :class:`RangeBands` over the detection's
-    range from the sensor, and :class:`MetadataThreshold` rules. Every value must be finite
-    and strictly positive (trackers divide by λ).
+    range from the sensor, :class:`MetadataThreshold` rules and learned
+    :class:`~ctxmodels.ClutterMap` s (read as they stand when λ is evaluated). Every value
+    must be finite and strictly positive (trackers divide by λ).
 
     The paper's radar (eq. lambda-radar): ``ClutterDensityModel(factors=[
     RangeBands(edges=(1000,), values=(1e-3, 1e-2))])``.
@@ -80,7 +82,7 @@ class ClutterDensityModel(ModelComponent):
 
     @property
     def uses_position(self) -> bool:
-        return any(isinstance(f, RangeBands) for f in self.factors)
+        return any(isinstance(f, (RangeBands, ClutterMap)) for f in self.factors)
 
     def _compiled(self) -> _core.ClutterModel:
         def build():
@@ -91,6 +93,8 @@ class ClutterDensityModel(ModelComponent):
                     parts.append(f._compiled())
                 elif isinstance(f, MetadataThreshold):
                     parts.append(f._compiled(keys.index(f.key)))
+                elif isinstance(f, ClutterMap):
+                    parts.append(f._core)  # shared: the model reads the map's updates
                 else:
                     parts.append(as_float(f, f"factors[{i}]"))
             return _core.ClutterModel(parts)

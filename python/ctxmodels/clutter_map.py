@@ -1,0 +1,158 @@
+r"""A clutter-intensity map learned online: a clutter factor whose values come from the
+detections that no track explains, scan after scan.
+
+Each cell :math:`c` of a grid in the sensor's measurement space (volume :math:`V_c`: rad·m
+for a bearing–range cell, m² for an x/y cell) holds a Gamma posterior over its clutter
+intensity (expected clutter points per unit measurement volume per scan). A
+Gamma(:math:`\lambda_0 s_0 V_c,\ s_0 V_c`) prior — intensity :math:`\lambda_0`, worth
+:math:`s_0` scans — updated with Poisson counts :math:`n_{c,j}` at scans :math:`j`, each
+discounted by :math:`\gamma` per scan since (exponential forgetting), has the posterior mean
+
+.. math::
+    \hat\lambda_c = \frac{\lambda_0 s_0 + N_c / V_c}{s_0 + S}, \qquad
+    N_c = \sum_j \gamma^{k-j} n_{c,j}, \qquad S = \sum_j \gamma^{k-j},
+
+which is the factor's value for a detection in cell :math:`c` (:math:`\lambda_0` outside
+the grid). Every update counts one scan of exposure for every cell: the map assumes the
+sensor reports clutter over its whole grid at each scan (a blind sector's cells then drift
+towards low λ, where no detection arrives to be weighed by it). An update costs
+O(detections) in the Rust core (the forgetting is a running scale, not a pass over cells).
+
+The map is *state*, not a value like the other components: it changes with each
+:meth:`ClutterMap.update`, and every :class:`~ctxmodels.ClutterDensityModel` built with it
+reads it as it stands when evaluated. Update it after a scan's tracking, with that scan's
+detections: within a scan the map is then fixed, and λ does not depend on the order of the
+detections. Its state (:attr:`counts`, :attr:`exposure`, :attr:`scale`) pickles and
+round-trips through Stone Soup's YAML exactly.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from stonesoup.base import Base, Property
+
+from . import _core
+from ._component import as_array, as_rows
+from .pose import Pose
+
+SPACES = ("bearing-range", "body-xy", "world-xy")
+
+
+class ClutterMap(Base):
+    """An online clutter-intensity map (see the module docs); a factor of
+    :class:`~ctxmodels.ClutterDensityModel`."""
+
+    space: str = Property(
+        doc="'bearing-range' (a bearing–range sensor's measurement space: bearing in the "
+            "sensor's frame, radians, then range, m; λ per rad·m), 'body-xy' (x along the "
+            "sensor's heading, y to its left, m; λ per m²) or 'world-xy' (m; λ per m²).")
+    edges: Sequence[Sequence[float]] = Property(
+        doc="The grid's edges on each axis, strictly increasing: (bearings within [-π, π], "
+            "ranges >= 0) or (x, y). Cells are half-open, [e_i, e_(i+1)).")
+    prior_intensity: float = Property(doc=r"Prior intensity :math:`\lambda_0` (> 0), also "
+                                          "the value outside the grid.")
+    prior_scans: float = Property(default=10.0, doc=r"Prior weight :math:`s_0` in scans (> 0).")
+    forgetting: float = Property(default=0.99, doc=r"Forgetting factor :math:`\gamma` per "
+                                                   "scan, in (0, 1]; memory ≈ 1/(1 − γ) scans.")
+    counts: np.ndarray = Property(
+        default=None, doc="State: the discounted clutter counts per cell, (n0, n1), times "
+                          ":attr:`scale`. None: a fresh map. Read back, it is the current state.")
+    exposure: float = Property(default=0.0, doc="State: the discounted number of scans, "
+                                                "times :attr:`scale`.")
+    scale: float = Property(default=1.0, doc="State: the running scale of the forgetting.")
+
+    @counts.getter
+    def counts(self) -> np.ndarray:
+        counts, _, _ = self._core.state()
+        return counts.reshape(self._core.shape)
+
+    @exposure.getter
+    def exposure(self) -> float:
+        return self._core.state()[1]
+
+    @scale.getter
+    def scale(self) -> float:
+        return self._core.state()[2]
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        edges = self.edges
+        if isinstance(edges, (str, bytes)) or not isinstance(edges, Sequence) or len(edges) != 2:
+            raise ValueError("edges: expected two sequences of edges, one per axis")
+        self.edges = tuple(tuple(as_array(axis, "edges", 1, "edges along one axis").tolist())
+                           for axis in edges)
+        self._core = self._build(self._property_counts, self._property_exposure,
+                                 self._property_scale)
+
+    def _build(self, counts, exposure, scale) -> _core.ClutterMap:
+        if self.space not in SPACES:
+            raise ValueError(f"space: must be one of {SPACES}, got {self.space!r}")
+        axes = self.edges
+        shape = (max(len(axes[0]) - 1, 0), max(len(axes[1]) - 1, 0))
+        if counts is not None:
+            counts = as_array(counts, "counts", 2, f"a {shape} array")
+            if counts.shape != shape:
+                raise ValueError(f"counts: must have shape {shape}, got {counts.shape}")
+            counts = counts.ravel().tolist()
+        return _core.ClutterMap(self.space, list(axes[0]), list(axes[1]),
+                                _number(self.prior_intensity, "prior_intensity"),
+                                _number(self.prior_scans, "prior_scans"),
+                                _number(self.forgetting, "forgetting"), counts,
+                                _number(exposure, "exposure"), _number(scale, "scale"))
+
+    def __setattr__(self, name, value):
+        if name in type(self).properties and "_core" in self.__dict__:
+            raise AttributeError(f"ClutterMap.{name}: set at construction; the state changes "
+                                 "through update() and reset()")
+        super().__setattr__(name, value)
+
+    def reset(self) -> None:
+        """Back to the prior everywhere (the configuration is kept)."""
+        self.__dict__["_core"] = self._build(None, 0.0, 1.0)
+
+    def update(self, pose: Pose | Sequence[float], positions, ranges=None) -> None:
+        """One scan: the world ``positions`` (M, 2) of the detections taken as clutter and,
+        for a bearing–range map, their measured ``ranges`` (M,) (NaN or None: from the
+        position). An empty scan counts too: it is evidence of little clutter."""
+        positions = as_rows(positions, "positions", ncols=2)
+        if ranges is not None:
+            ranges = as_array(ranges, "ranges", 1, "(M,) ranges")
+        self._core.update(_pose_tuple(pose), positions, ranges)
+
+    def intensity(self, pose: Pose | Sequence[float], positions, ranges=None) -> np.ndarray:
+        """The map's λ at world ``positions`` (M, 2) seen from ``pose``."""
+        positions = as_rows(positions, "positions", ncols=2)
+        if ranges is not None:
+            ranges = as_array(ranges, "ranges", 1, "(M,) ranges")
+        return self._core.intensity(_pose_tuple(pose), positions, ranges)
+
+    def intensity_grid(self) -> np.ndarray:
+        """The posterior mean λ of every cell, (n0, n1)."""
+        return self._core.intensities().reshape(self._core.shape)
+
+    # The core object is rebuilt from the state, which pickles with the configuration.
+    def __getstate__(self):
+        state = {k: v for k, v in self.__dict__.items() if k != "_core"}
+        state["_property_counts"] = self.counts
+        state["_property_exposure"], state["_property_scale"] = self.exposure, self.scale
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self.__dict__["_core"] = self._build(state["_property_counts"],
+                                             state["_property_exposure"],
+                                             state["_property_scale"])
+
+
+def _number(value, argument: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{argument}: expected a number, got {type(value).__name__}")
+    return float(value)
+
+
+def _pose_tuple(pose) -> tuple[float, float, float]:
+    return pose.as_tuple() if isinstance(pose, Pose) else Pose(*pose).as_tuple()
+
+
+__all__ = ["ClutterMap"]

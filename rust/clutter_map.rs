@@ -1,0 +1,327 @@
+//! An online clutter-intensity map: λ learned per cell of a grid in the sensor's measurement
+//! space from the detections that no track explains.
+//!
+//! Each cell c (measurement-space volume V_c: rad·m for a bearing–range cell, m² for an x/y
+//! cell) holds a Gamma posterior over its clutter intensity λ_c (expected clutter points per
+//! unit volume per scan). With a Gamma(λ₀ s₀ V_c, s₀ V_c) prior — intensity λ₀, worth s₀
+//! scans of evidence — and Poisson counts n_{c,j} at scans j, discounted by the forgetting
+//! factor γ ∈ (0, 1] per scan (a power prior: scan j counts γ^(k−j) at scan k), the
+//! posterior mean after scan k is
+//!
+//!   λ_c = (λ₀ s₀ + N_c / V_c) / (s₀ + S),   N_c = Σ_j γ^(k−j) n_{c,j},   S = Σ_j γ^(k−j).
+//!
+//! An update is O(detections): instead of multiplying every cell by γ each scan, N and S
+//! are stored multiplied by a running scale (×1/γ per scan) and new evidence is added at
+//! the current scale; the scale is brought back by an exact power of two when it grows
+//! large. Every update counts one scan of exposure for every cell: the map assumes the
+//! sensor reports clutter over its whole grid at every scan. Outside the grid λ = λ₀.
+
+use crate::error::{ModelError, Result};
+use crate::pose::Pose;
+use std::f64::consts::PI;
+
+/// The coordinates a map's grid is laid over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapSpace {
+    /// (bearing in the sensor's frame, radians in [−π, π); range from the sensor, m):
+    /// the measurement space of a 2-D bearing–range radar; λ per rad·m.
+    BearingRange,
+    /// (x along the sensor's heading, y to its left), m; λ per m².
+    BodyXY,
+    /// World (x, y), m; λ per m².
+    WorldXY,
+}
+
+/// Scales above this are brought back by [`RESCALE`] (both exact powers of two).
+const LARGE: f64 = 1.157920892373162e77; // 2^256
+const RESCALE: f64 = 8.636168555094445e-78; // 2^-256
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClutterMap {
+    space: MapSpace,
+    edges: [Vec<f64>; 2],
+    prior_intensity: f64,
+    prior_scans: f64,
+    forgetting: f64,
+    /// Cell volumes, row-major (axis 0 × axis 1).
+    volumes: Vec<f64>,
+    /// N_c × scale, row-major.
+    counts: Vec<f64>,
+    /// S × scale.
+    exposure: f64,
+    scale: f64,
+}
+
+fn check_edges(argument: &'static str, edges: &[f64], lowest: f64, highest: f64) -> Result<()> {
+    if edges.len() < 2 {
+        return Err(ModelError::invalid(argument, format!("a grid axis needs at least 2 edges, got {}", edges.len())));
+    }
+    if let Some(v) = edges.iter().find(|v| !v.is_finite()) {
+        return Err(ModelError::invalid(argument, format!("edges must be finite, got {v}")));
+    }
+    if edges.windows(2).any(|w| w[0] >= w[1]) { // (finite, checked above)
+        return Err(ModelError::invalid(argument, "edges must be strictly increasing"));
+    }
+    if edges[0] < lowest || edges[edges.len() - 1] > highest {
+        return Err(ModelError::invalid(argument, format!("edges must lie in [{lowest}, {highest}]")));
+    }
+    Ok(())
+}
+
+fn positive(argument: &'static str, value: f64) -> Result<()> {
+    if !(value.is_finite() && value > 0.0) {
+        return Err(ModelError::invalid(argument, format!("must be finite and > 0, got {value}")));
+    }
+    Ok(())
+}
+
+impl ClutterMap {
+    /// A fresh map (the prior everywhere). `edges[0]` is bearing (rad, within [−π, π]) or x,
+    /// `edges[1]` range (m, ≥ 0) or y.
+    pub fn new(space: MapSpace, edges: [Vec<f64>; 2], prior_intensity: f64, prior_scans: f64, forgetting: f64) -> Result<Self> {
+        let (low, high) = match space {
+            MapSpace::BearingRange => ([-PI, 0.0], [PI, f64::INFINITY]),
+            _ => ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]),
+        };
+        check_edges("edges", &edges[0], low[0], high[0])?;
+        check_edges("edges", &edges[1], low[1], high[1])?;
+        positive("prior_intensity", prior_intensity)?;
+        positive("prior_scans", prior_scans)?;
+        if !(forgetting > 0.0 && forgetting <= 1.0) {
+            return Err(ModelError::invalid("forgetting", format!("must be in (0, 1], got {forgetting}")));
+        }
+        let mut volumes = Vec::with_capacity((edges[0].len() - 1) * (edges[1].len() - 1));
+        for a in edges[0].windows(2) {
+            for b in edges[1].windows(2) {
+                volumes.push((a[1] - a[0]) * (b[1] - b[0]));
+            }
+        }
+        if let Some(v) = volumes.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+            return Err(ModelError::invalid("edges", format!("every cell needs a finite volume > 0, got {v}")));
+        }
+        let cells = volumes.len();
+        Ok(ClutterMap { space, edges, prior_intensity, prior_scans, forgetting, volumes, counts: vec![0.0; cells], exposure: 0.0, scale: 1.0 })
+    }
+
+    /// The map with a saved state (see [`state`](Self::state)).
+    pub fn with_state(mut self, counts: Vec<f64>, exposure: f64, scale: f64) -> Result<Self> {
+        if counts.len() != self.counts.len() {
+            return Err(ModelError::shape("counts", format!("must have one entry per cell ({}), got {}", self.counts.len(), counts.len())));
+        }
+        if let Some(v) = counts.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+            return Err(ModelError::invalid("counts", format!("must be finite and >= 0, got {v}")));
+        }
+        if !(exposure.is_finite() && exposure >= 0.0) {
+            return Err(ModelError::invalid("exposure", format!("must be finite and >= 0, got {exposure}")));
+        }
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(ModelError::invalid("scale", format!("must be finite and > 0, got {scale}")));
+        }
+        self.counts = counts;
+        self.exposure = exposure;
+        self.scale = scale;
+        Ok(self)
+    }
+
+    /// (counts × scale, exposure × scale, scale): everything an update changes.
+    pub fn state(&self) -> (&[f64], f64, f64) {
+        (&self.counts, self.exposure, self.scale)
+    }
+
+    /// λ outside the grid, and the prior mean everywhere.
+    pub fn prior_intensity(&self) -> f64 {
+        self.prior_intensity
+    }
+
+    pub fn shape(&self) -> [usize; 2] {
+        [self.edges[0].len() - 1, self.edges[1].len() - 1]
+    }
+
+    /// The detection's coordinates in the map's space. `measured`: its measured range
+    /// (NaN: from the position), used by a bearing–range map.
+    #[inline]
+    fn coordinates(&self, pose: &Pose, x: f64, y: f64, measured: f64) -> [f64; 2] {
+        let (dx, dy) = (x - pose.x, y - pose.y);
+        match self.space {
+            MapSpace::BearingRange => {
+                let mut bearing = dy.atan2(dx) - pose.heading;
+                // to [−π, π): the heading is already in range, so one turn at most
+                if bearing >= PI {
+                    bearing -= 2.0 * PI;
+                } else if bearing < -PI {
+                    bearing += 2.0 * PI;
+                }
+                let range = if measured.is_nan() { dx.hypot(dy) } else { measured };
+                [bearing, range]
+            }
+            MapSpace::BodyXY => {
+                let (sin, cos) = pose.heading.sin_cos();
+                [cos * dx + sin * dy, cos * dy - sin * dx]
+            }
+            MapSpace::WorldXY => [x, y],
+        }
+    }
+
+    /// The cell (row-major) holding (u, v): half-open [e_i, e_(i+1)) on each axis.
+    #[inline]
+    fn cell(&self, [u, v]: [f64; 2]) -> Option<usize> {
+        let axis = |edges: &[f64], value: f64| {
+            if !(value >= edges[0] && value < edges[edges.len() - 1]) {
+                return None;
+            }
+            Some(edges.partition_point(|e| *e <= value) - 1)
+        };
+        let i = axis(&self.edges[0], u)?;
+        let j = axis(&self.edges[1], v)?;
+        Some(i * (self.edges[1].len() - 1) + j)
+    }
+
+    #[inline]
+    fn intensity_of(&self, cell: usize) -> f64 {
+        let (n, s) = (self.counts[cell] / self.scale, self.exposure / self.scale);
+        (self.prior_intensity * self.prior_scans + n / self.volumes[cell]) / (self.prior_scans + s)
+    }
+
+    /// λ at a world position (NaN when the position is not finite).
+    #[inline]
+    pub fn value_at(&self, pose: &Pose, x: f64, y: f64, measured: f64) -> f64 {
+        if !(x.is_finite() && y.is_finite()) {
+            return f64::NAN;
+        }
+        match self.cell(self.coordinates(pose, x, y, measured)) {
+            Some(c) => self.intensity_of(c),
+            None => self.prior_intensity,
+        }
+    }
+
+    /// The posterior mean λ of every cell, row-major.
+    pub fn intensities(&self) -> Vec<f64> {
+        (0..self.counts.len()).map(|c| self.intensity_of(c)).collect()
+    }
+
+    /// One scan: the `positions` (M, 2, world x/y) of the detections taken as clutter, with
+    /// their measured ranges (NaN: none). Checks every input before changing anything.
+    pub fn update(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>) -> Result<()> {
+        if !positions.len().is_multiple_of(2) {
+            return Err(ModelError::shape("positions", "must be (M, 2)"));
+        }
+        let m = positions.len() / 2;
+        if let Some(row) = (0..m).find(|&i| !(positions[2 * i].is_finite() && positions[2 * i + 1].is_finite())) {
+            return Err(ModelError::non_finite("positions", row, "position is NaN or infinite"));
+        }
+        if let Some(r) = ranges {
+            if r.len() != m {
+                return Err(ModelError::shape("ranges", format!("must have {m} entries, got {}", r.len())));
+            }
+            if let Some(row) = r.iter().position(|v| v.is_infinite() || *v < 0.0) {
+                return Err(ModelError::non_finite("ranges", row, "range is infinite or negative (NaN = use the position)"));
+            }
+        }
+        self.scale /= self.forgetting;
+        for i in 0..m {
+            let measured = ranges.map_or(f64::NAN, |r| r[i]);
+            if let Some(c) = self.cell(self.coordinates(pose, positions[2 * i], positions[2 * i + 1], measured)) {
+                self.counts[c] += self.scale;
+            }
+        }
+        self.exposure += self.scale;
+        if self.scale > LARGE {
+            for c in &mut self.counts {
+                *c *= RESCALE;
+            }
+            self.exposure *= RESCALE;
+            self.scale *= RESCALE;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn radar() -> ClutterMap {
+        let bearings: Vec<f64> = (0..=8).map(|i| -PI + i as f64 * PI / 4.0).collect();
+        ClutterMap::new(MapSpace::BearingRange, [bearings, vec![0.0, 500.0, 1000.0]], 1e-3, 5.0, 0.9).unwrap()
+    }
+
+    #[test]
+    fn the_scale_constants_are_the_powers_of_two_they_claim() {
+        assert_eq!(LARGE, 2f64.powi(256));
+        assert_eq!(RESCALE, 2f64.powi(-256));
+    }
+
+    #[test]
+    fn a_fresh_map_is_the_prior_and_outside_is_the_prior() {
+        let map = radar();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        assert!(map.intensities().iter().all(|v| *v == 1e-3));
+        assert_eq!(map.value_at(&pose, 5000.0, 0.0, f64::NAN), 1e-3);
+        assert!(map.value_at(&pose, f64::NAN, 0.0, f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn the_posterior_mean_follows_the_discounted_counts() {
+        let mut map = radar();
+        let pose = Pose::new(10.0, 0.0, PI / 2.0).unwrap();
+        // straight ahead (bearing 0, in cell [0, π/4)), 100 m: cell (4, 0)
+        let ahead = [10.0, 100.0];
+        map.update(&pose, &ahead, None).unwrap();
+        map.update(&pose, &[], None).unwrap();
+        map.update(&pose, &[ahead, ahead].concat(), None).unwrap();
+        // N = 1·γ² + 0·γ + 2, S = γ² + γ + 1, V = π/4 · 500
+        let (g, v) = (0.9f64, PI / 4.0 * 500.0);
+        let expected = (1e-3 * 5.0 + (g * g + 2.0) / v) / (5.0 + g * g + g + 1.0);
+        let got = map.value_at(&pose, 10.0, 100.0, f64::NAN);
+        assert!((got - expected).abs() <= 1e-15 * expected, "{got} vs {expected}");
+        // the other cells only saw exposure
+        let quiet = 1e-3 * 5.0 / (5.0 + g * g + g + 1.0);
+        let behind = map.value_at(&pose, 10.0, -100.0, f64::NAN);
+        assert!((behind - quiet).abs() <= 1e-15 * quiet);
+    }
+
+    #[test]
+    fn a_measured_range_decides_the_range_cell() {
+        let mut map = radar();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        // the position says 499.9 m, the measurement 500 m (an edge: the upper cell owns it)
+        map.update(&pose, &[499.9, 1.0], Some(&[500.0])).unwrap();
+        let near = map.value_at(&pose, 100.0, 1.0, f64::NAN);
+        let far = map.value_at(&pose, 700.0, 1.0, f64::NAN);
+        assert!(far > near);
+    }
+
+    #[test]
+    fn rescaling_keeps_the_estimate() {
+        let mut map = ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 1.0], vec![0.0, 1.0]], 0.5, 1.0, 0.5).unwrap();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        for _ in 0..300 {
+            map.update(&pose, &[0.5, 0.5], None).unwrap();
+        }
+        assert!(map.scale <= LARGE);
+        // N → 1/(1 − γ) = 2 = S: λ = (0.5 + 2) / (1 + 2)
+        assert!((map.intensities()[0] - 2.5 / 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_configuration_and_inputs_are_named() {
+        let e = || [vec![0.0, 1.0], vec![0.0, 1.0]];
+        let argument = |r: Result<ClutterMap>| r.unwrap_err().argument();
+        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.0)), "forgetting");
+        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 1.5)), "forgetting");
+        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, e(), 0.0, 1.0, 0.9)), "prior_intensity");
+        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, e(), 1.0, -1.0, 0.9)), "prior_scans");
+        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, [vec![0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
+        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, [vec![1.0, 0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
+        assert_eq!(argument(ClutterMap::new(MapSpace::BearingRange, [vec![-4.0, 0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
+        let mut map = ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.9).unwrap();
+        let before = map.clone();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        assert_eq!(map.update(&pose, &[0.5, 0.5, f64::NAN, 0.0], None).unwrap_err().argument(), "positions");
+        assert_eq!(map.update(&pose, &[0.5, 0.5], Some(&[f64::INFINITY])).unwrap_err().argument(), "ranges");
+        assert_eq!(map, before, "a failed update changes nothing");
+        assert_eq!(map.clone().with_state(vec![0.0; 2], 0.0, 1.0).unwrap_err().argument(), "counts");
+        assert_eq!(map.clone().with_state(vec![-1.0], 0.0, 1.0).unwrap_err().argument(), "counts");
+        assert_eq!(map.with_state(vec![0.0], 0.0, 0.0).unwrap_err().argument(), "scale");
+    }
+}

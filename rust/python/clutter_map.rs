@@ -1,0 +1,97 @@
+//! The learned clutter map at the boundary: one estimator shared (not copied) with every
+//! clutter model built from it.
+
+use super::{borrow, guarded, points_slice, pose_of, slice, value_error};
+use crate::clutter::{read_map, SharedMap};
+use crate::clutter_map::{ClutterMap, MapSpace};
+use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use std::sync::{Arc, RwLock};
+
+#[pyclass(name = "ClutterMap", module = "ctxmodels._core", frozen)]
+pub struct PyClutterMap(pub(super) SharedMap);
+
+#[pymethods]
+impl PyClutterMap {
+    /// `space`: "bearing-range", "body-xy" or "world-xy"; `edges0`, `edges1`: the grid's
+    /// edges on each axis (bearing or x, then range or y); the prior's intensity and weight
+    /// in scans; the forgetting factor per scan; optionally a saved state.
+    #[new]
+    #[pyo3(signature = (space, edges0, edges1, prior_intensity, prior_scans, forgetting, counts = None, exposure = 0.0, scale = 1.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        space: &str, edges0: Vec<f64>, edges1: Vec<f64>, prior_intensity: f64, prior_scans: f64, forgetting: f64,
+        counts: Option<Vec<f64>>, exposure: f64, scale: f64,
+    ) -> PyResult<Self> {
+        let space = match space {
+            "bearing-range" => MapSpace::BearingRange,
+            "body-xy" => MapSpace::BodyXY,
+            "world-xy" => MapSpace::WorldXY,
+            other => return Err(value_error("space", format!("must be 'bearing-range', 'body-xy' or 'world-xy', got {other:?}"))),
+        };
+        let map = guarded(|| {
+            let map = ClutterMap::new(space, [edges0, edges1], prior_intensity, prior_scans, forgetting)?;
+            match counts {
+                Some(counts) => map.with_state(counts, exposure, scale),
+                None if exposure == 0.0 && scale == 1.0 => Ok(map),
+                None => {
+                    let [a, b] = map.shape();
+                    map.with_state(vec![0.0; a * b], exposure, scale)
+                }
+            }
+        })?;
+        Ok(PyClutterMap(Arc::new(RwLock::new(map))))
+    }
+
+    #[getter]
+    fn shape(&self) -> (usize, usize) {
+        let [a, b] = read_map(&self.0).shape();
+        (a, b)
+    }
+
+    /// One scan's clutter detections: world `positions` (M, 2), measured `ranges` (M,) or
+    /// None (NaN entries: from the position).
+    #[pyo3(signature = (pose, positions, ranges = None))]
+    fn update(&self, pose: (f64, f64, f64), positions: Bound<'_, PyArray2<f64>>, ranges: Option<Bound<'_, PyArray1<f64>>>) -> PyResult<()> {
+        let pose = pose_of(pose)?;
+        let positions = borrow(&positions, "positions")?;
+        let p = points_slice(&positions, "positions")?;
+        let ranges = ranges.map(|r| borrow(&r, "ranges")).transpose()?;
+        let r = ranges.as_ref().map(|r| slice(r, "ranges")).transpose()?;
+        let map = &self.0;
+        guarded(|| map.write().unwrap_or_else(|poisoned| poisoned.into_inner()).update(&pose, p, r))
+    }
+
+    /// λ of the map alone at world `positions` (M, 2) (the prior outside the grid).
+    #[pyo3(signature = (pose, positions, ranges = None))]
+    fn intensity<'py>(
+        &self, py: Python<'py>, pose: (f64, f64, f64), positions: Bound<'py, PyArray2<f64>>, ranges: Option<Bound<'py, PyArray1<f64>>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let pose = pose_of(pose)?;
+        let n = positions.shape()[0];
+        let positions = borrow(&positions, "positions")?;
+        let p = points_slice(&positions, "positions")?;
+        let ranges = ranges.map(|r| borrow(&r, "ranges")).transpose()?;
+        let r = ranges.as_ref().map(|r| slice(r, "ranges")).transpose()?;
+        if let Some(r) = r {
+            if r.len() != n {
+                return Err(value_error("ranges", format!("must have {n} entries, got {}", r.len())));
+            }
+        }
+        let map = read_map(&self.0);
+        let values: Vec<f64> = (0..n).map(|i| map.value_at(&pose, p[2 * i], p[2 * i + 1], r.map_or(f64::NAN, |r| r[i]))).collect();
+        Ok(PyArray1::from_vec(py, values))
+    }
+
+    /// The posterior mean λ of every cell, (n0 · n1,) row-major.
+    fn intensities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, read_map(&self.0).intensities())
+    }
+
+    /// (counts, exposure, scale): the state an update changes, as stored (see the core).
+    fn state<'py>(&self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, f64, f64) {
+        let map = read_map(&self.0);
+        let (counts, exposure, scale) = map.state();
+        (PyArray1::from_slice(py, counts), exposure, scale)
+    }
+}
