@@ -429,7 +429,7 @@ mod tests {
         let pose = Pose::new(3.0, -4.0, 0.7).unwrap();
         let clutter: Vec<f64> = (0..80).map(|k| ((k as f64) * 1.618_033_988_749_895).sin() * 1500.0).collect();
         for scan in 0..5 {
-            map.update(&pose, &clutter[8 * scan..8 * scan + 16], None).unwrap();
+            map.update(&pose, &clutter[8 * scan..8 * scan + 16], None, &[clutter[scan], clutter[scan + 1], 150.0]).unwrap();
         }
         ClutterFactor::Map(Arc::new(RwLock::new(map)))
     }
@@ -445,7 +445,7 @@ mod tests {
         let mut before = [0.0];
         model.evaluate(&pose, &at, &[], &mut before).unwrap();
         assert_eq!(before[0], 2.0 * read_map(shared).value_at(&pose, at[0], at[1], f64::NAN));
-        shared.write().unwrap().update(&pose, &[at, at, at].concat(), None).unwrap();
+        shared.write().unwrap().update(&pose, &[at, at, at].concat(), None, &[]).unwrap();
         let mut after = [0.0];
         model.evaluate(&pose, &at, &[], &mut after).unwrap();
         assert!(after[0] > before[0]);

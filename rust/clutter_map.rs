@@ -10,11 +10,17 @@
 //!
 //!   λ_c = (λ₀ s₀ + N_c / V_c) / (s₀ + S),   N_c = Σ_j γ^(k−j) n_{c,j},   S = Σ_j γ^(k−j).
 //!
-//! An update is O(detections): instead of multiplying every cell by γ each scan, N and S
-//! are stored multiplied by a running scale (×1/γ per scan) and new evidence is added at
-//! the current scale; the scale is brought back by an exact power of two when it grows
-//! large. Every update counts one scan of exposure for every cell: the map assumes the
-//! sensor reports clutter over its whole grid at every scan. Outside the grid λ = λ₀.
+//! An update is O(detections + gates): instead of multiplying every cell by γ each scan, N
+//! and S are stored multiplied by a running scale (×1/γ per scan) and new evidence is added
+//! at the current scale; the scale is brought back by an exact power of two when it grows
+//! large. Every update counts one scan of exposure for every cell (the sensor reports
+//! clutter over its whole grid at every scan) except what *gates* take out: a gate (a disc
+//! around a track's position) removes the detections inside it — they are the track's —
+//! and its area from its cell's exposure that scan, so S_c = S − D_c with D_c the cell's
+//! discounted gated fraction (capped at 1 per scan). A track, true or false, then neither
+//! adds clutter evidence nor counts as a place where clutter was looked for and not found.
+//! A gate's area (π r², in the measurement space: π r² / max(R, r) rad·m at range R for a
+//! bearing–range map) is assigned to the cell of its centre. Outside the grid λ = λ₀.
 
 use crate::error::{ModelError, Result};
 use crate::pose::Pose;
@@ -47,6 +53,8 @@ pub struct ClutterMap {
     volumes: Vec<f64>,
     /// N_c × scale, row-major.
     counts: Vec<f64>,
+    /// D_c × scale: the discounted scans' gated fractions of each cell.
+    deficit: Vec<f64>,
     /// S × scale.
     exposure: f64,
     scale: f64,
@@ -100,16 +108,20 @@ impl ClutterMap {
             return Err(ModelError::invalid("edges", format!("every cell needs a finite volume > 0, got {v}")));
         }
         let cells = volumes.len();
-        Ok(ClutterMap { space, edges, prior_intensity, prior_scans, forgetting, volumes, counts: vec![0.0; cells], exposure: 0.0, scale: 1.0 })
+        Ok(ClutterMap {
+            space, edges, prior_intensity, prior_scans, forgetting, volumes, counts: vec![0.0; cells], deficit: vec![0.0; cells], exposure: 0.0, scale: 1.0,
+        })
     }
 
     /// The map with a saved state (see [`state`](Self::state)).
-    pub fn with_state(mut self, counts: Vec<f64>, exposure: f64, scale: f64) -> Result<Self> {
-        if counts.len() != self.counts.len() {
-            return Err(ModelError::shape("counts", format!("must have one entry per cell ({}), got {}", self.counts.len(), counts.len())));
-        }
-        if let Some(v) = counts.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
-            return Err(ModelError::invalid("counts", format!("must be finite and >= 0, got {v}")));
+    pub fn with_state(mut self, counts: Vec<f64>, deficit: Vec<f64>, exposure: f64, scale: f64) -> Result<Self> {
+        for (argument, values) in [("counts", &counts), ("deficit", &deficit)] {
+            if values.len() != self.counts.len() {
+                return Err(ModelError::shape(argument, format!("must have one entry per cell ({}), got {}", self.counts.len(), values.len())));
+            }
+            if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                return Err(ModelError::invalid(argument, format!("must be finite and >= 0, got {v}")));
+            }
         }
         if !(exposure.is_finite() && exposure >= 0.0) {
             return Err(ModelError::invalid("exposure", format!("must be finite and >= 0, got {exposure}")));
@@ -117,15 +129,19 @@ impl ClutterMap {
         if !(scale.is_finite() && scale > 0.0) {
             return Err(ModelError::invalid("scale", format!("must be finite and > 0, got {scale}")));
         }
+        if let Some(v) = deficit.iter().find(|v| **v > exposure) {
+            return Err(ModelError::invalid("deficit", format!("cannot exceed the exposure ({exposure}), got {v}")));
+        }
         self.counts = counts;
+        self.deficit = deficit;
         self.exposure = exposure;
         self.scale = scale;
         Ok(self)
     }
 
-    /// (counts × scale, exposure × scale, scale): everything an update changes.
-    pub fn state(&self) -> (&[f64], f64, f64) {
-        (&self.counts, self.exposure, self.scale)
+    /// (counts, deficit, exposure — each × scale —, scale): everything an update changes.
+    pub fn state(&self) -> (&[f64], &[f64], f64, f64) {
+        (&self.counts, &self.deficit, self.exposure, self.scale)
     }
 
     /// λ outside the grid, and the prior mean everywhere.
@@ -178,7 +194,7 @@ impl ClutterMap {
 
     #[inline]
     fn intensity_of(&self, cell: usize) -> f64 {
-        let (n, s) = (self.counts[cell] / self.scale, self.exposure / self.scale);
+        let (n, s) = (self.counts[cell] / self.scale, (self.exposure - self.deficit[cell]) / self.scale);
         (self.prior_intensity * self.prior_scans + n / self.volumes[cell]) / (self.prior_scans + s)
     }
 
@@ -199,9 +215,11 @@ impl ClutterMap {
         (0..self.counts.len()).map(|c| self.intensity_of(c)).collect()
     }
 
-    /// One scan: the `positions` (M, 2, world x/y) of the detections taken as clutter, with
-    /// their measured ranges (NaN: none). Checks every input before changing anything.
-    pub fn update(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>) -> Result<()> {
+    /// One scan: the `positions` (M, 2, world x/y) of its detections, with their measured
+    /// ranges (NaN: none), and `gates` (G, 3: world x, y, radius ≥ 0) around the tracks'
+    /// positions — detections inside a gate are not clutter, and its area is not exposed.
+    /// Checks every input before changing anything.
+    pub fn update(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>, gates: &[f64]) -> Result<()> {
         if !positions.len().is_multiple_of(2) {
             return Err(ModelError::shape("positions", "must be (M, 2)"));
         }
@@ -217,17 +235,47 @@ impl ClutterMap {
                 return Err(ModelError::non_finite("ranges", row, "range is infinite or negative (NaN = use the position)"));
             }
         }
+        if !gates.len().is_multiple_of(3) {
+            return Err(ModelError::shape("gates", "must be (G, 3): x, y, radius"));
+        }
+        if let Some(g) = gates.chunks_exact(3).position(|g| !(g.iter().all(|v| v.is_finite()) && g[2] >= 0.0)) {
+            return Err(ModelError::non_finite("gates", g, "a gate needs a finite centre and a finite radius >= 0"));
+        }
         self.scale /= self.forgetting;
+        let inside_a_gate = |x: f64, y: f64| gates.chunks_exact(3).any(|g| (x - g[0]).powi(2) + (y - g[1]).powi(2) <= g[2] * g[2]);
         for i in 0..m {
+            let (x, y) = (positions[2 * i], positions[2 * i + 1]);
+            if inside_a_gate(x, y) {
+                continue;
+            }
             let measured = ranges.map_or(f64::NAN, |r| r[i]);
-            if let Some(c) = self.cell(self.coordinates(pose, positions[2 * i], positions[2 * i + 1], measured)) {
+            if let Some(c) = self.cell(self.coordinates(pose, x, y, measured)) {
                 self.counts[c] += self.scale;
+            }
+        }
+        // each gated cell's fraction this scan, summed in gate order, then capped at 1
+        let mut gated: Vec<(usize, f64)> = Vec::new();
+        for g in gates.chunks_exact(3) {
+            let centre = self.coordinates(pose, g[0], g[1], f64::NAN);
+            let Some(c) = self.cell(centre) else { continue };
+            let area = match self.space {
+                MapSpace::BearingRange => PI * g[2] * g[2] / centre[1].max(g[2]),
+                _ => PI * g[2] * g[2],
+            };
+            match gated.iter_mut().find(|(cell, _)| *cell == c) {
+                Some((_, fraction)) => *fraction += area / self.volumes[c],
+                None => gated.push((c, area / self.volumes[c])),
+            }
+        }
+        for (c, fraction) in gated {
+            if fraction > 0.0 {
+                self.deficit[c] += self.scale * fraction.min(1.0);
             }
         }
         self.exposure += self.scale;
         if self.scale > LARGE {
-            for c in &mut self.counts {
-                *c *= RESCALE;
+            for v in self.counts.iter_mut().chain(self.deficit.iter_mut()) {
+                *v *= RESCALE;
             }
             self.exposure *= RESCALE;
             self.scale *= RESCALE;
@@ -266,9 +314,9 @@ mod tests {
         let pose = Pose::new(10.0, 0.0, PI / 2.0).unwrap();
         // straight ahead (bearing 0, in cell [0, π/4)), 100 m: cell (4, 0)
         let ahead = [10.0, 100.0];
-        map.update(&pose, &ahead, None).unwrap();
-        map.update(&pose, &[], None).unwrap();
-        map.update(&pose, &[ahead, ahead].concat(), None).unwrap();
+        map.update(&pose, &ahead, None, &[]).unwrap();
+        map.update(&pose, &[], None, &[]).unwrap();
+        map.update(&pose, &[ahead, ahead].concat(), None, &[]).unwrap();
         // N = 1·γ² + 0·γ + 2, S = γ² + γ + 1, V = π/4 · 500
         let (g, v) = (0.9f64, PI / 4.0 * 500.0);
         let expected = (1e-3 * 5.0 + (g * g + 2.0) / v) / (5.0 + g * g + g + 1.0);
@@ -285,10 +333,33 @@ mod tests {
         let mut map = radar();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         // the position says 499.9 m, the measurement 500 m (an edge: the upper cell owns it)
-        map.update(&pose, &[499.9, 1.0], Some(&[500.0])).unwrap();
+        map.update(&pose, &[499.9, 1.0], Some(&[500.0]), &[]).unwrap();
         let near = map.value_at(&pose, 100.0, 1.0, f64::NAN);
         let far = map.value_at(&pose, 700.0, 1.0, f64::NAN);
         assert!(far > near);
+    }
+
+    #[test]
+    fn a_gate_takes_its_detections_and_its_area_out() {
+        let mut map = ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 10.0, 20.0], vec![0.0, 10.0]], 0.01, 2.0, 1.0).unwrap();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        // a track at (5, 5) with a 2 m gate, its detection at (5.5, 5) and clutter at (1, 1)
+        // and (15, 5); a second gate of the same cell and one outside the grid
+        let gates = [5.0, 5.0, 2.0, 8.0, 8.0, 1.0, 50.0, 50.0, 3.0];
+        map.update(&pose, &[5.5, 5.0, 1.0, 1.0, 15.0, 5.0], None, &gates).unwrap();
+        let fraction = (PI * 4.0 + PI) / 100.0;
+        let (counts, deficit, exposure, _) = map.state();
+        assert_eq!(counts, [1.0, 1.0]);
+        assert_eq!(deficit, [fraction, 0.0]);
+        assert_eq!(exposure, 1.0);
+        let expected = (0.01 * 2.0 + 1.0 / 100.0) / (2.0 + 1.0 - fraction);
+        assert_eq!(map.intensities()[0], expected);
+        // a cell gated whole every scan learns nothing: the prior
+        let mut covered = ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 1.0], vec![0.0, 1.0]], 0.01, 2.0, 0.9).unwrap();
+        for _ in 0..50 {
+            covered.update(&pose, &[0.2, 0.2, 0.9, 0.9], None, &[0.5, 0.5, 3.0]).unwrap();
+        }
+        assert_eq!(covered.intensities()[0], 0.01);
     }
 
     #[test]
@@ -296,7 +367,7 @@ mod tests {
         let mut map = ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 1.0], vec![0.0, 1.0]], 0.5, 1.0, 0.5).unwrap();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         for _ in 0..300 {
-            map.update(&pose, &[0.5, 0.5], None).unwrap();
+            map.update(&pose, &[0.5, 0.5], None, &[]).unwrap();
         }
         assert!(map.scale <= LARGE);
         // N → 1/(1 − γ) = 2 = S: λ = (0.5 + 2) / (1 + 2)
@@ -317,11 +388,15 @@ mod tests {
         let mut map = ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.9).unwrap();
         let before = map.clone();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
-        assert_eq!(map.update(&pose, &[0.5, 0.5, f64::NAN, 0.0], None).unwrap_err().argument(), "positions");
-        assert_eq!(map.update(&pose, &[0.5, 0.5], Some(&[f64::INFINITY])).unwrap_err().argument(), "ranges");
+        assert_eq!(map.update(&pose, &[0.5, 0.5, f64::NAN, 0.0], None, &[]).unwrap_err().argument(), "positions");
+        assert_eq!(map.update(&pose, &[0.5, 0.5], Some(&[f64::INFINITY]), &[]).unwrap_err().argument(), "ranges");
         assert_eq!(map, before, "a failed update changes nothing");
-        assert_eq!(map.clone().with_state(vec![0.0; 2], 0.0, 1.0).unwrap_err().argument(), "counts");
-        assert_eq!(map.clone().with_state(vec![-1.0], 0.0, 1.0).unwrap_err().argument(), "counts");
-        assert_eq!(map.with_state(vec![0.0], 0.0, 0.0).unwrap_err().argument(), "scale");
+        assert_eq!(map.update(&pose, &[0.5, 0.5], None, &[0.0, 0.0, -1.0]).unwrap_err().argument(), "gates");
+        assert_eq!(map.update(&pose, &[0.5, 0.5], None, &[0.0, 0.0]).unwrap_err().argument(), "gates");
+        assert_eq!(map, before, "a failed update changes nothing");
+        assert_eq!(map.clone().with_state(vec![0.0; 2], vec![0.0], 0.0, 1.0).unwrap_err().argument(), "counts");
+        assert_eq!(map.clone().with_state(vec![-1.0], vec![0.0], 0.0, 1.0).unwrap_err().argument(), "counts");
+        assert_eq!(map.clone().with_state(vec![0.0], vec![2.0], 1.0, 1.0).unwrap_err().argument(), "deficit");
+        assert_eq!(map.with_state(vec![0.0], vec![0.0], 0.0, 0.0).unwrap_err().argument(), "scale");
     }
 }

@@ -17,13 +17,15 @@ RANGES = np.array([0.0, 200.0, 600.0, 1000.0, 1600.0])
 
 
 class ReferenceMap:
-    """The estimator as its formula reads: N ← γN + n, S ← γS + 1 over every cell."""
+    """The estimator as its formula reads: N ← γN + n, S ← γS + 1, D ← γD + min(1, gated
+    fraction) over every cell; λ = (λ0 s0 + N/V) / (s0 + S − D)."""
 
     def __init__(self, space, edges, prior, prior_scans, forgetting):
         self.space, self.edges = space, [np.asarray(e, float) for e in edges]
         self.prior, self.s0, self.gamma = prior, prior_scans, forgetting
         self.volumes = np.outer(np.diff(self.edges[0]), np.diff(self.edges[1]))
         self.counts, self.exposure = np.zeros(self.volumes.shape), 0.0
+        self.deficit = np.zeros(self.volumes.shape)
 
     def coordinates(self, pose, positions, ranges):
         x, y, heading = pose
@@ -49,16 +51,33 @@ class ReferenceMap:
                  (v >= self.edges[1][0]) & (v < self.edges[1][-1])
         return i, j, inside
 
-    def update(self, pose, positions, ranges=None):
+    def update(self, pose, positions, ranges=None, gates=np.empty((0, 3))):
+        positions = np.asarray(positions, float).reshape(-1, 2)
+        gates = np.asarray(gates, float).reshape(-1, 3)
+        free = np.ones(len(positions), bool)
+        for gx, gy, r in gates:
+            free &= (positions[:, 0] - gx) ** 2 + (positions[:, 1] - gy) ** 2 > r * r
         n = np.zeros_like(self.counts)
-        if len(positions):
-            i, j, inside = self.cells(pose, positions, ranges)
+        if free.any():
+            i, j, inside = self.cells(pose, positions[free], None if ranges is None else ranges[free])
             np.add.at(n, (i[inside], j[inside]), 1.0)
+        fraction = np.zeros_like(self.counts)
+        if len(gates):
+            i, j, inside = self.cells(pose, gates[:, :2])
+            centre_range = np.hypot(*(gates[:, :2] - pose[:2]).T)
+            area = np.pi * gates[:, 2] ** 2
+            if self.space == "bearing-range":
+                area = area / np.maximum(centre_range, gates[:, 2])
+            for a, b, k, g in zip(i, j, inside, area):
+                if k:
+                    fraction[a, b] += g / self.volumes[a, b]
         self.counts = self.gamma * self.counts + n
+        self.deficit = self.gamma * self.deficit + np.minimum(fraction, 1.0)
         self.exposure = self.gamma * self.exposure + 1.0
 
     def grid(self):
-        return (self.prior * self.s0 + self.counts / self.volumes) / (self.s0 + self.exposure)
+        return (self.prior * self.s0 + self.counts / self.volumes) / \
+            (self.s0 + self.exposure - self.deficit)
 
     def intensity(self, pose, positions, ranges=None):
         i, j, inside = self.cells(pose, positions, ranges)
@@ -87,12 +106,16 @@ def test_matches_the_numpy_reference(space, edges):
         positions = _random_scan(rng, int(rng.integers(0, 40))) + pose[:2]
         ranges = np.where(rng.random(len(positions)) < 0.5, np.nan,
                           np.hypot(*(positions - pose[:2]).T)) if space == "bearing-range" else None
-        ours.update(pose, positions, ranges)
-        reference.update(pose, positions, ranges)
+        # gates around a few of the scan's own detections (tracks) and some elsewhere
+        gates = np.column_stack([np.concatenate([positions[:3], _random_scan(rng, 2) + pose[:2]]),
+                                 rng.uniform(0, 150, min(len(positions), 3) + 2)])
+        ours.update(pose, positions, ranges, gates)
+        reference.update(pose, positions, ranges, gates)
     np.testing.assert_allclose(ours.intensity_grid(), reference.grid(), rtol=1e-12)
     np.testing.assert_allclose(ours.intensity(pose, probes), reference.intensity(pose, probes),
                                rtol=1e-12)
     assert np.ptp(reference.grid()) > 0  # the cells learned different intensities
+    assert reference.deficit.max() > 0  # and gates took some exposure
 
 
 def test_converges_to_a_stationary_clutter_field():
@@ -164,7 +187,8 @@ def _used_map():
                          prior_intensity=1e-3, prior_scans=3.0, forgetting=0.93)
     rng = np.random.default_rng(8)
     for _ in range(40):
-        learned.update((0.0, 0.0, 0.0), _random_scan(rng, 25))
+        scan = _random_scan(rng, 25)
+        learned.update((0.0, 0.0, 0.0), scan, gates=np.column_stack([scan[:2], [30.0, 60.0]]))
     return learned
 
 
@@ -177,6 +201,7 @@ def test_state_round_trips_exactly_and_continues_identically(round_trip):
         restored = YAML().load(YAML().dumps(learned))
     assert type(restored) is ClutterMap
     assert restored.counts.tobytes() == learned.counts.tobytes()
+    assert restored.deficit.tobytes() == learned.deficit.tobytes() and learned.deficit.sum() > 0
     assert (restored.exposure, restored.scale) == (learned.exposure, learned.scale)
     assert learned.scale > 1 and learned.counts.sum() > 0  # a state worth saving
     scan = _random_scan(np.random.default_rng(9), 12)
@@ -207,6 +232,7 @@ def test_reset_and_immutability_of_the_configuration():
     (dict(forgetting=1.01), "forgetting"),
     (dict(counts=np.zeros((2, 2))), "counts"),
     (dict(counts=-np.ones((1, 1))), "counts"),
+    (dict(deficit=np.ones((1, 1))), "deficit"),
     (dict(exposure=-1.0), "exposure"),
     (dict(scale=0.0), "scale"),
     (dict(prior_intensity="high"), "prior_intensity"),
@@ -226,4 +252,8 @@ def test_bad_updates_are_named_and_change_nothing():
         learned.update((0.0, 0.0, 0.0), [[1.0, 2.0]], [np.inf])
     with pytest.raises(ValueError, match="^positions: "):
         learned.update((0.0, 0.0, 0.0), [[1.0, 2.0, 3.0]])
+    with pytest.raises(ValueError, match="^gates: "):
+        learned.update((0.0, 0.0, 0.0), [[1.0, 2.0]], gates=[[0.0, 0.0, -1.0]])
+    with pytest.raises(ValueError, match="^gates: "):
+        learned.update((0.0, 0.0, 0.0), [[1.0, 2.0]], gates=[[0.0, 0.0]])
     assert (learned.counts.tobytes(), learned.exposure) == before

@@ -228,6 +228,7 @@ class ClutterMap:
         prior_scans: float,
         forgetting: float,
         counts: Sequence[float] | None = None,
+        deficit: Sequence[float] | None = None,
         exposure: float = 0.0,
         scale: float = 1.0,
     ) -> ClutterMap:
@@ -236,15 +237,22 @@ class ClutterMap:
         in scans; the forgetting factor per scan; optionally a saved state."""
     @property
     def shape(self) -> tuple[int, int]: ...
-    def update(self, pose: _Pose, positions: _Floats, ranges: _Floats | None = None) -> None:
-        """One scan's clutter detections: world `positions` (M, 2), measured `ranges` (M,) or
-        None (NaN entries: from the position)."""
+    def update(
+        self,
+        pose: _Pose,
+        positions: _Floats,
+        ranges: _Floats | None = None,
+        gates: _Floats | None = None,
+    ) -> None:
+        """One scan: its detections' world `positions` (M, 2), measured `ranges` (M,) or None
+        (NaN entries: from the position), and `gates` (G, 3: x, y, radius) around tracks."""
     def intensity(self, pose: _Pose, positions: _Floats, ranges: _Floats | None = None) -> _Floats:
         """λ of the map alone at world `positions` (M, 2) (the prior outside the grid)."""
     def intensities(self) -> _Floats:
         """The posterior mean λ of every cell, (n0 · n1,) row-major."""
-    def state(self) -> tuple[_Floats, float, float]:
-        """(counts, exposure, scale): the state an update changes, as stored (see the core)."""
+    def state(self) -> tuple[_Floats, _Floats, float, float]:
+        """(counts, deficit, exposure, scale): the state an update changes, as stored (see the
+        core)."""
 
 def mount(pose: _Pose, forward: float, left: float, yaw: float) -> _Pose:
     """The pose (x, y, heading) of a sensor mounted on a platform at `pose`."""

@@ -15,15 +15,21 @@ discounted by :math:`\gamma` per scan since (exponential forgetting), has the po
 which is the factor's value for a detection in cell :math:`c` (:math:`\lambda_0` outside
 the grid). Every update counts one scan of exposure for every cell: the map assumes the
 sensor reports clutter over its whole grid at each scan (a blind sector's cells then drift
-towards low λ, where no detection arrives to be weighed by it). An update costs
-O(detections) in the Rust core (the forgetting is a running scale, not a pass over cells).
+towards low λ, where no detection arrives to be weighed by it) — except inside *gates*,
+discs around the tracks' positions: their detections are the tracks', not clutter, and
+their area is taken out of their cell's exposure that scan (:math:`S_c = S - D_c`, with
+:math:`D_c` the discounted gated fractions). So a track, true or false, neither adds
+clutter evidence nor passes for a place where clutter was looked for and not found: no
+feedback from the tracker's own mistakes into the map. An update costs
+O(detections + gates) in the Rust core (the forgetting is a running scale, not a pass over
+cells). :class:`~ctxmodels.stonesoup.ClutterMapLearner` feeds a map from a tracker's output.
 
 The map is *state*, not a value like the other components: it changes with each
 :meth:`ClutterMap.update`, and every :class:`~ctxmodels.ClutterDensityModel` built with it
 reads it as it stands when evaluated. Update it after a scan's tracking, with that scan's
 detections: within a scan the map is then fixed, and λ does not depend on the order of the
-detections. Its state (:attr:`counts`, :attr:`exposure`, :attr:`scale`) pickles and
-round-trips through Stone Soup's YAML exactly.
+detections. Its state (:attr:`counts`, :attr:`deficit`, :attr:`exposure`, :attr:`scale`)
+pickles and round-trips through Stone Soup's YAML exactly.
 """
 from __future__ import annotations
 
@@ -58,22 +64,28 @@ class ClutterMap(Base):
     counts: np.ndarray = Property(
         default=None, doc="State: the discounted clutter counts per cell, (n0, n1), times "
                           ":attr:`scale`. None: a fresh map. Read back, it is the current state.")
+    deficit: np.ndarray = Property(
+        default=None, doc="State: the discounted gated fractions per cell, (n0, n1), times "
+                          ":attr:`scale`. None: none.")
     exposure: float = Property(default=0.0, doc="State: the discounted number of scans, "
                                                 "times :attr:`scale`.")
     scale: float = Property(default=1.0, doc="State: the running scale of the forgetting.")
 
     @counts.getter
     def counts(self) -> np.ndarray:
-        counts, _, _ = self._core.state()
-        return counts.reshape(self._core.shape)
+        return self._core.state()[0].reshape(self._core.shape)
+
+    @deficit.getter
+    def deficit(self) -> np.ndarray:
+        return self._core.state()[1].reshape(self._core.shape)
 
     @exposure.getter
     def exposure(self) -> float:
-        return self._core.state()[1]
+        return self._core.state()[2]
 
     @scale.getter
     def scale(self) -> float:
-        return self._core.state()[2]
+        return self._core.state()[3]
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -82,23 +94,20 @@ class ClutterMap(Base):
             raise ValueError("edges: expected two sequences of edges, one per axis")
         self.edges = tuple(tuple(as_array(axis, "edges", 1, "edges along one axis").tolist())
                            for axis in edges)
-        self._core = self._build(self._property_counts, self._property_exposure,
-                                 self._property_scale)
+        self._core = self._build(self._property_counts, self._property_deficit,
+                                 self._property_exposure, self._property_scale)
 
-    def _build(self, counts, exposure, scale) -> _core.ClutterMap:
+    def _build(self, counts, deficit, exposure, scale) -> _core.ClutterMap:
         if self.space not in SPACES:
             raise ValueError(f"space: must be one of {SPACES}, got {self.space!r}")
         axes = self.edges
         shape = (max(len(axes[0]) - 1, 0), max(len(axes[1]) - 1, 0))
-        if counts is not None:
-            counts = as_array(counts, "counts", 2, f"a {shape} array")
-            if counts.shape != shape:
-                raise ValueError(f"counts: must have shape {shape}, got {counts.shape}")
-            counts = counts.ravel().tolist()
+        counts, deficit = (_cells(values, name, shape) for values, name in
+                           ((counts, "counts"), (deficit, "deficit")))
         return _core.ClutterMap(self.space, list(axes[0]), list(axes[1]),
                                 _number(self.prior_intensity, "prior_intensity"),
                                 _number(self.prior_scans, "prior_scans"),
-                                _number(self.forgetting, "forgetting"), counts,
+                                _number(self.forgetting, "forgetting"), counts, deficit,
                                 _number(exposure, "exposure"), _number(scale, "scale"))
 
     def __setattr__(self, name, value):
@@ -109,16 +118,20 @@ class ClutterMap(Base):
 
     def reset(self) -> None:
         """Back to the prior everywhere (the configuration is kept)."""
-        self.__dict__["_core"] = self._build(None, 0.0, 1.0)
+        self.__dict__["_core"] = self._build(None, None, 0.0, 1.0)
 
-    def update(self, pose: Pose | Sequence[float], positions, ranges=None) -> None:
-        """One scan: the world ``positions`` (M, 2) of the detections taken as clutter and,
-        for a bearing–range map, their measured ``ranges`` (M,) (NaN or None: from the
-        position). An empty scan counts too: it is evidence of little clutter."""
+    def update(self, pose: Pose | Sequence[float], positions, ranges=None, gates=None) -> None:
+        """One scan: the world ``positions`` (M, 2) of its detections, for a bearing–range
+        map their measured ``ranges`` (M,) (NaN or None: from the position), and ``gates``
+        (G, 3: world x, y, radius in m) around the tracks' positions, whose detections are
+        not clutter and whose area is not exposed. An empty scan counts too: it is evidence
+        of little clutter."""
         positions = as_rows(positions, "positions", ncols=2)
         if ranges is not None:
             ranges = as_array(ranges, "ranges", 1, "(M,) ranges")
-        self._core.update(_pose_tuple(pose), positions, ranges)
+        if gates is not None:
+            gates = as_rows(gates, "gates", ncols=3)
+        self._core.update(_pose_tuple(pose), positions, ranges, gates)
 
     def intensity(self, pose: Pose | Sequence[float], positions, ranges=None) -> np.ndarray:
         """The map's λ at world ``positions`` (M, 2) seen from ``pose``."""
@@ -134,15 +147,25 @@ class ClutterMap(Base):
     # The core object is rebuilt from the state, which pickles with the configuration.
     def __getstate__(self):
         state = {k: v for k, v in self.__dict__.items() if k != "_core"}
-        state["_property_counts"] = self.counts
+        state["_property_counts"], state["_property_deficit"] = self.counts, self.deficit
         state["_property_exposure"], state["_property_scale"] = self.exposure, self.scale
         return state
 
     def __setstate__(self, state):
         self.__dict__.update(state)
         self.__dict__["_core"] = self._build(state["_property_counts"],
+                                             state["_property_deficit"],
                                              state["_property_exposure"],
                                              state["_property_scale"])
+
+
+def _cells(values, argument: str, shape) -> list | None:
+    if values is None:
+        return None
+    values = as_array(values, argument, 2, f"a {shape} array")
+    if values.shape != shape:
+        raise ValueError(f"{argument}: must have shape {shape}, got {values.shape}")
+    return values.ravel().tolist()
 
 
 def _number(value, argument: str) -> float:

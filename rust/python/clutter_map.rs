@@ -17,11 +17,11 @@ impl PyClutterMap {
     /// edges on each axis (bearing or x, then range or y); the prior's intensity and weight
     /// in scans; the forgetting factor per scan; optionally a saved state.
     #[new]
-    #[pyo3(signature = (space, edges0, edges1, prior_intensity, prior_scans, forgetting, counts = None, exposure = 0.0, scale = 1.0))]
+    #[pyo3(signature = (space, edges0, edges1, prior_intensity, prior_scans, forgetting, counts = None, deficit = None, exposure = 0.0, scale = 1.0))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         space: &str, edges0: Vec<f64>, edges1: Vec<f64>, prior_intensity: f64, prior_scans: f64, forgetting: f64,
-        counts: Option<Vec<f64>>, exposure: f64, scale: f64,
+        counts: Option<Vec<f64>>, deficit: Option<Vec<f64>>, exposure: f64, scale: f64,
     ) -> PyResult<Self> {
         let space = match space {
             "bearing-range" => MapSpace::BearingRange,
@@ -31,14 +31,9 @@ impl PyClutterMap {
         };
         let map = guarded(|| {
             let map = ClutterMap::new(space, [edges0, edges1], prior_intensity, prior_scans, forgetting)?;
-            match counts {
-                Some(counts) => map.with_state(counts, exposure, scale),
-                None if exposure == 0.0 && scale == 1.0 => Ok(map),
-                None => {
-                    let [a, b] = map.shape();
-                    map.with_state(vec![0.0; a * b], exposure, scale)
-                }
-            }
+            let [a, b] = map.shape();
+            let zeros = || vec![0.0; a * b];
+            map.with_state(counts.unwrap_or_else(zeros), deficit.unwrap_or_else(zeros), exposure, scale)
         })?;
         Ok(PyClutterMap(Arc::new(RwLock::new(map))))
     }
@@ -49,17 +44,22 @@ impl PyClutterMap {
         (a, b)
     }
 
-    /// One scan's clutter detections: world `positions` (M, 2), measured `ranges` (M,) or
-    /// None (NaN entries: from the position).
-    #[pyo3(signature = (pose, positions, ranges = None))]
-    fn update(&self, pose: (f64, f64, f64), positions: Bound<'_, PyArray2<f64>>, ranges: Option<Bound<'_, PyArray1<f64>>>) -> PyResult<()> {
+    /// One scan: its detections' world `positions` (M, 2), measured `ranges` (M,) or None
+    /// (NaN entries: from the position), and `gates` (G, 3: x, y, radius) around tracks.
+    #[pyo3(signature = (pose, positions, ranges = None, gates = None))]
+    fn update(
+        &self, pose: (f64, f64, f64), positions: Bound<'_, PyArray2<f64>>, ranges: Option<Bound<'_, PyArray1<f64>>>,
+        gates: Option<Bound<'_, PyArray2<f64>>>,
+    ) -> PyResult<()> {
         let pose = pose_of(pose)?;
         let positions = borrow(&positions, "positions")?;
         let p = points_slice(&positions, "positions")?;
         let ranges = ranges.map(|r| borrow(&r, "ranges")).transpose()?;
         let r = ranges.as_ref().map(|r| slice(r, "ranges")).transpose()?;
+        let gates = gates.map(|g| borrow(&g, "gates")).transpose()?;
+        let g = gates.as_ref().map(|g| slice(g, "gates")).transpose()?.unwrap_or(&[]);
         let map = &self.0;
-        guarded(|| map.write().unwrap_or_else(|poisoned| poisoned.into_inner()).update(&pose, p, r))
+        guarded(|| map.write().unwrap_or_else(|poisoned| poisoned.into_inner()).update(&pose, p, r, g))
     }
 
     /// λ of the map alone at world `positions` (M, 2) (the prior outside the grid).
@@ -88,10 +88,11 @@ impl PyClutterMap {
         PyArray1::from_vec(py, read_map(&self.0).intensities())
     }
 
-    /// (counts, exposure, scale): the state an update changes, as stored (see the core).
-    fn state<'py>(&self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, f64, f64) {
+    /// (counts, deficit, exposure, scale): the state an update changes, as stored (see the
+    /// core).
+    fn state<'py>(&self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64, f64) {
         let map = read_map(&self.0);
-        let (counts, exposure, scale) = map.state();
-        (PyArray1::from_slice(py, counts), exposure, scale)
+        let (counts, deficit, exposure, scale) = map.state();
+        (PyArray1::from_slice(py, counts), PyArray1::from_slice(py, deficit), exposure, scale)
     }
 }

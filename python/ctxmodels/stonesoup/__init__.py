@@ -25,6 +25,9 @@
   puts a scan's detections in value order (:func:`in_stable_order`) and never lets set
   iteration (memory addresses) decide a result; :func:`in_track_order` sorts tracks by
   content.
+* Learning: :class:`LearningTracker` calls learners after each scan of any tracker;
+  :class:`ClutterMapLearner` feeds a sensor's :class:`~ctxmodels.ClutterMap` with the
+  detections no track explains.
 * :class:`CachedCombinedLinearGaussianTransitionModel`: F(Δt), Q(Δt) computed once per
   scan interval.
 * :class:`AnalyticCartesianToBearingRange`: the stock bearing–range measurement model with
@@ -39,6 +42,7 @@ from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast_association import FastGNNWith2DAssignment
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .hypothesiser import PDAHypothesiser
+from .learning import ClutterMapLearner, LearningTracker
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracker
 from .ordering import in_stable_order, in_track_order
@@ -57,6 +61,7 @@ __all__ = [
     "BernoulliParticleUpdater",
     "CachedCombinedLinearGaussianTransitionModel",
     "CircularRegion",
+    "ClutterMapLearner",
     "LCCUpdater",
     "MeasurementDrivenBirth",
     "PHDUpdater",
@@ -69,6 +74,7 @@ __all__ = [
     "MultiMeasurementInitiator",
     "MultiSensorFeeder",
     "MultiTargetMixtureTracker",
+    "LearningTracker",
     "PDAHypothesiser",
     "UpdateTimeStepsDeleter",
     "in_stable_order",
