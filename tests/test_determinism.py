@@ -36,7 +36,7 @@ from test_stonesoup_jpda import _tracker as tutorial_tracker
 # job's tracks differed in the last bits between hash seeds although its scores did not.
 JOBS = [("mixed-range", 1, "gmphd-context", 40.0), ("formation", 0, "gmphd-pd-aware", 40.0),
         ("islands", 0, "gmphd-radar-only", 90.0), ("islands", 2, "gmphd-sight", 40.0),
-        ("mixed-range", 0, "jpda", 20.0),
+        ("mixed-range", 0, "jpda", 20.0), ("islands", 2, "gmphd-learned", 60.0),
         # the component path (the readable reference), whose stock reducer ordered the
         # mixture by a set of random tags until reduce_mixture (its digest varied per call)
         # (12 s: it is slow; test_reduction.py holds its mixture order scan by scan)

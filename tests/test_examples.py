@@ -47,6 +47,11 @@ def test_example_runs(example, tmp_path):
             "30 m ahead: radar 0.00, lidar 0.95, either 0.950",
             "60 m ahead: radar 0.40, lidar 0.20, either 0.520",
             "lidar λ for areas 2.5 and 30 m²: 0.1, 0.001"], output
+    if example.stem == "learned_clutter_map":
+        lines = output.splitlines()
+        ratios = [float(re.search(r"learned/expected (\d+\.\d+)", line).group(1)) for line in lines]
+        assert len(ratios) == 3 and all(0.85 <= r <= 1.15 for r in ratios), output  # seen 0.94–0.98
+        assert int(re.search(r"λ there (\d+)×", lines[2]).group(1)) >= 20, output  # the coast
     if example.stem == "monte_carlo_on_dask":
         assert output.splitlines()[0] == "6 runs; identical to the process pool's: True", output
     if example.stem == "jpda_expected_misses":

@@ -10,14 +10,16 @@ import pytest
 from stonesoup.types.detection import Detection
 from stonesoup.models.measurement.linear import LinearGaussian
 
-from ctxmodels import (ClutterDensityModel, ConstantPose, DetectionProbabilityModel, Mounting,
+from ctxmodels import (ClutterDensityModel, ClutterMap, ConstantPose, DetectionProbabilityModel,
+                       Mounting,
                        NavigationTrack, Pose, RangeBands, SensorModel)
 from ctxmodels.experiment.runner import Job, run_job
 from ctxmodels.experiment.scenarios import make_scenario
 from ctxmodels.experiment.scoring import score_run, tracks_digest
 from ctxmodels.experiment.sensors import paper_sensor_models
 from ctxmodels.experiment.trackers import TRACKERS, applicable, paper_tracker
-from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, PoseCentredRegion,
+from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, ClutterMapLearner,
+                                 LearningTracker, PoseCentredRegion,
                                  PointProcessMultiTargetTracker, in_track_order)
 
 DURATION, SEED = 40.0, 2
@@ -109,7 +111,12 @@ def test_what_each_tracker_reads():
     for name, spec in TRACKERS.items():
         if spec.line_of_sight:
             continue
-        feeders = paper_tracker(name, streams, models, pose, primary="b").detector.feeders
+        built = paper_tracker(name, streams, models, pose, primary="b")
+        if spec.clutter == "learned":
+            assert isinstance(built, LearningTracker)
+            assert [type(x) for x in built.learners] == [ClutterMapLearner]
+            built = built.tracker
+        feeders = built.detector.feeders
         expected = ["b"] if spec.primary_only else ["a", "b"]
         if not spec.uses_context:
             assert len(feeders) == len(expected)
@@ -118,7 +125,13 @@ def test_what_each_tracker_reads():
         assert all(isinstance(f, ContextFeeder) and f.pose_source is pose for f in feeders)
         for feeder, sensor in zip(feeders, expected, strict=True):
             assert feeder.sensor_model.detection == models[sensor].detection
-            clutter = models[sensor].clutter if spec.clutter == "context" else uniform_clutter()
+            if spec.clutter == "learned" and sensor == "b":  # the primary's λ: a fresh map
+                (learned,) = feeder.sensor_model.clutter.factors
+                assert isinstance(learned, ClutterMap) and learned.exposure == 0
+                assert learned.edges[1][-1] >= 80.0 and learned.space == "bearing-range"  # the lidar's reach
+                continue
+            clutter = (uniform_clutter() if spec.clutter == "uniform" and spec.pd == "context"
+                       else models[sensor].clutter)
             assert feeder.sensor_model.clutter == clutter
             assert feeder.sensor_model.name == models[sensor].name
 

@@ -5,6 +5,7 @@ import json
 import pytest
 
 from ctxmodels.cli import main
+from ctxmodels.experiment.findings import FINDINGS
 from ctxmodels.experiment.runner import ExperimentConfig, submission_order
 from ctxmodels.experiment.sweep import SweepConfig, run_sweep
 from ctxmodels.experiment.trackers import DEFAULT_TRACKERS, applicable
@@ -17,7 +18,7 @@ def test_quick_run_end_to_end(tmp_path, capsys):
     for heading in ("## Scores", "## Findings", "## Tracks per radar scan"):
         assert heading in printed
     findings = json.loads((out / "findings.json").read_text())
-    assert len(findings) == 7
+    assert [f["key"] for f in findings] == [f.key for f in FINDINGS]
     assert {f["verdict"] for f in findings} <= {"reproduced", "not reproduced", "inconclusive"}
     assert all(len(f["seeds"]) == 3 for f in findings)
     summary = json.loads((out / "results.json").read_text())

@@ -1,4 +1,4 @@
-"""The paper's findings (and two of ours) as paired comparisons with computed verdicts.
+"""The paper's findings (and some of ours) as paired comparisons with computed verdicts.
 
 Each :class:`Finding` says "every tracker in ``better`` beats every tracker in ``worse``"
 on one *scope*: a scenario, or ``"combined"`` (Scenarios 1 and 2 aggregated per seed as
@@ -57,6 +57,16 @@ FINDINGS: tuple[Finding, ...] = (
             ("jpda-context",), ("jpda",), COMBINED, "context JPDA − JPDA"),
     Finding("sight-beats-context", "line-of-sight GM-PHD > context-aware (S3)", "ours",
             ("gmphd-sight",), ("gmphd-context",), "islands", "line of sight − context (S3)"),
+    # Learned λ (the radar's clutter map, learned online from the tracker's own output):
+    Finding("learned-beats-pd-aware",
+            "learned-λ GM-PHD > P_D-aware (λ 1e-3, the map's prior)", "ours",
+            ("gmphd-learned",), ("gmphd-pd-aware",), COMBINED, "learned λ − P_D-aware"),
+    Finding("learned-matches-context",
+            "learned-λ GM-PHD ≥ context-aware (the paper's λ, here the simulation's truth)",
+            "ours", ("gmphd-learned",), ("gmphd-context",), COMBINED, "learned λ − context"),
+    Finding("learned-beats-context-on-coasts",
+            "learned-λ GM-PHD > context-aware (S3: coastal returns)", "ours",
+            ("gmphd-learned",), ("gmphd-context",), "islands", "learned λ − context (S3)"),
 )
 
 
