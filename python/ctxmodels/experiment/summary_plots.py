@@ -7,6 +7,7 @@ pyplot; each ``plot_*`` saves what its ``_figure_*`` twin returns.
 """
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -196,8 +197,9 @@ def _figure_sensitivity(finding_label, x_name, x_values, y_name, y_values, diff,
     for y, words in ((good, "favours\nfinding"), (bad, "against\nfinding")):
         colourbar.ax.text(0.5, y + (0.02 if y else -0.02), words, transform=colourbar.ax.transAxes,
                           ha="center", va="bottom" if y else "top", fontsize=7.5)
-    ax.set_title(f"{finding_label}: {metric_label} difference\n"
-                 f"mean [95 % interval] per setting", fontsize=10)
+    # (long claims wrapped: the title must fit over the heatmap)
+    ax.set_title("\n".join(textwrap.wrap(f"{finding_label}: {metric_label} difference", 80))
+                 + "\nmean [95 % interval] per setting", fontsize=10)
     handles = [Patch(fill=False, ec="k", lw=2.2, label="bold, solid box: interval excludes 0,"
                                                        " favours the finding"),
                Patch(fill=False, ec="k", lw=2.2, ls=(0, (3, 2)),
