@@ -39,7 +39,7 @@ import numpy as np
 from stonesoup.base import Base, Property
 
 from . import _core
-from ._component import as_array, as_rows
+from ._component import as_array, as_float, as_rows
 from .pose import Pose
 
 SPACES = ("bearing-range", "body-xy", "world-xy")
@@ -104,11 +104,13 @@ class ClutterMap(Base):
         shape = (max(len(axes[0]) - 1, 0), max(len(axes[1]) - 1, 0))
         counts, deficit = (_cells(values, name, shape) for values, name in
                            ((counts, "counts"), (deficit, "deficit")))
+        # (finite=False: the core names non-finite values with the rule they break)
+        number = lambda value, name: as_float(value, name, finite=False)  # noqa: E731
         return _core.ClutterMap(self.space, list(axes[0]), list(axes[1]),
-                                _number(self.prior_intensity, "prior_intensity"),
-                                _number(self.prior_scans, "prior_scans"),
-                                _number(self.forgetting, "forgetting"), counts, deficit,
-                                _number(exposure, "exposure"), _number(scale, "scale"))
+                                number(self.prior_intensity, "prior_intensity"),
+                                number(self.prior_scans, "prior_scans"),
+                                number(self.forgetting, "forgetting"), counts, deficit,
+                                number(exposure, "exposure"), number(scale, "scale"))
 
     def __setattr__(self, name, value):
         if name in type(self).properties and "_core" in self.__dict__:
@@ -166,12 +168,6 @@ def _cells(values, argument: str, shape) -> list | None:
     if values.shape != shape:
         raise ValueError(f"{argument}: must have shape {shape}, got {values.shape}")
     return values.ravel().tolist()
-
-
-def _number(value, argument: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{argument}: expected a number, got {type(value).__name__}")
-    return float(value)
 
 
 def _pose_tuple(pose) -> tuple[float, float, float]:
