@@ -8,6 +8,7 @@
 
 use crate::batch::for_each_chunk;
 use crate::clutter_map::ClutterMap;
+use crate::coast::CoastalBand;
 use crate::error::{ModelError, Result};
 use std::sync::{Arc, RwLock, RwLockReadGuard};
 use crate::pose::Pose;
@@ -41,6 +42,8 @@ pub enum ClutterFactor {
     Metadata(MetadataThreshold),
     /// λ from the map as it stands when the model is evaluated.
     Map(SharedMap),
+    /// A band along the coastline (seen from the sensor) with a higher λ.
+    Coast(Arc<CoastalBand>),
 }
 
 impl PartialEq for ClutterFactor {
@@ -50,6 +53,7 @@ impl PartialEq for ClutterFactor {
             (ClutterFactor::Range(a), ClutterFactor::Range(b)) => a == b,
             (ClutterFactor::Metadata(a), ClutterFactor::Metadata(b)) => a == b,
             (ClutterFactor::Map(a), ClutterFactor::Map(b)) => Arc::ptr_eq(a, b),
+            (ClutterFactor::Coast(a), ClutterFactor::Coast(b)) => Arc::ptr_eq(a, b),
             _ => false,
         }
     }
@@ -80,7 +84,7 @@ impl ClutterModel {
             match f {
                 ClutterFactor::Constant(v) => check_density(i, *v)?,
                 // its values are posterior means with a prior > 0: finite and > 0
-                ClutterFactor::Map(_) => uses_position = true,
+                ClutterFactor::Map(_) | ClutterFactor::Coast(_) => uses_position = true,
                 ClutterFactor::Range(b) => {
                     uses_position = true;
                     for &v in b.values() {
@@ -170,6 +174,7 @@ impl ClutterModel {
                 ClutterFactor::Constant(v) => *v,
                 ClutterFactor::Range(bands) => bands.at(range),
                 ClutterFactor::Map(map) => read_map(map).value_at(pose, x, y, measured),
+                ClutterFactor::Coast(band) => band.value_at([pose.x, pose.y], x, y),
                 ClutterFactor::Metadata(rule) => {
                     let value = metadata[rule.column];
                     if value.is_nan() {
@@ -305,6 +310,16 @@ impl LaneKernel for Densities<'_> {
                             let measured = ranges.map_or(f64::NAN, |r| r[first + 4 * j + i]);
                             map.value_at(pose, p[2 * i], p[2 * i + 1], measured)
                         };
+                        let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);
+                        if checks {
+                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                        }
+                        density.store(o);
+                    }
+                }
+                ClutterFactor::Coast(band) => {
+                    for (o, p) in blocks.zip(xy.chunks_exact(8)) {
+                        let at = |i: usize| band.value_at([pose.x, pose.y], p[2 * i], p[2 * i + 1]);
                         let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);
                         if checks {
                             bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));

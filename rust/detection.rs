@@ -8,6 +8,7 @@
 
 use crate::batch::{check_columns, check_rows, for_each_chunk, Columns, CvRows, Layout, MemoryOrder, PositionMapping, Rows};
 use crate::cubature::Rule;
+use crate::detection_estimate::{read_estimate, SharedEstimate};
 use crate::error::{check_probability, ModelError, Result};
 use crate::land::LandMask;
 use crate::pose::{Pose, SensorFrame};
@@ -28,6 +29,8 @@ pub enum DetectionFactor {
     Land(Arc<LandMask>),
     /// A target shadowed from the sensor by land gets 0.
     Sight(Arc<LineOfSight>),
+    /// Range bands learned online, as they stand when the model is put at a pose.
+    Estimate(SharedEstimate),
 }
 
 #[derive(Debug, Clone)]
@@ -42,7 +45,7 @@ impl DetectionModel {
                 DetectionFactor::Constant(v) => vec![*v],
                 DetectionFactor::Range(b) => b.values().to_vec(),
                 DetectionFactor::Sector(s) => s.values().to_vec(),
-                DetectionFactor::Land(_) | DetectionFactor::Sight(_) => vec![],
+                DetectionFactor::Land(_) | DetectionFactor::Sight(_) | DetectionFactor::Estimate(_) => vec![], // (probabilities by construction)
             };
             for v in values {
                 check_probability("factors", v).map_err(|_| {
@@ -71,6 +74,14 @@ impl DetectionModel {
                     Some(sq) => Step::SquaredBands(sq),
                     None => Step::Bands(bands.clone()),
                 }),
+                // frozen for the scan: a learner's update after it does not reach this one
+                DetectionFactor::Estimate(estimate) => {
+                    let bands = read_estimate(estimate).bands();
+                    steps.push(match bands.squared() {
+                        Some(sq) => Step::SquaredBands(sq),
+                        None => Step::Bands(bands),
+                    })
+                }
                 DetectionFactor::Sector(s) => steps.push(Step::Sector(s.in_frame(&frame))),
                 DetectionFactor::Land(land) => indexed.push(Indexed::Land(Arc::clone(land))),
                 DetectionFactor::Sight(sight) => indexed.push(Indexed::Sight(Arc::clone(sight))),

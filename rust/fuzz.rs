@@ -161,6 +161,8 @@ fn clutter_factor() -> impl Strategy<Value = Option<ClutterFactor>> {
         3 => (0usize..4, wild(), density(), density(), prop::option::of(density())).prop_map(|(column, threshold, below, at_or_above, missing)| {
             Some(ClutterFactor::Metadata(MetadataThreshold { column, threshold, below, at_or_above, missing }))
         }),
+        1 => (land(), 0.0..200.0f64, density(), any::<bool>())
+            .prop_map(|(l, w, v, seen)| crate::coast::CoastalBand::new(l, w, v, seen).ok().map(|b| ClutterFactor::Coast(Arc::new(b)))),
     ]
 }
 
@@ -347,6 +349,7 @@ proptest! {
                     let map = crate::clutter::read_map(m);
                     map.intensities().into_iter().chain([map.prior_intensity()]).collect()
                 }
+                ClutterFactor::Coast(band) => vec![band.inside(), 1.0],
             };
             lo *= values.iter().fold(f64::INFINITY, |a, v| a.min(v.abs()));
             hi *= values.iter().fold(0.0f64, |a, v| a.max(v.abs()));

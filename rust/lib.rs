@@ -8,8 +8,10 @@
 pub mod batch;
 pub mod clutter;
 pub mod clutter_map;
+pub mod coast;
 pub mod cubature;
 pub mod detection;
+pub mod detection_estimate;
 pub mod distinct;
 pub mod error;
 pub mod gmphd;

@@ -7,6 +7,7 @@
 
 use crate::batch::PositionMapping;
 use crate::clutter::{ClutterFactor, ClutterModel, MetadataThreshold};
+use crate::coast::CoastalBand;
 use crate::cubature::Rule;
 use crate::detection::{DetectionFactor, DetectionModel};
 use crate::error::ModelError;
@@ -25,6 +26,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
 
 mod clutter_map;
+mod detection_estimate;
 mod jpda;
 mod mixture;
 mod particles;
@@ -277,7 +279,8 @@ fn rule_of(rule: &str, order: i64) -> PyResult<Rule> {
 #[pymethods]
 impl PyDetectionModel {
     /// `factors`: floats (constants), RangeBands, AngularSector, LandMask (0 on land),
-    /// LineOfSight (0 when shadowed). P_D is their product.
+    /// LineOfSight (0 when shadowed), DetectionEstimate (shared, read as it stands). P_D is
+    /// their product.
     #[new]
     fn new(factors: Vec<Bound<'_, PyAny>>) -> PyResult<Self> {
         let mut converted = Vec::with_capacity(factors.len());
@@ -290,11 +293,13 @@ impl PyDetectionModel {
                 DetectionFactor::Land(l.get().0.clone())
             } else if let Ok(l) = f.cast::<PyLineOfSight>() {
                 DetectionFactor::Sight(l.get().0.clone())
+            } else if let Ok(e) = f.cast::<detection_estimate::PyDetectionEstimate>() {
+                DetectionFactor::Estimate(e.get().0.clone())
             } else if let Ok(v) = f.extract::<f64>() {
                 DetectionFactor::Constant(v)
             } else {
                 return Err(PyTypeError::new_err(format!(
-                    "factors: factor {i} is a {}, expected a float, RangeBands, AngularSector, LandMask or LineOfSight",
+                    "factors: factor {i} is a {}, expected a float, RangeBands, AngularSector, LandMask, LineOfSight or DetectionEstimate",
                     f.get_type().name()?
                 )));
             });
@@ -386,6 +391,30 @@ impl PyDetectionModel {
     }
 }
 
+#[pyclass(name = "CoastalBand", module = "ctxmodels._core", frozen)]
+pub struct PyCoastalBand(Arc<CoastalBand>);
+
+#[pymethods]
+impl PyCoastalBand {
+    /// λ × `inside` within `width` m of `land`'s coastline (`seen_only`: coast the sensor
+    /// sees), × 1 elsewhere.
+    #[new]
+    fn new(land: &Bound<'_, PyLandMask>, width: f64, inside: f64, seen_only: bool) -> PyResult<Self> {
+        let land = land.get().0.clone();
+        Ok(PyCoastalBand(Arc::new(guarded(|| CoastalBand::new(land, width, inside, seen_only))?)))
+    }
+
+    /// The factor at world `positions` (M, 2) for a sensor at `pose`.
+    fn evaluate<'py>(&self, py: Python<'py>, pose: (f64, f64, f64), positions: Bound<'py, PyArray2<f64>>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let pose = pose_of(pose)?;
+        let positions = borrow(&positions, "positions")?;
+        let p = points_slice(&positions, "positions")?;
+        let band = &self.0;
+        let values: Vec<f64> = p.chunks_exact(2).map(|q| band.value_at([pose.x, pose.y], q[0], q[1])).collect();
+        Ok(PyArray1::from_vec(py, values))
+    }
+}
+
 #[pyclass(name = "MetadataThreshold", module = "ctxmodels._core", frozen, skip_from_py_object)]
 pub struct PyMetadataThreshold(MetadataThreshold);
 
@@ -415,11 +444,13 @@ impl PyClutterModel {
                 ClutterFactor::Metadata(m.get().0.clone())
             } else if let Ok(map) = f.cast::<clutter_map::PyClutterMap>() {
                 ClutterFactor::Map(map.get().0.clone())
+            } else if let Ok(band) = f.cast::<PyCoastalBand>() {
+                ClutterFactor::Coast(band.get().0.clone())
             } else if let Ok(v) = f.extract::<f64>() {
                 ClutterFactor::Constant(v)
             } else {
                 return Err(PyTypeError::new_err(format!(
-                    "factors: factor {i} is a {}, expected a float, RangeBands, MetadataThreshold or ClutterMap",
+                    "factors: factor {i} is a {}, expected a float, RangeBands, MetadataThreshold, ClutterMap or CoastalBand",
                     f.get_type().name()?
                 )));
             });
@@ -502,6 +533,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyMetadataThreshold>()?;
     m.add_class::<PyClutterModel>()?;
     m.add_class::<clutter_map::PyClutterMap>()?;
+    m.add_class::<PyCoastalBand>()?;
+    m.add_class::<detection_estimate::PyDetectionEstimate>()?;
     m.add_function(wrap_pyfunction!(mount, m)?)?;
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;
     m.add_function(wrap_pyfunction!(simd_backend, m)?)?;

@@ -24,7 +24,8 @@ from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.state import GaussianState, ParticleState, State
 
 import ctxmodels
-from ctxmodels import (AngularSector, ClutterDensityModel, ConstantPose, DetectionProbabilityModel,
+from ctxmodels import (AngularSector, ClutterDensityModel, CoastalClutter, ConstantPose,
+                       DetectionProbabilityModel,
                        DetectionSet, DetectorContext, LandMask, LineOfSight, MetadataThreshold,
                        Mounting, NavigationTrack, Pose, RangeBands, SensorModel, _core)
 
@@ -86,6 +87,9 @@ FACTORIES = {
     "MetadataThreshold": lambda: MetadataThreshold(key="area", threshold=10, below=1e-1, at_or_above=1e-3),
     "MetadataThreshold-missing": lambda: MetadataThreshold(key="snr", threshold=3.5, below=2.0,
                                                            at_or_above=0.5, missing=1.0),
+    "CoastalClutter": lambda: CoastalClutter(land=land_mask(), width=30.0, inside=20.0),
+    "ClutterDensityModel-coast": lambda: ClutterDensityModel(factors=[
+        1e-3, CoastalClutter(land=land_mask(), width=15.0, inside=50.0, seen_only=False)]),
     "ClutterDensityModel": lambda: ClutterDensityModel(factors=[
         2.0, RangeBands(edges=(1000,), values=(1e-3, 1e-2)),
         MetadataThreshold(key="area", threshold=10, below=1e-1, at_or_above=1e-3)]),
@@ -118,8 +122,11 @@ def behaviour(obj):
         if obj.missing is None:
             column[::7] = 1.0
         return ClutterDensityModel(factors=[obj]).evaluate(pose, STATES[:, 0::2], column)
+    if isinstance(obj, CoastalClutter):
+        return obj.evaluate(pose, STATES[:, 0::2] / 4)
     if isinstance(obj, ClutterDensityModel):
-        return obj.evaluate(pose, STATES[:, 0::2], AREAS)
+        areas = AREAS if obj.metadata_keys else None
+        return obj.evaluate(pose, STATES[:, 0::2], areas), obj.evaluate(pose, STATES[:, 0::2] / 4, areas)
     if isinstance(obj, Pose):
         return obj.as_tuple()
     if isinstance(obj, Mounting):

@@ -1,8 +1,10 @@
-"""Learning from a tracker's own output (``LearningTracker``, ``ClutterMapLearner``): the
-hook sees each scan the tracker saw, with its tracks, and changes nothing else; a GM-PHD
-that learns its radar's clutter map on a simulated scan stream converges to the true
-clutter intensity without absorbing the target it tracks (the gate), where a map fed every
-detection takes the target for clutter."""
+"""Learning from a tracker's own output (``LearningTracker``, ``ClutterMapLearner``,
+``DetectionLearner``): the hook sees each scan the tracker saw, with its tracks, and changes
+nothing else; a GM-PHD that learns its radar's clutter map on a simulated scan stream
+converges to the true clutter intensity without absorbing the target it tracks (the gate),
+where a map fed every detection takes the target for clutter; one that learns its radar's
+P_D converges to the target's; the P_D learner counts confirmed tracks only, weighted by
+the sensor's other factors."""
 import datetime
 import math
 
@@ -19,11 +21,15 @@ from stonesoup.predictor.kalman import KalmanPredictor
 from stonesoup.types.detection import Detection
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
-from ctxmodels import (ClutterDensityModel, ClutterMap, ConstantPose,
-                       DetectionProbabilityModel, Pose, RangeBands, SensorModel)
+from stonesoup.types.state import GaussianState
+from stonesoup.types.track import Track
+
+from ctxmodels import (AngularSector, ClutterDensityModel, ClutterMap, ConstantPose,
+                       DetectionEstimate, DetectionProbabilityModel, DetectionSet, Pose,
+                       RangeBands, SensorModel)
 from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, ClutterMapLearner,
-                                 ContextFeeder, LearningTracker, MeasurementDrivenBirth,
-                                 PHDUpdater, in_track_order)
+                                 ContextFeeder, DetectionLearner, LearningTracker,
+                                 MeasurementDrivenBirth, PHDUpdater, in_track_order)
 
 START = datetime.datetime(2026, 1, 1)
 TARGET = np.array([600.0, 300.0])
@@ -51,9 +57,10 @@ def _scans(n, seed):
     return scans
 
 
-def _learning_tracker(scans, learned, learners):
-    sensor = SensorModel(detection=DetectionProbabilityModel(factors=[RangeBands(
-        edges=(1500.0,), values=(0.9, 0.0))]), clutter=ClutterDensityModel(factors=[learned]))
+def _learning_tracker(scans, learned, learners, detection=None):
+    detection = detection or RangeBands(edges=(1500.0,), values=(0.9, 0.0))
+    sensor = SensorModel(detection=DetectionProbabilityModel(factors=[detection]),
+                         clutter=ClutterDensityModel(factors=[learned]))
     predictor = KalmanPredictor(CombinedLinearGaussianTransitionModel(
         [ConstantVelocity(0.05), ConstantVelocity(0.05)]))
     updater = ExtendedKalmanUpdater(measurement_model=None, force_symmetric_covariance=True)
@@ -132,8 +139,70 @@ def test_a_gmphd_learns_the_clutter_and_not_its_target():
     assert everything.intensity_grid()[target_cell] > 2.5 * expected
 
 
+def test_a_gmphd_learns_its_targets_detection_probability():
+    scans = _scans(600, seed=4)
+    estimate = DetectionEstimate(edges=(0.0, 1500.0), prior_probability=0.5, prior_trials=5.0,
+                                 forgetting=0.99)
+    tracker = _learning_tracker(scans, 2e-3, [DetectionLearner(gate_radius=30.0)], estimate)
+    seen = []
+    for time, tracks in tracker:
+        seen.append(estimate.probabilities()[0])
+    # the target's P_D is 0.9; a memory of ~100 scans of one track: σ ≈ √(0.09/100) = 0.03,
+    # a clutter point in a 30 m gate at 670 m ≈ 0.008 a scan
+    assert abs(np.mean(seen[300:]) - 0.9) < 0.04
+    assert abs(seen[-1] - 0.9) < 0.1
+    assert seen[0] == 0.5  # no confirmed track yet: the prior
+
+
+def _track(*states):
+    return Track([GaussianState([[x], [0.0], [y], [0.0]], np.eye(4), timestamp=START
+                                + datetime.timedelta(seconds=k)) for k, (x, y) in states])
+
+
+def test_detection_learner_counts_confirmed_tracks_weighted_by_the_other_factors():
+    estimate = DetectionEstimate(edges=(50.0, 400.0, 900.0, 1600.0), prior_probability=0.5,
+                                 forgetting=1.0)
+    sensor = SensorModel(detection=DetectionProbabilityModel(factors=[
+        estimate, AngularSector.blind(math.pi, math.radians(60))]),
+        clutter=ClutterDensityModel(factors=[1e-3]))
+    model = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
+
+    def scan(k, *points):
+        time = START + datetime.timedelta(seconds=k)
+        detections = {Detection([[math.atan2(y, x)], [math.hypot(x, y)]], timestamp=time,
+                                measurement_model=model) for x, y in points}
+        return time, DetectionSet(detections, sensor.context(Pose(x=0.0, y=0.0), time))
+
+    a, b, c = _track((1, (300.0, 0.0))), _track((1, (0.0, 600.0))), _track((1, (-300.0, 0.0)))
+    learner = DetectionLearner(gate_radius=20.0, confirmation=1)
+    learner.learn(*scan(1, (305.0, 0.0), (0.0, 590.0)), {a, b, c})
+    assert estimate.trials.sum() == 0  # nobody confirmed yet
+    # a: in coverage, detected again; b: detected, then missed; c: astern, in the blind
+    # sector; d: new at the second scan, detected there
+    for track in (a, b, c):
+        track.append(_track((2, tuple(track.state_vector[[0, 2], 0]))).state)
+    d = _track((2, (0.0, -1000.0)))
+    learner.learn(*scan(2, (300.0, 4.0), (0.0, -1000.0)), {a, b, c, d})
+    # a: a hit in band 0; b: a miss in band 1; c unconfirmed; d: no earlier detection
+    assert list(estimate.hits) == [1.0, 0.0, 0.0] and list(estimate.trials) == [1.0, 1.0, 0.0]
+    everyone = DetectionLearner(gate_radius=20.0, confirmation=0)
+    fresh = DetectionEstimate(edges=(50.0, 400.0, 900.0, 1600.0), prior_probability=0.5,
+                              forgetting=1.0)
+    time, detections = scan(2, (300.0, 4.0), (0.0, -1000.0))
+    detections.detector_context = SensorModel(detection=DetectionProbabilityModel(factors=[
+        fresh, AngularSector.blind(math.pi, math.radians(60))]),
+        clutter=ClutterDensityModel(factors=[1e-3])).context(Pose(x=0.0, y=0.0), time)
+    everyone.learn(time, detections, {a, b, c, d})
+    # with no confirmation every track counts, but c's weight is 0: the blind sector
+    assert list(fresh.hits) == [1.0, 0.0, 1.0] and list(fresh.trials) == [1.0, 1.0, 1.0]
+
+
 def test_bad_learners_are_named():
     with pytest.raises(ValueError, match="^gate_radius: "):
         ClutterMapLearner(gate_radius=-1.0)
+    with pytest.raises(ValueError, match="^gate_radius: "):
+        DetectionLearner(gate_radius=float("nan"))
+    with pytest.raises(ValueError, match="^confirmation: "):
+        DetectionLearner(gate_radius=1.0, confirmation=-1)
     with pytest.raises(TypeError, match="^learners: learner 0"):
         LearningTracker(tracker=_learning_tracker([], _map(), []).tracker, learners=[object()])

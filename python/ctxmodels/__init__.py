@@ -8,8 +8,10 @@ and handed to Stone Soup trackers as per-scan :class:`DetectorContext` objects.
 from ._core import rule_points
 from .clutter import ClutterDensityModel, MetadataThreshold
 from .clutter_map import ClutterMap
+from .coast import CoastalClutter
 from .context import DetectionSet, DetectorContext, detection_positions, measured_ranges
 from .detection import DetectionProbabilityModel
+from .detection_estimate import DetectionEstimate
 from .land import LandMask, LineOfSight
 from .pose import ConstantPose, Mounting, NavigationTrack, Pose, PoseSource
 from .range_bands import RangeBands
@@ -22,7 +24,9 @@ __all__ = [
     "AngularSector",
     "ClutterDensityModel",
     "ClutterMap",
+    "CoastalClutter",
     "ConstantPose",
+    "DetectionEstimate",
     "DetectionProbabilityModel",
     "DetectionSet",
     "DetectorContext",

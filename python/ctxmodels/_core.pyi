@@ -17,6 +17,8 @@ __all__ = [
     "AngularSector",
     "ClutterAtPose",
     "ClutterMap",
+    "CoastalBand",
+    "DetectionEstimate",
     "ClutterModel",
     "DetectionAtPose",
     "DetectionModel",
@@ -88,10 +90,14 @@ class DetectionModel:
     """P_D as the product of its factors (each in [0, 1])."""
 
     def __new__(
-        cls, factors: Sequence[float | RangeBands | AngularSector | LandMask | LineOfSight]
+        cls,
+        factors: Sequence[
+            float | RangeBands | AngularSector | LandMask | LineOfSight | DetectionEstimate
+        ],
     ) -> DetectionModel:
         """`factors`: floats (constants), RangeBands, AngularSector, LandMask (0 on land),
-        LineOfSight (0 when shadowed). P_D is their product."""
+        LineOfSight (0 when shadowed), DetectionEstimate (shared, read as it stands). P_D is
+        their product."""
     def evaluate(
         self,
         pose: _Pose,
@@ -195,7 +201,7 @@ class ClutterModel:
     """λ as the product of its factors (each finite and > 0)."""
 
     def __new__(
-        cls, factors: Sequence[float | RangeBands | MetadataThreshold | ClutterMap]
+        cls, factors: Sequence[float | RangeBands | MetadataThreshold | ClutterMap | CoastalBand]
     ) -> ClutterModel:
         """`factors`: floats (constants), RangeBands (over range from the sensor),
         MetadataThreshold rules and ClutterMaps (shared, read as they stand). λ is their
@@ -253,6 +259,39 @@ class ClutterMap:
     def state(self) -> tuple[_Floats, _Floats, float, float]:
         """(counts, deficit, exposure, scale): the state an update changes, as stored (see the
         core)."""
+
+@final
+class CoastalBand:
+    """A clutter factor, higher within a width of a coastline the sensor sees."""
+
+    def __new__(cls, land: LandMask, width: float, inside: float, seen_only: bool) -> CoastalBand:
+        """λ × `inside` within `width` m of `land`'s coastline (`seen_only`: coast the sensor
+        sees), × 1 elsewhere."""
+    def evaluate(self, pose: _Pose, positions: _Floats) -> _Floats:
+        """The factor at world `positions` (M, 2) for a sensor at `pose`."""
+
+@final
+class DetectionEstimate:
+    """A detection probability learned online per range band (Beta posterior, forgetting)."""
+
+    def __new__(
+        cls,
+        edges: Sequence[float],
+        prior_probability: float,
+        prior_trials: float,
+        forgetting: float,
+        outside: float,
+        hits: Sequence[float] | None = None,
+        trials: Sequence[float] | None = None,
+    ) -> DetectionEstimate:
+        """Band `edges` (m of range); the prior's P_D and weight in trials; the forgetting
+        factor per update; the value outside the bands; optionally a saved state."""
+    def update(self, pose: _Pose, positions: _Floats, detected: _Floats, weights: _Floats) -> None:
+        """One scan's trials: track `positions` (M, 2), `detected` (M,) 0/1, `weights` (M,)."""
+    def probabilities(self) -> _Floats:
+        """The posterior mean P_D of every band."""
+    def state(self) -> tuple[_Floats, _Floats]:
+        """(hits, trials): the state an update changes."""
 
 def mount(pose: _Pose, forward: float, left: float, yaw: float) -> _Pose:
     """The pose (x, y, heading) of a sensor mounted on a platform at `pose`."""

@@ -9,6 +9,7 @@ from stonesoup.base import Property
 from . import _core
 from ._component import ModelComponent, as_array, as_float, as_rows, as_sequence, check_out
 from .clutter_map import ClutterMap
+from .coast import CoastalClutter
 from .pose import Pose
 from .range_bands import RangeBands
 
@@ -44,7 +45,7 @@ class MetadataThreshold(ModelComponent):
                                        as_float(self.at_or_above, "at_or_above"), missing)
 
 
-ClutterFactor = float | RangeBands | MetadataThreshold | ClutterMap
+ClutterFactor = float | RangeBands | MetadataThreshold | ClutterMap | CoastalClutter
 
 
 class ClutterDensityModel(ModelComponent):
@@ -56,8 +57,9 @@ class ClutterDensityModel(ModelComponent):
     in the units of the detection's *measurement space* — what Stone Soup's
     ``clutter_spatial_density`` means: per m² for a Cartesian (x, y) sensor, per rad·m for
     a bearing–range radar. Factors: constants, :class:`RangeBands` over the detection's
-    range from the sensor, :class:`MetadataThreshold` rules and learned
-    :class:`~ctxmodels.ClutterMap` s (read as they stand when λ is evaluated). Every value
+    range from the sensor, :class:`MetadataThreshold` rules, learned
+    :class:`~ctxmodels.ClutterMap` s (read as they stand when λ is evaluated) and coastal
+    bands (:class:`~ctxmodels.CoastalClutter`). Every value
     must be finite and strictly positive (trackers divide by λ).
 
     The paper's radar (eq. lambda-radar): ``ClutterDensityModel(factors=[
@@ -82,21 +84,25 @@ class ClutterDensityModel(ModelComponent):
 
     @property
     def uses_position(self) -> bool:
-        return any(isinstance(f, (RangeBands, ClutterMap)) for f in self.factors)
+        return any(isinstance(f, (RangeBands, ClutterMap, CoastalClutter)) for f in self.factors)
 
     def _compiled(self) -> _core.ClutterModel:
         def build():
             keys = self.metadata_keys
             parts = []
             for i, f in enumerate(self.factors):
-                if isinstance(f, RangeBands):
+                if isinstance(f, (RangeBands, CoastalClutter)):
                     parts.append(f._compiled())
                 elif isinstance(f, MetadataThreshold):
                     parts.append(f._compiled(keys.index(f.key)))
                 elif isinstance(f, ClutterMap):
                     parts.append(f._core)  # shared: the model reads the map's updates
-                else:
+                elif isinstance(f, (int, float, np.integer, np.floating)):
                     parts.append(as_float(f, f"factors[{i}]"))
+                else:
+                    raise TypeError(f"factors[{i}]: expected a float, RangeBands, "
+                                    "MetadataThreshold, ClutterMap or CoastalClutter, got "
+                                    f"{type(f).__name__}")
             return _core.ClutterModel(parts)
         return self._cached("core", build)
 

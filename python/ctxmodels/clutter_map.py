@@ -40,7 +40,7 @@ from stonesoup.base import Base, Property
 
 from . import _core
 from ._component import as_array, as_float, as_rows
-from .pose import Pose
+from .pose import Pose, pose_tuple
 
 SPACES = ("bearing-range", "body-xy", "world-xy")
 
@@ -133,14 +133,14 @@ class ClutterMap(Base):
             ranges = as_array(ranges, "ranges", 1, "(M,) ranges")
         if gates is not None:
             gates = as_rows(gates, "gates", ncols=3)
-        self._core.update(_pose_tuple(pose), positions, ranges, gates)
+        self._core.update(pose_tuple(pose), positions, ranges, gates)
 
     def intensity(self, pose: Pose | Sequence[float], positions, ranges=None) -> np.ndarray:
         """The map's λ at world ``positions`` (M, 2) seen from ``pose``."""
         positions = as_rows(positions, "positions", ncols=2)
         if ranges is not None:
             ranges = as_array(ranges, "ranges", 1, "(M,) ranges")
-        return self._core.intensity(_pose_tuple(pose), positions, ranges)
+        return self._core.intensity(pose_tuple(pose), positions, ranges)
 
     def intensity_grid(self) -> np.ndarray:
         """The posterior mean λ of every cell, (n0, n1)."""
@@ -168,10 +168,6 @@ def _cells(values, argument: str, shape) -> list | None:
     if values.shape != shape:
         raise ValueError(f"{argument}: must have shape {shape}, got {values.shape}")
     return values.ravel().tolist()
-
-
-def _pose_tuple(pose) -> tuple[float, float, float]:
-    return pose.as_tuple() if isinstance(pose, Pose) else Pose(*pose).as_tuple()
 
 
 __all__ = ["ClutterMap"]

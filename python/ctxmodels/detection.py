@@ -9,12 +9,13 @@ from stonesoup.base import Property
 from . import _core
 from ._component import (ModelComponent, as_array, as_columns, as_float, as_int,
                          as_position_mapping, as_rows, as_sequence, check_out)
+from .detection_estimate import DetectionEstimate
 from .land import LandMask, LineOfSight
 from .pose import Pose
 from .range_bands import RangeBands
 from .sector import AngularSector
 
-DetectionFactor = float | RangeBands | AngularSector | LandMask | LineOfSight
+DetectionFactor = float | RangeBands | AngularSector | LandMask | LineOfSight | DetectionEstimate
 
 #: Integration rules for the expected P_D of a Gaussian (see :class:`SensorModel`).
 PD_RULES = ("mean", "cubature", "unscented", "gauss-hermite")
@@ -31,7 +32,9 @@ class DetectionProbabilityModel(ModelComponent):
     where :math:`S` is the sensor pose at the scan. Factors: constants (floats), range
     bands (:class:`RangeBands`, over range from the sensor), body-frame sectors
     (:class:`AngularSector`), land (:class:`LandMask`: 0 on land) and line of sight
-    (:class:`LineOfSight`: 0 when shadowed by land). Every factor value must lie in [0, 1].
+    (:class:`LineOfSight`: 0 when shadowed by land) and range bands learned online
+    (:class:`DetectionEstimate`: read as they stand when the model is put at a scan's pose).
+    Every factor value must lie in [0, 1].
 
     The paper's radar (eq. pd-radar): ``DetectionProbabilityModel(factors=[
     RangeBands(edges=(50, 1612), values=(0, 0.4, 0), upper_owns=(False, True)),
@@ -51,8 +54,14 @@ class DetectionProbabilityModel(ModelComponent):
             for i, factor in enumerate(self.factors):
                 if isinstance(factor, (RangeBands, AngularSector, LandMask, LineOfSight)):
                     parts.append(factor._compiled())
-                else:
+                elif isinstance(factor, DetectionEstimate):
+                    parts.append(factor._core)  # shared: its updates reach this model
+                elif isinstance(factor, (int, float, np.integer, np.floating)):
                     parts.append(as_float(factor, f"factors[{i}]"))
+                else:
+                    raise TypeError(f"factors[{i}]: expected a float, RangeBands, AngularSector, "
+                                    "LandMask, LineOfSight or DetectionEstimate, got "
+                                    f"{type(factor).__name__}")
             return _core.DetectionModel(parts)
         return self._cached("core", build)
 

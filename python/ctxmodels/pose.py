@@ -34,6 +34,11 @@ class Pose(ModelComponent):
         return float(self.x), float(self.y), float(self.heading)
 
 
+def pose_tuple(pose) -> tuple[float, float, float]:
+    """``pose`` (a :class:`Pose` or an (x, y, heading) sequence) as the core's tuple."""
+    return pose.as_tuple() if isinstance(pose, Pose) else Pose(*pose).as_tuple()
+
+
 def _computed_pose(x: float, y: float, heading: float) -> Pose:
     """The :class:`Pose` ``Pose(x=x, y=y, heading=heading)`` builds, for floats computed from
     already validated ones (interpolated, mounted): without the per-Property checks, which

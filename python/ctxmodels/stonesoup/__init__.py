@@ -27,7 +27,8 @@
   content.
 * Learning: :class:`LearningTracker` calls learners after each scan of any tracker;
   :class:`ClutterMapLearner` feeds a sensor's :class:`~ctxmodels.ClutterMap` with the
-  detections no track explains.
+  detections no track explains, :class:`DetectionLearner` its
+  :class:`~ctxmodels.DetectionEstimate` with whether its tracks were detected.
 * :class:`CachedCombinedLinearGaussianTransitionModel`: F(Δt), Q(Δt) computed once per
   scan interval.
 * :class:`AnalyticCartesianToBearingRange`: the stock bearing–range measurement model with
@@ -42,7 +43,7 @@ from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast_association import FastGNNWith2DAssignment
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .hypothesiser import PDAHypothesiser
-from .learning import ClutterMapLearner, LearningTracker
+from .learning import ClutterMapLearner, DetectionLearner, LearningTracker
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracker
 from .ordering import in_stable_order, in_track_order
@@ -62,6 +63,7 @@ __all__ = [
     "CachedCombinedLinearGaussianTransitionModel",
     "CircularRegion",
     "ClutterMapLearner",
+    "DetectionLearner",
     "LCCUpdater",
     "MeasurementDrivenBirth",
     "PHDUpdater",

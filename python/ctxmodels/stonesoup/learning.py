@@ -4,7 +4,8 @@
 scan's detections (with their context) and the tracker's tracks to its *learners*. The
 trackers' update equations are untouched: what a learner changes — a
 :class:`~ctxmodels.ClutterMap` in a sensor's clutter model — is read by the contexts of
-the scans that follow. :class:`ClutterMapLearner` is the learner of clutter maps.
+the scans that follow. :class:`ClutterMapLearner` is the learner of clutter maps,
+:class:`DetectionLearner` that of detection-probability estimates.
 """
 from __future__ import annotations
 
@@ -18,7 +19,24 @@ from stonesoup.tracker.base import Tracker
 
 from ..clutter_map import ClutterMap
 from ..context import detection_positions, measured_ranges
+from ..detection import DetectionProbabilityModel
+from ..detection_estimate import DetectionEstimate
 from .ordering import in_stable_order, in_track_order
+
+
+def _gate_radius(radius) -> float:
+    if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)) \
+            or not (math.isfinite(radius) and radius >= 0):
+        raise ValueError(f"gate_radius: must be a finite number of metres >= 0, got {radius!r}")
+    return float(radius)
+
+
+def _scan_positions(detections, model) -> np.ndarray:
+    """World positions (M, 2) of a scan's detections, in a reproducible order."""
+    ordered = in_stable_order(detections)
+    if not ordered:
+        return np.empty((0, 2))
+    return detection_positions(ordered, model.position_mapping)
 
 
 class ClutterMapLearner(Base):
@@ -39,10 +57,7 @@ class ClutterMapLearner(Base):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        radius = self.gate_radius
-        if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)) \
-                or not (math.isfinite(radius) and radius >= 0):
-            raise ValueError(f"gate_radius: must be a finite number of metres >= 0, got {radius!r}")
+        _gate_radius(self.gate_radius)
 
     def learn(self, time, detections, tracks) -> None:
         """After the scan at ``time``: ``detections`` as the tracker received them (a
@@ -68,6 +83,80 @@ class ClutterMapLearner(Base):
                          dtype=np.float64).reshape(-1, 3)
         for learned in maps:
             learned.update(context.pose, positions, ranges, gates)
+
+
+class DetectionLearner(Base):
+    r"""Updates the :class:`~ctxmodels.DetectionEstimate` factors of each scan's sensor with
+    that scan. A track is *detected* at a scan when a detection of the scan lies within
+    ``gate_radius`` of its position at the scan (the association, read from the output of
+    any tracker, including the array trackers that keep no hypotheses). Every *confirmed*
+    track with a state at the scan is a trial there: a hit if detected, weighted by the
+    product of the sensor's other P_D factors at its position (0 in a blind sector or
+    behind land: no evidence). Confirmed: detected by this sensor on at least
+    ``confirmation`` earlier scans — the M-of-N rule of track confirmation. It keeps out
+    false tracks, which would otherwise count their misses against the sensor and pull the
+    estimate down (and a lower P_D keeps false tracks alive longer: a feedback loop). It
+    conditions on earlier scans only, so for a real target this scan's trial is unbiased.
+
+    Known biases, both small when the gate holds a track's detections and little clutter:
+    a clutter point inside a missed track's gate counts as a hit (up to λ × the gate's
+    area), and the miss after which a tracker deletes a track is not seen (the track has no
+    state at that scan).
+    """
+
+    gate_radius: float = Property(doc="Radius (m) of the disc around each track's position "
+                                      "at the scan within which a detection is the track's.")
+    confirmation: int = Property(default=3, doc="Detections by the sensor a track needs "
+                                                "on earlier scans to count as a trial.")
+    position_mapping: Sequence[int] = Property(default=(0, 2),
+                                               doc="Indices of x and y in the track states.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        _gate_radius(self.gate_radius)
+        if isinstance(self.confirmation, bool) or not isinstance(self.confirmation, (int, np.integer)) \
+                or self.confirmation < 0:
+            raise ValueError(f"confirmation: must be an integer >= 0, got {self.confirmation!r}")
+        self._detections = {}  # track id -> detections by the sensor so far
+        self._others = {}  # id(model) -> (model, {id(estimate): its other factors' model})
+
+    def learn(self, time, detections, tracks) -> None:
+        """After the scan at ``time``: ``detections`` as the tracker received them (a
+        :class:`~ctxmodels.DetectionSet` with its context; anything else is ignored) and
+        the tracker's ``tracks``."""
+        context = getattr(detections, "detector_context", None)
+        model = getattr(context, "sensor_model", None)
+        factors = getattr(getattr(model, "detection", None), "factors", ())
+        estimates = list({id(f): f for f in factors if isinstance(f, DetectionEstimate)}.values())
+        if not estimates:
+            return
+        x, y = self.position_mapping
+        tracked = [t for t in in_track_order(tracks) if len(t) and t.timestamp == time]
+        states = np.array([[float(t.state_vector[x, 0]), float(t.state_vector[y, 0])]
+                           for t in tracked], dtype=np.float64).reshape(-1, 2)
+        found = _scan_positions(detections, model)
+        if len(states) and len(found):
+            gaps = np.hypot(states[:, None, 0] - found[None, :, 0],
+                            states[:, None, 1] - found[None, :, 1])
+            detected = (gaps <= self.gate_radius).any(axis=1)
+        else:
+            detected = np.zeros(len(states), dtype=bool)
+        earlier = np.array([self._detections.get(t.id, 0) for t in tracked], dtype=np.int64)
+        trial = earlier >= self.confirmation
+        for estimate in estimates:
+            weights = self._other_factors(model, estimate).evaluate(
+                context.pose, states[trial], position_mapping=(0, 1))
+            estimate.update(context.pose, states[trial], detected[trial], weights)
+        # (tracks without a state at the scan have ended)
+        self._detections = {t.id: int(n) for t, n in zip(tracked, earlier + detected)}
+
+    def _other_factors(self, model, estimate) -> DetectionProbabilityModel:
+        """``model``'s P_D without ``estimate`` (built once per model and estimate)."""
+        kept, others = self._others.setdefault(id(model), (model, {}))
+        if id(estimate) not in others:
+            others[id(estimate)] = DetectionProbabilityModel(
+                factors=[f for f in model.detection.factors if f is not estimate] or [1.0])
+        return others[id(estimate)]
 
 
 class LearningTracker(Tracker):
@@ -120,4 +209,4 @@ class _LastScan:
             yield scan
 
 
-__all__ = ["ClutterMapLearner", "LearningTracker"]
+__all__ = ["ClutterMapLearner", "DetectionLearner", "LearningTracker"]

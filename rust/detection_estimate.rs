@@ -1,0 +1,227 @@
+//! An online detection-probability estimate: P_D learned per range band from whether the
+//! tracks a sensor should have seen at a scan were detected.
+//!
+//! Band b = [e_b, e_(b+1)) of range from the sensor holds a Beta posterior over its P_D p_b.
+//! The prior Beta(p₀ s₀, (1 − p₀) s₀) has mean p₀ and is worth s₀ trials. A trial is one
+//! track at one scan: a hit d ∈ {0, 1} (a detection was associated with it) and a weight
+//! w ∈ [0, 1], the product of the sensor's *other* P_D factors at the track (0 in a blind
+//! sector or behind land: a miss there says nothing about p_b). Discounting every earlier
+//! trial by the forgetting factor γ ∈ (0, 1] per update (a power prior), the estimate after
+//! update k is
+//!
+//!   p_b = (p₀ s₀ + H_b) / (s₀ + T_b),   H_b = Σ_j γ^(k−j) d_j,   T_b = Σ_j γ^(k−j) w_j,
+//!
+//! clamped to [0, 1]. With weights 0 or 1 (the usual case: sectors, land and line of sight
+//! are 0 or 1) this is the Beta posterior mean exactly; with fractional weights it is the
+//! ratio estimator Σd / Σw of p_b shrunk to the prior, which can exceed 1 before clamping.
+//! Outside the bands the factor is a fixed `outside` value (the sensor's range limits are
+//! specification, not something to learn from tracks). Few bands: an update multiplies
+//! every band by γ, O(bands + trials).
+
+use crate::error::{ModelError, Result};
+use crate::pose::Pose;
+use crate::range_bands::RangeBands;
+use std::sync::{Arc, RwLock, RwLockReadGuard};
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct DetectionEstimate {
+    edges: Vec<f64>,
+    prior_probability: f64,
+    prior_trials: f64,
+    forgetting: f64,
+    outside: f64,
+    /// H_b: the discounted hits per band.
+    hits: Vec<f64>,
+    /// T_b: the discounted trial weights per band.
+    trials: Vec<f64>,
+}
+
+/// An estimate shared between the detection models that read it and the learner that
+/// updates it between scans.
+pub type SharedEstimate = Arc<RwLock<DetectionEstimate>>;
+
+/// Reads a shared estimate ([`DetectionEstimate::update`] checks its inputs before changing
+/// anything, so a poisoned lock holds a whole state).
+pub fn read_estimate(estimate: &SharedEstimate) -> RwLockReadGuard<'_, DetectionEstimate> {
+    estimate.read().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+fn probability(argument: &'static str, value: f64, open: bool) -> Result<()> {
+    let inside = if open { value > 0.0 && value < 1.0 } else { (0.0..=1.0).contains(&value) };
+    if !inside {
+        let interval = if open { "(0, 1)" } else { "[0, 1]" };
+        return Err(ModelError::invalid(argument, format!("must lie in {interval}, got {value}")));
+    }
+    Ok(())
+}
+
+impl DetectionEstimate {
+    /// A fresh estimate (the prior in every band). `edges`: at least 2, strictly increasing,
+    /// finite, ≥ 0 (metres of range).
+    pub fn new(edges: Vec<f64>, prior_probability: f64, prior_trials: f64, forgetting: f64, outside: f64) -> Result<Self> {
+        if edges.len() < 2 {
+            return Err(ModelError::invalid("edges", format!("needs at least 2 edges (one band), got {}", edges.len())));
+        }
+        if let Some(e) = edges.iter().find(|e| !(e.is_finite() && **e >= 0.0)) {
+            return Err(ModelError::invalid("edges", format!("edges must be finite and >= 0, got {e}")));
+        }
+        if edges.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(ModelError::invalid("edges", "edges must be strictly increasing"));
+        }
+        probability("prior_probability", prior_probability, true)?;
+        if !(prior_trials.is_finite() && prior_trials > 0.0) {
+            return Err(ModelError::invalid("prior_trials", format!("must be finite and > 0, got {prior_trials}")));
+        }
+        if !(forgetting > 0.0 && forgetting <= 1.0) {
+            return Err(ModelError::invalid("forgetting", format!("must be in (0, 1], got {forgetting}")));
+        }
+        probability("outside", outside, false)?;
+        let bands = edges.len() - 1;
+        Ok(DetectionEstimate { edges, prior_probability, prior_trials, forgetting, outside, hits: vec![0.0; bands], trials: vec![0.0; bands] })
+    }
+
+    /// The estimate with a saved state (see [`state`](Self::state)).
+    pub fn with_state(mut self, hits: Vec<f64>, trials: Vec<f64>) -> Result<Self> {
+        for (argument, values) in [("hits", &hits), ("trials", &trials)] {
+            if values.len() != self.hits.len() {
+                return Err(ModelError::shape(argument, format!("must have one entry per band ({}), got {}", self.hits.len(), values.len())));
+            }
+            if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                return Err(ModelError::invalid(argument, format!("must be finite and >= 0, got {v}")));
+            }
+        }
+        self.hits = hits;
+        self.trials = trials;
+        Ok(self)
+    }
+
+    /// (H, T): everything an update changes.
+    pub fn state(&self) -> (&[f64], &[f64]) {
+        (&self.hits, &self.trials)
+    }
+
+    /// The band holding range `r`, if any.
+    fn band(&self, r: f64) -> Option<usize> {
+        let last = self.edges.len() - 1;
+        if !(r >= self.edges[0] && r < self.edges[last]) {
+            return None;
+        }
+        Some(self.edges.partition_point(|e| *e <= r) - 1)
+    }
+
+    /// The posterior mean P_D of every band.
+    pub fn probabilities(&self) -> Vec<f64> {
+        let (p0, s0) = (self.prior_probability, self.prior_trials);
+        self.hits.iter().zip(&self.trials).map(|(h, t)| ((p0 * s0 + h) / (s0 + t)).clamp(0.0, 1.0)).collect()
+    }
+
+    /// The estimate as it stands, as range bands: `outside` below the first edge and from
+    /// the last one on; each edge belongs to the band above it.
+    pub fn bands(&self) -> RangeBands {
+        let mut values = Vec::with_capacity(self.edges.len() + 1);
+        values.push(self.outside);
+        values.extend(self.probabilities());
+        values.push(self.outside);
+        RangeBands::new(self.edges.clone(), values, vec![true; self.edges.len()]).expect("checked edges and probabilities make valid bands")
+    }
+
+    /// One scan's trials: tracks at world `positions` (x, y pairs, row-major), whether each
+    /// was `detected` (0 or 1), and each one's `weights` (the other P_D factors, in [0, 1]).
+    /// Every input is checked before anything changes. Forgets one scan, even with no trials.
+    pub fn update(&mut self, pose: &Pose, positions: &[f64], detected: &[f64], weights: &[f64]) -> Result<()> {
+        let n = positions.len() / 2;
+        if positions.len() % 2 != 0 {
+            return Err(ModelError::shape("positions", "must be (M, 2)"));
+        }
+        for (argument, values) in [("detected", detected), ("weights", weights)] {
+            if values.len() != n {
+                return Err(ModelError::shape(argument, format!("must have one entry per position ({n}), got {}", values.len())));
+            }
+        }
+        if let Some(i) = (0..n).find(|&i| !(positions[2 * i].is_finite() && positions[2 * i + 1].is_finite())) {
+            return Err(ModelError::non_finite("positions", i, "position is NaN or infinite"));
+        }
+        if let Some(v) = detected.iter().find(|v| **v != 0.0 && **v != 1.0) {
+            return Err(ModelError::invalid("detected", format!("must be 0 or 1, got {v}")));
+        }
+        if let Some(v) = weights.iter().find(|v| !(0.0..=1.0).contains(*v)) {
+            return Err(ModelError::invalid("weights", format!("must lie in [0, 1], got {v}")));
+        }
+        for (h, t) in self.hits.iter_mut().zip(self.trials.iter_mut()) {
+            *h *= self.forgetting;
+            *t *= self.forgetting;
+        }
+        for i in 0..n {
+            let range = (positions[2 * i] - pose.x).hypot(positions[2 * i + 1] - pose.y);
+            if let Some(b) = self.band(range) {
+                self.hits[b] += detected[i];
+                self.trials[b] += weights[i];
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn origin() -> Pose {
+        Pose::new(0.0, 0.0, 0.0).unwrap()
+    }
+
+    #[test]
+    fn fresh_estimate_is_the_prior_inside_and_outside_beyond() {
+        let e = DetectionEstimate::new(vec![50.0, 500.0, 1600.0], 0.5, 4.0, 0.99, 0.0).unwrap();
+        assert_eq!(e.probabilities(), vec![0.5, 0.5]);
+        let bands = e.bands();
+        assert_eq!(bands.at(49.9), 0.0);
+        assert_eq!(bands.at(50.0), 0.5);
+        assert_eq!(bands.at(1600.0), 0.0);
+    }
+
+    #[test]
+    fn beta_posterior_mean_without_forgetting() {
+        let mut e = DetectionEstimate::new(vec![0.0, 100.0, 200.0], 0.5, 2.0, 1.0, 0.0).unwrap();
+        // band 0: 3 hits of 4; band 1: 0 of 2; one trial out of the bands; one with weight 0
+        let positions = [10.0, 0.0, 20.0, 0.0, 0.0, 30.0, 40.0, 0.0, 150.0, 0.0, 0.0, -150.0, 500.0, 0.0, 60.0, 0.0];
+        let detected = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        let weights = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0];
+        e.update(&origin(), &positions, &detected, &weights).unwrap();
+        let p = e.probabilities();
+        assert_eq!(p[0], (1.0 + 3.0) / (2.0 + 4.0));
+        assert_eq!(p[1], 1.0 / (2.0 + 2.0));
+    }
+
+    #[test]
+    fn forgetting_discounts_earlier_scans() {
+        let mut e = DetectionEstimate::new(vec![0.0, 100.0], 0.5, 1.0, 0.5, 0.0).unwrap();
+        e.update(&origin(), &[10.0, 0.0], &[1.0], &[1.0]).unwrap();
+        e.update(&origin(), &[10.0, 0.0], &[0.0], &[1.0]).unwrap();
+        let (h, t) = e.state();
+        assert_eq!((h[0], t[0]), (0.5, 1.5));
+        assert_eq!(e.probabilities()[0], (0.5 + 0.5) / (1.0 + 1.5));
+    }
+
+    #[test]
+    fn bad_inputs_change_nothing() {
+        let mut e = DetectionEstimate::new(vec![0.0, 100.0], 0.5, 1.0, 0.9, 0.0).unwrap();
+        let before = e.clone();
+        assert!(e.update(&origin(), &[10.0, 0.0], &[0.5], &[1.0]).is_err());
+        assert!(e.update(&origin(), &[10.0, 0.0], &[1.0], &[1.5]).is_err());
+        assert!(e.update(&origin(), &[f64::NAN, 0.0], &[1.0], &[1.0]).is_err());
+        assert!(e.update(&origin(), &[10.0, 0.0, 1.0], &[1.0], &[1.0]).is_err());
+        assert_eq!(e, before);
+    }
+
+    #[test]
+    fn bad_configuration_names_the_argument() {
+        let err = |r: Result<DetectionEstimate>| r.unwrap_err().to_string();
+        assert!(err(DetectionEstimate::new(vec![0.0], 0.5, 1.0, 0.9, 0.0)).starts_with("edges"));
+        assert!(err(DetectionEstimate::new(vec![0.0, 0.0], 0.5, 1.0, 0.9, 0.0)).starts_with("edges"));
+        assert!(err(DetectionEstimate::new(vec![0.0, 1.0], 1.0, 1.0, 0.9, 0.0)).starts_with("prior_probability"));
+        assert!(err(DetectionEstimate::new(vec![0.0, 1.0], 0.5, 0.0, 0.9, 0.0)).starts_with("prior_trials"));
+        assert!(err(DetectionEstimate::new(vec![0.0, 1.0], 0.5, 1.0, 0.0, 0.0)).starts_with("forgetting"));
+        assert!(err(DetectionEstimate::new(vec![0.0, 1.0], 0.5, 1.0, 0.9, 1.5)).starts_with("outside"));
+    }
+}
