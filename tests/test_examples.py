@@ -52,6 +52,12 @@ def test_example_runs(example, tmp_path):
         ratios = [float(re.search(r"learned/expected (\d+\.\d+)", line).group(1)) for line in lines]
         assert len(ratios) == 3 and all(0.85 <= r <= 1.15 for r in ratios), output  # seen 0.94–0.98
         assert int(re.search(r"λ there (\d+)×", lines[2]).group(1)) >= 20, output  # the coast
+    if example.stem == "learned_detection_probability":
+        lines = output.splitlines()
+        late = [float(v) for v in lines[1].split(":")[1].split()]
+        assert len(late) == 8 and all(abs(p - 0.4) <= 0.06 for p in late[1:4]), output  # 0.36–0.41
+        assert 0.3 <= float(re.search(r"all bands: (\d\.\d+)", lines[2]).group(1)) <= 0.45
+        assert _run(example, tmp_path, hash_seed="4242") == output  # bit-reproducible
     if example.stem == "monte_carlo_on_dask":
         assert output.splitlines()[0] == "6 runs; identical to the process pool's: True", output
     if example.stem == "jpda_expected_misses":

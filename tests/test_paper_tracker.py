@@ -10,16 +10,16 @@ import pytest
 from stonesoup.types.detection import Detection
 from stonesoup.models.measurement.linear import LinearGaussian
 
-from ctxmodels import (ClutterDensityModel, ClutterMap, ConstantPose, DetectionProbabilityModel,
-                       Mounting,
-                       NavigationTrack, Pose, RangeBands, SensorModel)
+from ctxmodels import (ClutterDensityModel, ClutterMap, ConstantPose, DetectionEstimate,
+                       DetectionProbabilityModel, Mounting, NavigationTrack, Pose, RangeBands,
+                       SensorModel)
 from ctxmodels.experiment.runner import Job, run_job
 from ctxmodels.experiment.scenarios import make_scenario
 from ctxmodels.experiment.scoring import score_run, tracks_digest
 from ctxmodels.experiment.sensors import paper_sensor_models
 from ctxmodels.experiment.trackers import TRACKERS, applicable, paper_tracker
 from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, ClutterMapLearner,
-                                 LearningTracker, PoseCentredRegion,
+                                 DetectionLearner, LearningTracker, PoseCentredRegion,
                                  PointProcessMultiTargetTracker, in_track_order)
 
 DURATION, SEED = 40.0, 2
@@ -112,9 +112,11 @@ def test_what_each_tracker_reads():
         if spec.line_of_sight:
             continue
         built = paper_tracker(name, streams, models, pose, primary="b")
-        if spec.clutter == "learned":
+        learners = ([ClutterMapLearner] if spec.clutter == "learned" else []) \
+            + ([DetectionLearner] if spec.pd == "learned" else [])
+        if learners:
             assert isinstance(built, LearningTracker)
-            assert [type(x) for x in built.learners] == [ClutterMapLearner]
+            assert [type(x) for x in built.learners] == learners
             built = built.tracker
         feeders = built.detector.feeders
         expected = ["b"] if spec.primary_only else ["a", "b"]
@@ -124,7 +126,12 @@ def test_what_each_tracker_reads():
             continue
         assert all(isinstance(f, ContextFeeder) and f.pose_source is pose for f in feeders)
         for feeder, sensor in zip(feeders, expected, strict=True):
-            assert feeder.sensor_model.detection == models[sensor].detection
+            if spec.pd == "learned" and sensor == "b":  # the primary's bands: a fresh estimate
+                (estimate,) = feeder.sensor_model.detection.factors
+                assert isinstance(estimate, DetectionEstimate) and estimate.trials.sum() == 0
+                assert estimate.edges == (0.0, 80.0) and estimate.outside == 0  # the lidar's reach
+            else:
+                assert feeder.sensor_model.detection == models[sensor].detection
             if spec.clutter == "learned" and sensor == "b":  # the primary's λ: a fresh map
                 (learned,) = feeder.sensor_model.clutter.factors
                 assert isinstance(learned, ClutterMap) and learned.exposure == 0

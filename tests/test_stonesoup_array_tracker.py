@@ -143,7 +143,8 @@ def test_finite_difference_jacobian_agrees_to_its_round_off():
 
 EXPERIMENT_CASES = [("mixed-range", name) for name in
                     ("gmphd-context", "gmphd-pd-aware", "gmphd-uniform", "gmphd-radar-only")] \
-    + [("formation", "gmphd-context"), ("islands", "gmphd-sight"), ("islands", "gmphd-learned")]
+    + [("formation", "gmphd-context"), ("islands", "gmphd-sight"), ("islands", "gmphd-learned"),
+       ("islands", "gmphd-learned-clutter"), ("islands", "gmphd-coastal")]
 
 
 @pytest.mark.parametrize(("scenario", "name"), EXPERIMENT_CASES)

@@ -197,8 +197,9 @@ def _list(args) -> int:
     for name, spec in SCENARIOS.items():
         print(f"  {name:14s} {getattr(spec, 'description', '')}".rstrip())
     print("trackers:")
+    width = max(map(len, TRACKERS))
     for name, spec in TRACKERS.items():
-        print(f"  {name:18s} {spec.label}: {spec.description}")
+        print(f"  {name:{width}s} {spec.label}: {spec.description}")
     return 0
 
 

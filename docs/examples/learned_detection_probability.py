@@ -1,0 +1,69 @@
+"""
+A radar's detection probability learned from its own tracks
+===========================================================
+
+The main job's ``gmphd-learned`` tracker does not know its radar's P_D: where the paper
+writes 0.4 between 50 m and 1612 m, it holds a :class:`~ctxmodels.DetectionEstimate` — 8
+range bands, each a Beta posterior with prior mean 0.5 worth 5 trials, forgetting 0.99 per
+scan — and a :class:`~ctxmodels.stonesoup.DetectionLearner` feeds it after every radar scan
+with whether each confirmed track (three earlier detections) had a detection within 50 m.
+The blind sector astern stays as specified: a track there is no evidence. Here it runs on
+the simulated "mixed-range" scenario (480 s), where the radar's true P_D is 0.4 everywhere
+in coverage, and the estimate is drawn per band as the run goes on.
+"""
+
+# %%
+# One run of the learned tracker
+# ------------------------------
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ctxmodels import DetectionEstimate
+from ctxmodels.experiment.scenarios import make_scenario
+from ctxmodels.experiment.trackers import TRACKERS, build_tracker
+
+run = make_scenario("mixed-range", seed=0)
+tracker = build_tracker(TRACKERS["gmphd-learned"], run)
+estimate = next(f for feeder in tracker.tracker.detector.feeders
+                for f in feeder.sensor_model.detection.factors
+                if isinstance(f, DetectionEstimate))
+
+times, history = [], []
+for time, tracks in tracker:
+    if not history or not np.array_equal(history[-1], estimate.probabilities()):
+        times.append((time - run.radar_times[0]).total_seconds())
+        history.append(estimate.probabilities())
+history = np.array(history)
+edges = np.asarray(estimate.edges)
+late = history[np.asarray(times) >= 240].mean(axis=0)
+print("bands (m):", ", ".join(f"{a:.0f}-{b:.0f}" for a, b in zip(edges[:-1], edges[1:])))
+print("mean over the second half:", " ".join(f"{p:.2f}" for p in late))
+print(f"all bands: {late.mean():.2f} against the true 0.40")
+
+# %%
+# The estimate per band, over the run
+# -----------------------------------
+# The bands from 245 m to 830 m settle near the true 0.4 within a minute or two; the
+# nearest band sees few tracks confirmed by the radar and stays near its prior (0.5); a
+# band without trials drifts back towards the prior as the forgetting discounts its
+# evidence (the straight stretches). Between about 800 m and 1.2 km the estimate stays
+# below the truth: there the sea clutter is ten times denser, and the tracker's own false
+# tracks — confirmed by clutter, then missed — still count against the radar. How much
+# that costs the tracker is in docs/study.md.
+fig, (over_time, per_band) = plt.subplots(1, 2, figsize=(11, 4))
+colours = plt.cm.viridis(np.linspace(0, 1, len(edges) - 1))
+for band, colour in enumerate(colours):
+    over_time.plot(times, history[:, band], color=colour, lw=1,
+                   label=f"{edges[band]:.0f}–{edges[band + 1]:.0f} m")
+over_time.axhline(0.4, color="k", ls="--", lw=1, label="truth")
+over_time.set(xlabel="time (s)", ylabel="learned P_D", ylim=(0, 1),
+              title="Each band's estimate after each radar scan")
+over_time.legend(fontsize=7, ncol=2)
+centres = (edges[:-1] + edges[1:]) / 2
+per_band.bar(centres, late, width=np.diff(edges) * 0.9, color=colours)
+per_band.axhline(0.4, color="k", ls="--", lw=1, label="truth")
+per_band.set(xlabel="range (m)", ylabel="mean learned P_D, 240–480 s", ylim=(0, 1),
+             title="The second half, per band")
+per_band.legend()
+fig.tight_layout()
+plt.show()
