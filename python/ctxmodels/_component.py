@@ -54,6 +54,43 @@ def freeze(value: Any) -> Any:
     return value
 
 
+class LearnedComponent(Base):
+    """A component with a state learned online, kept in a core estimator (``_core``): its
+    configuration Properties are fixed at construction, and its state Properties
+    (``STATE``: name and fresh value, in the order ``_build`` takes them) change only
+    through ``update`` and :meth:`reset`. Pickles rebuild the core from the state."""
+
+    STATE: tuple[tuple[str, Any], ...] = ()
+
+    def _build(self, *state):  # the core estimator from a state (None: fresh)
+        raise NotImplementedError
+
+    def _start(self) -> None:
+        """Builds the core from the state Properties as given (at the end of ``__init__``)."""
+        self.__dict__["_core"] = self._build(*(getattr(self, f"_property_{name}")
+                                               for name, _ in self.STATE))
+
+    def __setattr__(self, name, value):
+        if name in type(self).properties and "_core" in self.__dict__:
+            raise AttributeError(f"{type(self).__name__}.{name}: set at construction; the "
+                                 "state changes through update() and reset()")
+        super().__setattr__(name, value)
+
+    def reset(self) -> None:
+        """Back to the prior (the configuration is kept)."""
+        self.__dict__["_core"] = self._build(*(fresh for _, fresh in self.STATE))
+
+    def __getstate__(self):
+        state = {k: v for k, v in self.__dict__.items() if k != "_core"}
+        state.update({f"_property_{name}": getattr(self, name) for name, _ in self.STATE})
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self.__dict__["_core"] = self._build(*(state[f"_property_{name}"]
+                                               for name, _ in self.STATE))
+
+
 class ModelComponent(Base):
     """Base of ctxmodels components: immutable, value-equal, cached compilation."""
 

@@ -36,16 +36,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from stonesoup.base import Base, Property
+from stonesoup.base import Property
 
 from . import _core
-from ._component import as_array, as_float, as_rows
+from ._component import LearnedComponent, as_array, as_float, as_rows
 from .pose import Pose, pose_tuple
 
 SPACES = ("bearing-range", "body-xy", "world-xy")
 
 
-class ClutterMap(Base):
+class ClutterMap(LearnedComponent):
     """An online clutter-intensity map (see the module docs); a factor of
     :class:`~ctxmodels.ClutterDensityModel`."""
 
@@ -71,6 +71,8 @@ class ClutterMap(Base):
                                                 "times :attr:`scale`.")
     scale: float = Property(default=1.0, doc="State: the running scale of the forgetting.")
 
+    STATE = (("counts", None), ("deficit", None), ("exposure", 0.0), ("scale", 1.0))
+
     @counts.getter
     def counts(self) -> np.ndarray:
         return self._core.state()[0].reshape(self._core.shape)
@@ -94,8 +96,7 @@ class ClutterMap(Base):
             raise ValueError("edges: expected two sequences of edges, one per axis")
         self.edges = tuple(tuple(as_array(axis, "edges", 1, "edges along one axis").tolist())
                            for axis in edges)
-        self._core = self._build(self._property_counts, self._property_deficit,
-                                 self._property_exposure, self._property_scale)
+        self._start()
 
     def _build(self, counts, deficit, exposure, scale) -> _core.ClutterMap:
         if self.space not in SPACES:
@@ -111,16 +112,6 @@ class ClutterMap(Base):
                                 number(self.prior_scans, "prior_scans"),
                                 number(self.forgetting, "forgetting"), counts, deficit,
                                 number(exposure, "exposure"), number(scale, "scale"))
-
-    def __setattr__(self, name, value):
-        if name in type(self).properties and "_core" in self.__dict__:
-            raise AttributeError(f"ClutterMap.{name}: set at construction; the state changes "
-                                 "through update() and reset()")
-        super().__setattr__(name, value)
-
-    def reset(self) -> None:
-        """Back to the prior everywhere (the configuration is kept)."""
-        self.__dict__["_core"] = self._build(None, None, 0.0, 1.0)
 
     def update(self, pose: Pose | Sequence[float], positions, ranges=None, gates=None) -> None:
         """One scan: the world ``positions`` (M, 2) of its detections, for a bearing–range
@@ -146,19 +137,6 @@ class ClutterMap(Base):
         """The posterior mean λ of every cell, (n0, n1)."""
         return self._core.intensities().reshape(self._core.shape)
 
-    # The core object is rebuilt from the state, which pickles with the configuration.
-    def __getstate__(self):
-        state = {k: v for k, v in self.__dict__.items() if k != "_core"}
-        state["_property_counts"], state["_property_deficit"] = self.counts, self.deficit
-        state["_property_exposure"], state["_property_scale"] = self.exposure, self.scale
-        return state
-
-    def __setstate__(self, state):
-        self.__dict__.update(state)
-        self.__dict__["_core"] = self._build(state["_property_counts"],
-                                             state["_property_deficit"],
-                                             state["_property_exposure"],
-                                             state["_property_scale"])
 
 
 def _cells(values, argument: str, shape) -> list | None:

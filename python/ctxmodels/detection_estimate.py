@@ -32,14 +32,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from stonesoup.base import Base, Property
+from stonesoup.base import Property
 
 from . import _core
-from ._component import as_array, as_float, as_rows
+from ._component import LearnedComponent, as_array, as_float, as_rows
 from .pose import Pose, pose_tuple
 
 
-class DetectionEstimate(Base):
+class DetectionEstimate(LearnedComponent):
     """An online P_D estimate per range band (see the module docs); a factor of
     :class:`~ctxmodels.DetectionProbabilityModel`."""
 
@@ -58,6 +58,8 @@ class DetectionEstimate(Base):
     trials: np.ndarray = Property(default=None, doc="State: the discounted trial weights per "
                                                     "band. None: a fresh estimate.")
 
+    STATE = (("hits", None), ("trials", None))
+
     @hits.getter
     def hits(self) -> np.ndarray:
         return self._core.state()[0]
@@ -69,7 +71,7 @@ class DetectionEstimate(Base):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self.edges = tuple(as_array(self.edges, "edges", 1, "(B + 1,) band edges").tolist())
-        self._core = self._build(self._property_hits, self._property_trials)
+        self._start()
 
     def _build(self, hits, trials) -> _core.DetectionEstimate:
         bands = max(len(self.edges) - 1, 0)
@@ -82,16 +84,6 @@ class DetectionEstimate(Base):
                                        number(self.prior_trials, "prior_trials"),
                                        number(self.forgetting, "forgetting"),
                                        number(self.outside, "outside"), hits, trials)
-
-    def __setattr__(self, name, value):
-        if name in type(self).properties and "_core" in self.__dict__:
-            raise AttributeError(f"DetectionEstimate.{name}: set at construction; the state "
-                                 "changes through update() and reset()")
-        super().__setattr__(name, value)
-
-    def reset(self) -> None:
-        """Back to the prior in every band (the configuration is kept)."""
-        self.__dict__["_core"] = self._build(None, None)
 
     def update(self, pose: Pose | Sequence[float], positions, detected, weights=None) -> None:
         """One scan's trials: tracks at world ``positions`` (M, 2), whether each was
@@ -108,15 +100,6 @@ class DetectionEstimate(Base):
         """The posterior mean P_D of every band, (B,)."""
         return self._core.probabilities()
 
-    # The core object is rebuilt from the state, which pickles with the configuration.
-    def __getstate__(self):
-        state = {k: v for k, v in self.__dict__.items() if k != "_core"}
-        state["_property_hits"], state["_property_trials"] = self.hits, self.trials
-        return state
-
-    def __setstate__(self, state):
-        self.__dict__.update(state)
-        self.__dict__["_core"] = self._build(state["_property_hits"], state["_property_trials"])
 
 
 def _per_band(values, argument: str, bands: int) -> list | None:

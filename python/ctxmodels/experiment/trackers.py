@@ -276,16 +276,16 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
                              f"name it (one of {list(streams)})")
         sensor_models = {**sensor_models, primary: _with_coast(sensor_models[primary])}
     if spec.pd == "context" and spec.clutter == "uniform":
-        sensor_models = {s: _with_clutter(m, uniform_clutter()) for s, m in sensor_models.items()}
+        sensor_models = {s: _with(m, clutter=uniform_clutter()) for s, m in sensor_models.items()}
     if "learned" in (spec.pd, spec.clutter) and primary is None:
         raise ValueError(f"primary: {name} learns the primary sensor's model; name it (one of "
                          f"{list(streams)})")
     if spec.clutter == "learned":
-        sensor_models = {**sensor_models, primary: _with_clutter(sensor_models[primary], ClutterDensityModel(
+        sensor_models = {**sensor_models, primary: _with(sensor_models[primary], clutter=ClutterDensityModel(
             factors=[learned_clutter_map(sensor_models[primary])]))}
     if spec.pd == "learned":
-        sensor_models = {**sensor_models, primary: _with_detection(
-            sensor_models[primary], learned_detection(sensor_models[primary]))}
+        sensor_models = {**sensor_models, primary: _with(
+            sensor_models[primary], detection=learned_detection(sensor_models[primary]))}
     region = None
     if spec.family == "gmphd":
         radius = (_region_radius([sensor_models[s] for s in streams]) if region_radius is None
@@ -383,12 +383,7 @@ def _with_coast(model: SensorModel) -> SensorModel:
         raise ValueError("sensor_models: the coastal band follows the land in the primary "
                          "sensor's P_D (LandMask / LineOfSight factors); it has none")
     band = CoastalClutter(land=lands[0], width=COAST_WIDTH, inside=COAST_FACTOR)
-    return _with_clutter(model, ClutterDensityModel(factors=[*model.clutter.factors, band]))
-
-
-def _with_detection(model: SensorModel, detection) -> SensorModel:
-    properties = {name: getattr(model, name) for name in type(model).properties}
-    return type(model)(**{**properties, "detection": detection})
+    return _with(model, clutter=ClutterDensityModel(factors=[*model.clutter.factors, band]))
 
 
 def _detector(spec: TrackerSpec, streams, sensor_models, pose_source):
@@ -402,9 +397,10 @@ def _detector(spec: TrackerSpec, streams, sensor_models, pose_source):
         for sensor, reader in streams.items()])
 
 
-def _with_clutter(model: SensorModel, clutter) -> SensorModel:
+def _with(model: SensorModel, **changes) -> SensorModel:
+    """``model`` with some Properties replaced (``clutter=...``, ``detection=...``)."""
     properties = {name: getattr(model, name) for name in type(model).properties}
-    return type(model)(**{**properties, "clutter": clutter})
+    return type(model)(**{**properties, **changes})
 
 
 def _sees_land(model: SensorModel) -> bool:

@@ -31,6 +31,15 @@ def _gate_radius(radius) -> float:
     return float(radius)
 
 
+def _learned_factors(detections, part: str, kind: type):
+    """The scan's context, its sensor model and the distinct ``kind`` factors of the model's
+    ``part`` ("clutter" or "detection"; none without a context)."""
+    context = getattr(detections, "detector_context", None)
+    model = getattr(context, "sensor_model", None)
+    factors = getattr(getattr(model, part, None), "factors", ())
+    return context, model, list({id(f): f for f in factors if isinstance(f, kind)}.values())
+
+
 def _scan_positions(detections, model) -> np.ndarray:
     """World positions (M, 2) of a scan's detections, in a reproducible order."""
     ordered = in_stable_order(detections)
@@ -63,11 +72,7 @@ class ClutterMapLearner(Base):
         """After the scan at ``time``: ``detections`` as the tracker received them (a
         :class:`~ctxmodels.DetectionSet` with its context; anything else is ignored) and
         the tracker's ``tracks``."""
-        context = getattr(detections, "detector_context", None)
-        model = getattr(context, "sensor_model", None)
-        clutter = getattr(model, "clutter", None)
-        maps = list({id(f): f for f in getattr(clutter, "factors", ())
-                     if isinstance(f, ClutterMap)}.values())
+        context, model, maps = _learned_factors(detections, "clutter", ClutterMap)
         if not maps:
             return
         ordered = in_stable_order(detections)  # a reproducible order, whatever the set's
@@ -124,10 +129,7 @@ class DetectionLearner(Base):
         """After the scan at ``time``: ``detections`` as the tracker received them (a
         :class:`~ctxmodels.DetectionSet` with its context; anything else is ignored) and
         the tracker's ``tracks``."""
-        context = getattr(detections, "detector_context", None)
-        model = getattr(context, "sensor_model", None)
-        factors = getattr(getattr(model, "detection", None), "factors", ())
-        estimates = list({id(f): f for f in factors if isinstance(f, DetectionEstimate)}.values())
+        context, model, estimates = _learned_factors(detections, "detection", DetectionEstimate)
         if not estimates:
             return
         x, y = self.position_mapping
