@@ -21,6 +21,20 @@
 //! adds clutter evidence nor counts as a place where clutter was looked for and not found.
 //! A gate's area (π r², in the measurement space: π r² / max(R, r) rad·m at range R for a
 //! bearing–range map) is assigned to the cell of its centre. Outside the grid λ = λ₀.
+//!
+//! *Pooling* (optional) shares evidence between cells that are expected to have similar
+//! clutter: a pool g (a range ring of a bearing–range map — every bearing at one range
+//! cell — or the whole grid) has its own posterior with the λ₀ prior,
+//!
+//!   λ_g = (λ₀ s₀ V_g + Σ_c N_c) / (s₀ V_g + Σ_c V_c S_c),   V_g = Σ_c V_c,
+//!
+//! and a cell of the pool shrinks towards λ_g instead of λ₀, with weight s_p scans:
+//! λ_c = (λ_g s_p + N_c / V_c) / (s_p + S_c) (an empirical-Bayes plug-in: λ_g includes the
+//! cell's own counts). A ring pools tens of cells, so its level is learned in a few scans,
+//! while a cell with much evidence of its own (a coast) still departs from it. The pools'
+//! sums are recomputed from the cells after each update (O(cells), vectorised; an
+//! incremental sum would round differently from a restored one): they are a function of
+//! the state, which therefore stays (counts, deficit, exposure, scale) and restores exactly.
 
 use crate::error::{ModelError, Result};
 use crate::pose::Pose;
@@ -36,6 +50,17 @@ pub enum MapSpace {
     BodyXY,
     /// World (x, y), m; λ per m².
     WorldXY,
+}
+
+/// How cells share evidence (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pooling {
+    /// Every cell on its own, shrinking towards λ₀.
+    None,
+    /// A bearing–range map's range rings: the cells of one range cell, every bearing.
+    Range,
+    /// The whole grid.
+    Grid,
 }
 
 /// Scales above this are brought back by [`RESCALE`] (both exact powers of two).
@@ -58,6 +83,15 @@ pub struct ClutterMap {
     /// S × scale.
     exposure: f64,
     scale: f64,
+    pooling: Pooling,
+    /// s_p: the weight of a cell's pool in its prior, scans.
+    pooled_scans: f64,
+    /// V_g per pool (empty without pooling).
+    pool_volumes: Vec<f64>,
+    /// Σ_c N_c × scale per pool.
+    pool_counts: Vec<f64>,
+    /// Σ_c V_c D_c × scale per pool.
+    pool_deficit: Vec<f64>,
 }
 
 fn check_edges(argument: &'static str, edges: &[f64], lowest: f64, highest: f64) -> Result<()> {
@@ -110,7 +144,68 @@ impl ClutterMap {
         let cells = volumes.len();
         Ok(ClutterMap {
             space, edges, prior_intensity, prior_scans, forgetting, volumes, counts: vec![0.0; cells], deficit: vec![0.0; cells], exposure: 0.0, scale: 1.0,
+            pooling: Pooling::None, pooled_scans: prior_scans, pool_volumes: Vec::new(), pool_counts: Vec::new(), pool_deficit: Vec::new(),
         })
+    }
+
+    /// The map with its cells pooled (see the module docs): `pooled_scans` (s_p > 0) is the
+    /// weight of a cell's pool in its prior. Range rings need a bearing–range map.
+    pub fn with_pooling(mut self, pooling: Pooling, pooled_scans: f64) -> Result<Self> {
+        if pooling == Pooling::Range && self.space != MapSpace::BearingRange {
+            return Err(ModelError::invalid("pooling", "range rings need a bearing-range map"));
+        }
+        positive("pooling_scans", pooled_scans)?;
+        let pools = match pooling {
+            Pooling::None => 0,
+            Pooling::Range => self.shape()[1],
+            Pooling::Grid => 1,
+        };
+        self.pooling = pooling;
+        self.pooled_scans = pooled_scans;
+        let columns = self.shape()[1];
+        let mut volumes = vec![0.0; columns];
+        for row in self.volumes.chunks_exact(columns) {
+            for (total, v) in volumes.iter_mut().zip(row) {
+                *total += v;
+            }
+        }
+        self.pool_volumes = if pooling == Pooling::Grid { vec![volumes.iter().sum()] } else { volumes };
+        self.pool_volumes.truncate(pools);
+        self.refresh_pools();
+        Ok(self)
+    }
+
+    /// The pool of a cell (row-major index), if pooled.
+    #[inline]
+    fn pool_of(&self, cell: usize) -> Option<usize> {
+        match self.pooling {
+            Pooling::None => None,
+            Pooling::Range => Some(cell % (self.edges[1].len() - 1)),
+            Pooling::Grid => Some(0),
+        }
+    }
+
+    /// Recomputes the pools' sums from their cells: per range column, the rows in order
+    /// (contiguous rows, so the compiler vectorises it), and for the whole grid the columns'
+    /// sums in order. A function of the state alone, so restores are exact.
+    fn refresh_pools(&mut self) {
+        if self.pooling == Pooling::None {
+            return;
+        }
+        let columns = self.edges[1].len() - 1;
+        let (mut counts, mut deficit) = (vec![0.0; columns], vec![0.0; columns]);
+        for ((n, d), v) in self.counts.chunks_exact(columns).zip(self.deficit.chunks_exact(columns)).zip(self.volumes.chunks_exact(columns)) {
+            for j in 0..columns {
+                counts[j] += n[j];
+                deficit[j] += v[j] * d[j];
+            }
+        }
+        if self.pooling == Pooling::Grid {
+            counts = vec![counts.iter().sum()];
+            deficit = vec![deficit.iter().sum()];
+        }
+        self.pool_counts = counts;
+        self.pool_deficit = deficit;
     }
 
     /// The map with a saved state (see [`state`](Self::state)).
@@ -136,6 +231,7 @@ impl ClutterMap {
         self.deficit = deficit;
         self.exposure = exposure;
         self.scale = scale;
+        self.refresh_pools();
         Ok(self)
     }
 
@@ -195,7 +291,20 @@ impl ClutterMap {
     #[inline]
     fn intensity_of(&self, cell: usize) -> f64 {
         let (n, s) = (self.counts[cell] / self.scale, (self.exposure - self.deficit[cell]) / self.scale);
-        (self.prior_intensity * self.prior_scans + n / self.volumes[cell]) / (self.prior_scans + s)
+        let (prior, weight) = match self.pool_of(cell) {
+            Some(g) => (self.pool_intensity(g), self.pooled_scans),
+            None => (self.prior_intensity, self.prior_scans),
+        };
+        (prior * weight + n / self.volumes[cell]) / (weight + s)
+    }
+
+    /// λ_g of a pool: its cells' evidence together, with the λ₀ prior.
+    #[inline]
+    fn pool_intensity(&self, pool: usize) -> f64 {
+        let volume = self.pool_volumes[pool];
+        let exposed = (volume * self.exposure - self.pool_deficit[pool]) / self.scale;
+        (self.prior_intensity * self.prior_scans * volume + self.pool_counts[pool] / self.scale)
+            / (self.prior_scans * volume + exposed.max(0.0))
     }
 
     /// λ at a world position (NaN when the position is not finite).
@@ -280,6 +389,7 @@ impl ClutterMap {
             self.exposure *= RESCALE;
             self.scale *= RESCALE;
         }
+        self.refresh_pools();
         Ok(())
     }
 }
@@ -375,6 +485,55 @@ mod tests {
     }
 
     #[test]
+    fn a_ring_pools_its_cells_and_a_cell_shrinks_towards_its_ring() {
+        let (g, s0, sp) = (0.9f64, 5.0, 3.0);
+        let mut map = radar().with_pooling(Pooling::Range, sp).unwrap();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        // two points ~100 m ahead, just to port (cell (4, 0)), one at 700 m port (cell (6, 1)), then an
+        // empty scan
+        map.update(&pose, &[100.0, 1.0, 100.0, 2.0, 0.0, 700.0], None, &[]).unwrap();
+        map.update(&pose, &[], None, &[]).unwrap();
+        let (v, big) = (PI / 4.0 * 500.0, 2.0 * PI * 500.0);
+        let exposure = g + 1.0;
+        let ring = |n: f64| (1e-3 * s0 * big + n) / (s0 * big + big * exposure);
+        let cell = |ring: f64, n: f64| (ring * sp + n / v) / (sp + exposure);
+        let grid = map.intensities(); // rows: 8 bearings, columns: 2 ranges
+        let near = ring(2.0 * g);
+        assert!((grid[4 * 2] - cell(near, 2.0 * g)).abs() <= 1e-15 * grid[8]);
+        assert!((grid[0] - cell(near, 0.0)).abs() <= 1e-15 * grid[0], "a quiet cell follows its ring");
+        let far = ring(g);
+        assert!((grid[6 * 2 + 1] - cell(far, g)).abs() <= 1e-15 * grid[13]);
+        assert!((grid[1] - cell(far, 0.0)).abs() <= 1e-15 * grid[1]);
+        // the whole grid as one pool
+        let mut whole = radar().with_pooling(Pooling::Grid, sp).unwrap();
+        whole.update(&pose, &[100.0, 1.0, 100.0, 2.0, 0.0, 700.0], None, &[]).unwrap();
+        whole.update(&pose, &[], None, &[]).unwrap();
+        let level = (1e-3 * s0 * 2.0 * big + 3.0 * g) / (2.0 * s0 * big + 2.0 * big * exposure);
+        assert!((whole.intensities()[1] - cell(level, 0.0)).abs() <= 1e-15 * level);
+    }
+
+    #[test]
+    fn a_pooled_state_restores_exactly_through_rescales_and_gates() {
+        let pose = Pose::new(3.0, -2.0, 0.4).unwrap();
+        let fresh = || {
+            ClutterMap::new(MapSpace::BearingRange, [(0..=8).map(|i| -PI + i as f64 * PI / 4.0).collect(), vec![0.0, 500.0, 1000.0]], 1e-3, 5.0, 0.3)
+                .unwrap()
+                .with_pooling(Pooling::Range, 2.0)
+                .unwrap()
+        };
+        let mut map = fresh();
+        for k in 0..600 {
+            let t = k as f64;
+            let points = [200.0 * t.cos(), 300.0 * t.sin(), 600.0 + t % 7.0, -40.0 * (t % 3.0), 50.0, 20.0];
+            map.update(&pose, &points[..2 + 2 * (k % 3)], None, &[600.0 + t % 7.0, -40.0, 30.0]).unwrap();
+        }
+        let (counts, deficit, exposure, scale) = map.state();
+        let restored = fresh().with_state(counts.to_vec(), deficit.to_vec(), exposure, scale).unwrap();
+        assert_eq!(restored.intensities(), map.intensities());
+        assert_eq!(restored, map);
+    }
+
+    #[test]
     fn bad_configuration_and_inputs_are_named() {
         let e = || [vec![0.0, 1.0], vec![0.0, 1.0]];
         let argument = |r: Result<ClutterMap>| r.unwrap_err().argument();
@@ -385,6 +544,10 @@ mod tests {
         assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, [vec![0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
         assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, [vec![1.0, 0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
         assert_eq!(argument(ClutterMap::new(MapSpace::BearingRange, [vec![-4.0, 0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
+        let fresh = || ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.9).unwrap();
+        assert_eq!(argument(fresh().with_pooling(Pooling::Range, 1.0)), "pooling");
+        assert_eq!(argument(fresh().with_pooling(Pooling::Grid, 0.0)), "pooling_scans");
+        assert_eq!(argument(fresh().with_pooling(Pooling::Grid, f64::NAN)), "pooling_scans");
         let mut map = ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.9).unwrap();
         let before = map.clone();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();

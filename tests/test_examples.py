@@ -55,7 +55,8 @@ def test_example_runs(example, tmp_path):
     if example.stem == "learned_detection_probability":
         lines = output.splitlines()
         late = [float(v) for v in lines[1].split(":")[1].split()]
-        assert len(late) == 8 and all(abs(p - 0.4) <= 0.06 for p in late[1:4]), output  # 0.36–0.41
+        # 245 m to 1.2 km: seen 0.35–0.41
+        assert len(late) == 8 and all(abs(p - 0.4) <= 0.06 for p in late[1:6]), output
         assert 0.3 <= float(re.search(r"all bands: (\d\.\d+)", lines[2]).group(1)) <= 0.45
         assert _run(example, tmp_path, hash_seed="4242") == output  # bit-reproducible
     if example.stem == "monte_carlo_on_dask":

@@ -237,10 +237,13 @@ class ClutterMap:
         deficit: Sequence[float] | None = None,
         exposure: float = 0.0,
         scale: float = 1.0,
+        pooling: Literal["none", "range", "grid"] = "none",
+        pooling_scans: float = 10.0,
     ) -> ClutterMap:
         """`space`: "bearing-range", "body-xy" or "world-xy"; `edges0`, `edges1`: the grid's
         edges on each axis (bearing or x, then range or y); the prior's intensity and weight
-        in scans; the forgetting factor per scan; optionally a saved state."""
+        in scans; the forgetting factor per scan; optionally a saved state; the pooling
+        ("none", "range" or "grid") and its weight in scans."""
     @property
     def shape(self) -> tuple[int, int]: ...
     def update(

@@ -13,7 +13,23 @@ discounted by :math:`\gamma` per scan since (exponential forgetting), has the po
     N_c = \sum_j \gamma^{k-j} n_{c,j}, \qquad S = \sum_j \gamma^{k-j},
 
 which is the factor's value for a detection in cell :math:`c` (:math:`\lambda_0` outside
-the grid). Every update counts one scan of exposure for every cell: the map assumes the
+the grid).
+
+*Pooling* shares evidence between cells expected to have similar clutter. With
+``pooling='range'`` (a bearing–range map) each range ring — the cells of one range cell, at
+every bearing — has a posterior of its own with the :math:`\lambda_0` prior,
+
+.. math::
+    \hat\lambda_g = \frac{\lambda_0 s_0 V_g + \sum_{c \in g} N_c}
+                          {s_0 V_g + \sum_{c \in g} V_c S_c}, \qquad V_g = \sum_{c \in g} V_c,
+
+and each of its cells shrinks towards :math:`\hat\lambda_g` instead of :math:`\lambda_0`,
+with weight :math:`s_p` (:attr:`~ClutterMap.pooling_scans`) scans:
+:math:`\hat\lambda_c = (\hat\lambda_g s_p + N_c / V_c) / (s_p + S_c)` (an empirical-Bayes
+plug-in). Sea clutter depends mostly on range (the grazing angle), so a ring learns the
+level of tens of cells in a few scans, and a cell with much evidence of its own (a coast)
+still departs from it. ``pooling='grid'`` pools the whole grid (any space). Without pooling
+(the default) every cell shrinks towards :math:`\lambda_0` alone. Every update counts one scan of exposure for every cell: the map assumes the
 sensor reports clutter over its whole grid at each scan (a blind sector's cells then drift
 towards low λ, where no detection arrives to be weighed by it) — except inside *gates*,
 discs around the tracks' positions: their detections are the tracks', not clutter, and
@@ -43,6 +59,7 @@ from ._component import LearnedComponent, as_array, as_float, as_rows
 from .pose import Pose, pose_tuple
 
 SPACES = ("bearing-range", "body-xy", "world-xy")
+POOLINGS = ("none", "range", "grid")
 
 
 class ClutterMap(LearnedComponent):
@@ -58,9 +75,17 @@ class ClutterMap(LearnedComponent):
             "ranges >= 0) or (x, y). Cells are half-open, [e_i, e_(i+1)).")
     prior_intensity: float = Property(doc=r"Prior intensity :math:`\lambda_0` (> 0), also "
                                           "the value outside the grid.")
-    prior_scans: float = Property(default=10.0, doc=r"Prior weight :math:`s_0` in scans (> 0).")
+    prior_scans: float = Property(default=10.0, doc=r"Prior weight :math:`s_0` in scans (> 0), "
+                                                    "of a cell or, pooled, of a pool.")
     forgetting: float = Property(default=0.99, doc=r"Forgetting factor :math:`\gamma` per "
                                                    "scan, in (0, 1]; memory ≈ 1/(1 − γ) scans.")
+    pooling: str = Property(
+        default="none", doc="'none' (every cell on its own), 'range' (a bearing-range map's "
+                            "range rings: the cells of one range cell, every bearing) or 'grid' "
+                            "(the whole grid): see the module docs.")
+    pooling_scans: float = Property(
+        default=10.0, doc=r"Pooled: the weight :math:`s_p` of a cell's pool in its prior, "
+                          "scans (> 0).")
     counts: np.ndarray = Property(
         default=None, doc="State: the discounted clutter counts per cell, (n0, n1), times "
                           ":attr:`scale`. None: a fresh map. Read back, it is the current state.")
@@ -101,6 +126,8 @@ class ClutterMap(LearnedComponent):
     def _build(self, counts, deficit, exposure, scale) -> _core.ClutterMap:
         if self.space not in SPACES:
             raise ValueError(f"space: must be one of {SPACES}, got {self.space!r}")
+        if self.pooling not in POOLINGS:
+            raise ValueError(f"pooling: must be one of {POOLINGS}, got {self.pooling!r}")
         axes = self.edges
         shape = (max(len(axes[0]) - 1, 0), max(len(axes[1]) - 1, 0))
         counts, deficit = (_cells(values, name, shape) for values, name in
@@ -111,7 +138,9 @@ class ClutterMap(LearnedComponent):
                                 number(self.prior_intensity, "prior_intensity"),
                                 number(self.prior_scans, "prior_scans"),
                                 number(self.forgetting, "forgetting"), counts, deficit,
-                                number(exposure, "exposure"), number(scale, "scale"))
+                                number(exposure, "exposure"), number(scale, "scale"),
+                                self.pooling,
+                                number(self.pooling_scans, "pooling_scans"))
 
     def update(self, pose: Pose | Sequence[float], positions, ranges=None, gates=None) -> None:
         """One scan: the world ``positions`` (M, 2) of its detections, for a bearing–range

@@ -3,7 +3,7 @@
 
 use super::{borrow, guarded, points_slice, pose_of, slice, value_error};
 use crate::clutter::{read_map, SharedMap};
-use crate::clutter_map::{ClutterMap, MapSpace};
+use crate::clutter_map::{ClutterMap, MapSpace, Pooling};
 use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use std::sync::{Arc, RwLock};
@@ -15,13 +15,14 @@ pub struct PyClutterMap(pub(super) SharedMap);
 impl PyClutterMap {
     /// `space`: "bearing-range", "body-xy" or "world-xy"; `edges0`, `edges1`: the grid's
     /// edges on each axis (bearing or x, then range or y); the prior's intensity and weight
-    /// in scans; the forgetting factor per scan; optionally a saved state.
+    /// in scans; the forgetting factor per scan; optionally a saved state; the pooling
+    /// ("none", "range" or "grid") and its weight in scans.
     #[new]
-    #[pyo3(signature = (space, edges0, edges1, prior_intensity, prior_scans, forgetting, counts = None, deficit = None, exposure = 0.0, scale = 1.0))]
+    #[pyo3(signature = (space, edges0, edges1, prior_intensity, prior_scans, forgetting, counts = None, deficit = None, exposure = 0.0, scale = 1.0, pooling = "none", pooling_scans = 10.0))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         space: &str, edges0: Vec<f64>, edges1: Vec<f64>, prior_intensity: f64, prior_scans: f64, forgetting: f64,
-        counts: Option<Vec<f64>>, deficit: Option<Vec<f64>>, exposure: f64, scale: f64,
+        counts: Option<Vec<f64>>, deficit: Option<Vec<f64>>, exposure: f64, scale: f64, pooling: &str, pooling_scans: f64,
     ) -> PyResult<Self> {
         let space = match space {
             "bearing-range" => MapSpace::BearingRange,
@@ -29,8 +30,14 @@ impl PyClutterMap {
             "world-xy" => MapSpace::WorldXY,
             other => return Err(value_error("space", format!("must be 'bearing-range', 'body-xy' or 'world-xy', got {other:?}"))),
         };
+        let pooling = match pooling {
+            "none" => Pooling::None,
+            "range" => Pooling::Range,
+            "grid" => Pooling::Grid,
+            other => return Err(value_error("pooling", format!("must be 'none', 'range' or 'grid', got {other:?}"))),
+        };
         let map = guarded(|| {
-            let map = ClutterMap::new(space, [edges0, edges1], prior_intensity, prior_scans, forgetting)?;
+            let map = ClutterMap::new(space, [edges0, edges1], prior_intensity, prior_scans, forgetting)?.with_pooling(pooling, pooling_scans)?;
             let [a, b] = map.shape();
             let zeros = || vec![0.0; a * b];
             map.with_state(counts.unwrap_or_else(zeros), deficit.unwrap_or_else(zeros), exposure, scale)
