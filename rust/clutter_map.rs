@@ -10,9 +10,9 @@
 //!
 //!   λ_c = (λ₀ s₀ + N_c / V_c) / (s₀ + S),   N_c = Σ_j γ^(k−j) n_{c,j},   S = Σ_j γ^(k−j).
 //!
-//! An update is O(detections + gates): instead of multiplying every cell by γ each scan, N
-//! and S are stored multiplied by a running scale (×1/γ per scan) and new evidence is added
-//! at the current scale; the scale is brought back by an exact power of two when it grows
+//! An update is O(detections + gates) (pooled, plus one pass over the cells, below): instead
+//! of multiplying every cell by γ each scan, N and S are stored multiplied by a running
+//! scale (×1/γ per scan) and new evidence is added at the current scale; the scale is brought back by an exact power of two when it grows
 //! large. Every update counts one scan of exposure for every cell (the sensor reports
 //! clutter over its whole grid at every scan) except what *gates* take out: a gate (a disc
 //! around a track's position) removes the detections inside it — they are the track's —

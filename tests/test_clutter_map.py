@@ -258,6 +258,19 @@ def test_state_round_trips_exactly_and_continues_identically(round_trip, pooling
     assert restored.intensity_grid().tobytes() == learned.intensity_grid().tobytes()
 
 
+def test_a_pickle_from_before_pooling_loads_unpooled():
+    """A map pickled before ``pooling`` existed has no state for it: it loads with the
+    Properties' defaults (no pooling) and the same numbers."""
+    learned = _used_map()
+    state = learned.__getstate__()
+    for name in ("_property_pooling", "_property_pooling_scans"):
+        del state[name]
+    old = ClutterMap.__new__(ClutterMap)
+    old.__setstate__(state)
+    assert old.pooling == "none" and old.pooling_scans == 10.0
+    assert old.intensity_grid().tobytes() == learned.intensity_grid().tobytes()
+
+
 def test_reset_and_immutability_of_the_configuration():
     learned = _used_map()
     learned.reset()

@@ -4,20 +4,22 @@ experiment runner's results bit for bit, and the surveillance region follows the
 (asked for each scan's time only, never for a time ahead of the scans)."""
 import dataclasses
 import datetime
+import math
 
 import numpy as np
 import pytest
 from stonesoup.types.detection import Detection
 from stonesoup.models.measurement.linear import LinearGaussian
 
-from ctxmodels import (ClutterDensityModel, ClutterMap, ConstantPose, DetectionEstimate,
-                       DetectionProbabilityModel, Mounting, NavigationTrack, Pose, RangeBands,
-                       SensorModel)
+from ctxmodels import (AngularSector, ClutterDensityModel, ClutterMap, ConstantPose,
+                       DetectionEstimate, DetectionProbabilityModel, Mounting, NavigationTrack,
+                       Pose, RangeBands, SensorModel)
 from ctxmodels.experiment.runner import Job, run_job
 from ctxmodels.experiment.scenarios import make_scenario
 from ctxmodels.experiment.scoring import score_run, tracks_digest
 from ctxmodels.experiment.sensors import paper_sensor_models
-from ctxmodels.experiment.trackers import TRACKERS, applicable, paper_tracker
+from ctxmodels.experiment.trackers import (TRACKERS, applicable, learned_clutter_map,
+                                          paper_tracker)
 from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, ClutterMapLearner,
                                  DetectionLearner, LearningTracker, PoseCentredRegion,
                                  PointProcessMultiTargetTracker, in_track_order)
@@ -309,3 +311,28 @@ def test_both_paths_agree_when_births_wait_while_the_region_moves():
         for (mean_a, weight_a), (mean_b, weight_b) in zip(a, b):
             np.testing.assert_allclose(mean_a, mean_b, rtol=1e-9, atol=1e-9)
             assert weight_a == pytest.approx(weight_b, rel=1e-9)
+
+
+def test_the_learned_map_spans_the_bearings_the_radar_sees():
+    """``gmphd-learned``'s clutter map leaves the radar's blind sector astern (65°) out of
+    its grid — a pooled ring would otherwise learn the sector's missing clutter as a lower
+    level — in 59 cells of 5°; a blind sector that does not hold bearing π would split the
+    seen interval, so the grid keeps the full circle then."""
+    learned = learned_clutter_map(paper_sensor_models()["radar"])
+    bearings = np.asarray(learned.edges[0])
+    assert len(bearings) == 60 and learned.pooling == "range"
+    np.testing.assert_allclose(bearings[[0, -1]], np.radians([-147.5, 147.5]), rtol=1e-12)
+    np.testing.assert_allclose(np.diff(bearings), math.radians(5.0), rtol=1e-9)
+    for centre in (-math.pi, 3 * math.pi):  # the same sector, other turns
+        radar = paper_sensor_models()["radar"]
+        factors = [AngularSector.blind(centre, math.radians(65.0)) if isinstance(f, AngularSector)
+                   else f for f in radar.detection.factors]
+        moved = SensorModel(detection=DetectionProbabilityModel(factors=factors),
+                            clutter=radar.clutter, name="radar")
+        np.testing.assert_allclose(np.asarray(learned_clutter_map(moved).edges[0]), bearings)
+    ahead = [AngularSector.blind(0.0, math.radians(65.0)) if isinstance(f, AngularSector) else f
+             for f in paper_sensor_models()["radar"].detection.factors]
+    split = SensorModel(detection=DetectionProbabilityModel(factors=ahead),
+                        clutter=paper_sensor_models()["radar"].clutter, name="radar")
+    np.testing.assert_allclose(np.asarray(learned_clutter_map(split).edges[0])[[0, -1]],
+                               [-math.pi, math.pi])

@@ -20,7 +20,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from stonesoup.base import Base
+from stonesoup.base import Base, Property
 
 _CACHE_PREFIX = "_cached_"
 
@@ -86,6 +86,10 @@ class LearnedComponent(Base):
         return state
 
     def __setstate__(self, state):
+        # a pickle from before a Property was added: that Property's default
+        for name, prop in type(self).properties.items():
+            if prop.default is not Property.empty:
+                state.setdefault(f"_property_{name}", prop.default)
         self.__dict__.update(state)
         self.__dict__["_core"] = self._build(*(state[f"_property_{name}"]
                                                for name, _ in self.STATE))

@@ -15,6 +15,17 @@ discounted by :math:`\gamma` per scan since (exponential forgetting), has the po
 which is the factor's value for a detection in cell :math:`c` (:math:`\lambda_0` outside
 the grid).
 
+Every update counts one scan of exposure for every cell: the map assumes the sensor
+reports clutter over its whole grid at each scan (a blind sector's cells then drift
+towards low λ, where no detection arrives to be weighed by it) — except inside *gates*,
+discs around the tracks' positions: their detections are the tracks', not clutter, and
+their area is taken out of their cell's exposure that scan (:math:`S_c = S - D_c`, with
+:math:`D_c` the discounted gated fractions). So a track, true or false, neither adds
+clutter evidence nor passes for a place where clutter was looked for and not found: no
+feedback from the tracker's own mistakes into the map. An update costs
+O(detections + gates) in the Rust core (the forgetting is a running scale, not a pass over
+cells). :class:`~ctxmodels.stonesoup.ClutterMapLearner` feeds a map from a tracker's output.
+
 *Pooling* shares evidence between cells expected to have similar clutter. With
 ``pooling='range'`` (a bearing–range map) each range ring — the cells of one range cell, at
 every bearing — has a posterior of its own with the :math:`\lambda_0` prior,
@@ -28,17 +39,11 @@ with weight :math:`s_p` (:attr:`~ClutterMap.pooling_scans`) scans:
 :math:`\hat\lambda_c = (\hat\lambda_g s_p + N_c / V_c) / (s_p + S_c)` (an empirical-Bayes
 plug-in). Sea clutter depends mostly on range (the grazing angle), so a ring learns the
 level of tens of cells in a few scans, and a cell with much evidence of its own (a coast)
-still departs from it. ``pooling='grid'`` pools the whole grid (any space). Without pooling
-(the default) every cell shrinks towards :math:`\lambda_0` alone. Every update counts one scan of exposure for every cell: the map assumes the
-sensor reports clutter over its whole grid at each scan (a blind sector's cells then drift
-towards low λ, where no detection arrives to be weighed by it) — except inside *gates*,
-discs around the tracks' positions: their detections are the tracks', not clutter, and
-their area is taken out of their cell's exposure that scan (:math:`S_c = S - D_c`, with
-:math:`D_c` the discounted gated fractions). So a track, true or false, neither adds
-clutter evidence nor passes for a place where clutter was looked for and not found: no
-feedback from the tracker's own mistakes into the map. An update costs
-O(detections + gates) in the Rust core (the forgetting is a running scale, not a pass over
-cells). :class:`~ctxmodels.stonesoup.ClutterMapLearner` feeds a map from a tracker's output.
+still departs from it; but a cell that cannot see clutter (a blind sector) pulls its ring
+down, so leave such cells out of the grid. ``pooling='grid'`` pools the whole grid (any
+space). Without pooling (the default) every cell shrinks towards :math:`\lambda_0` alone.
+Pooled, an update also recomputes the pools' sums from the cells (one vectorised pass,
+O(cells)), so that a restored map is exactly the saved one.
 
 The map is *state*, not a value like the other components: it changes with each
 :meth:`ClutterMap.update`, and every :class:`~ctxmodels.ClutterDensityModel` built with it

@@ -309,7 +309,9 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
     return LearningTracker(tracker=tracker, learners=learners) if learners else tracker
 
 
-#: The learned radar clutter map (``gmphd-learned``), fixed from the radar before any run:
+#: The learned radar clutter map (``gmphd-learned``), from the radar: its first edition's
+#: settings were fixed before any run; the pooling, the ring prior's weight and the grid's
+#: bearings were revised after its results showed the warm-up loss (``docs/study.md``):
 #: cells of 5° × 50 m in its bearing–range space — 5σ of its bearing noise and 10σ of its
 #: range noise, so a point source's returns stay in one cell, and fine enough to follow the
 #: sea clutter's step at 1 km and a coastline — over the bearings the radar sees (its blind
