@@ -329,6 +329,14 @@ impl ClutterMap {
     /// positions — detections inside a gate are not clutter, and its area is not exposed.
     /// Checks every input before changing anything.
     pub fn update(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>, gates: &[f64]) -> Result<()> {
+        self.update_weighted(pose, positions, ranges, None, gates)
+    }
+
+    /// [`update`](Self::update) with each detection counting `weights[i]` ∈ [0, 1] of a
+    /// clutter point instead of 1: the probability that it is clutter, when a tracker
+    /// knows it (a PHD update's λ / (λ + Σ P_D w g), a JPDA's no-target association).
+    /// The expected clutter count then feeds the posterior: an EM-style estimate.
+    pub fn update_weighted(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>, weights: Option<&[f64]>, gates: &[f64]) -> Result<()> {
         if !positions.len().is_multiple_of(2) {
             return Err(ModelError::shape("positions", "must be (M, 2)"));
         }
@@ -342,6 +350,14 @@ impl ClutterMap {
             }
             if let Some(row) = r.iter().position(|v| v.is_infinite() || *v < 0.0) {
                 return Err(ModelError::non_finite("ranges", row, "range is infinite or negative (NaN = use the position)"));
+            }
+        }
+        if let Some(w) = weights {
+            if w.len() != m {
+                return Err(ModelError::shape("weights", format!("must have {m} entries, got {}", w.len())));
+            }
+            if let Some(row) = w.iter().position(|v| !(*v >= 0.0 && *v <= 1.0)) {
+                return Err(ModelError::non_finite("weights", row, "a weight must be in [0, 1]"));
             }
         }
         if !gates.len().is_multiple_of(3) {
@@ -359,7 +375,7 @@ impl ClutterMap {
             }
             let measured = ranges.map_or(f64::NAN, |r| r[i]);
             if let Some(c) = self.cell(self.coordinates(pose, x, y, measured)) {
-                self.counts[c] += self.scale;
+                self.counts[c] += weights.map_or(self.scale, |w| w[i] * self.scale);
             }
         }
         // each gated cell's fraction this scan, summed in gate order, then capped at 1
@@ -531,6 +547,26 @@ mod tests {
         let restored = fresh().with_state(counts.to_vec(), deficit.to_vec(), exposure, scale).unwrap();
         assert_eq!(restored.intensities(), map.intensities());
         assert_eq!(restored, map);
+    }
+
+    #[test]
+    fn weights_count_fractions_of_a_point_and_ones_change_nothing() {
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        let points = [100.0, 1.0, 100.0, 2.0, 0.0, 700.0];
+        let (mut plain, mut ones, mut half) = (radar(), radar(), radar());
+        plain.update(&pose, &points, None, &[]).unwrap();
+        ones.update_weighted(&pose, &points, None, Some(&[1.0; 3]), &[]).unwrap();
+        half.update_weighted(&pose, &points, None, Some(&[0.5, 0.0, 0.25]), &[]).unwrap();
+        assert_eq!(ones, plain);
+        let (counts, ..) = half.state();
+        let g = 1.0 / 0.9;
+        assert_eq!((counts[4 * 2], counts[6 * 2 + 1]), (0.5 * g, 0.25 * g));
+        let before = half.clone();
+        for bad in [[0.5, 1.5, 0.0], [0.5, f64::NAN, 0.0], [-0.1, 0.0, 0.0]] {
+            assert_eq!(half.update_weighted(&pose, &points, None, Some(&bad), &[]).unwrap_err().argument(), "weights");
+        }
+        assert_eq!(half.update_weighted(&pose, &points, None, Some(&[1.0]), &[]).unwrap_err().argument(), "weights");
+        assert_eq!(half, before, "a failed update changes nothing");
     }
 
     #[test]

@@ -54,16 +54,17 @@ class ReferenceMap:
                  (v >= self.edges[1][0]) & (v < self.edges[1][-1])
         return i, j, inside
 
-    def update(self, pose, positions, ranges=None, gates=np.empty((0, 3))):
+    def update(self, pose, positions, ranges=None, gates=np.empty((0, 3)), weights=None):
         positions = np.asarray(positions, float).reshape(-1, 2)
         gates = np.asarray(gates, float).reshape(-1, 3)
+        weights = np.ones(len(positions)) if weights is None else np.asarray(weights, float)
         free = np.ones(len(positions), bool)
         for gx, gy, r in gates:
             free &= (positions[:, 0] - gx) ** 2 + (positions[:, 1] - gy) ** 2 > r * r
         n = np.zeros_like(self.counts)
         if free.any():
             i, j, inside = self.cells(pose, positions[free], None if ranges is None else ranges[free])
-            np.add.at(n, (i[inside], j[inside]), 1.0)
+            np.add.at(n, (i[inside], j[inside]), weights[free][inside])
         fraction = np.zeros_like(self.counts)
         if len(gates):
             i, j, inside = self.cells(pose, gates[:, :2])
@@ -123,8 +124,10 @@ def test_matches_the_numpy_reference(space, edges, pooling):
         # gates around a few of the scan's own detections (tracks) and some elsewhere
         gates = np.column_stack([np.concatenate([positions[:3], _random_scan(rng, 2) + pose[:2]]),
                                  rng.uniform(0, 150, min(len(positions), 3) + 2)])
-        ours.update(pose, positions, ranges, gates)
-        reference.update(pose, positions, ranges, gates)
+        # every other scan with clutter probabilities as weights
+        weights = rng.random(len(positions)) if scan % 2 else None
+        ours.update(pose, positions, ranges, gates, weights)
+        reference.update(pose, positions, ranges, gates, weights)
     np.testing.assert_allclose(ours.intensity_grid(), reference.grid(), rtol=1e-12)
     np.testing.assert_allclose(ours.intensity(pose, probes), reference.intensity(pose, probes),
                                rtol=1e-12)
@@ -321,4 +324,10 @@ def test_bad_updates_are_named_and_change_nothing():
         learned.update((0.0, 0.0, 0.0), [[1.0, 2.0]], gates=[[0.0, 0.0, -1.0]])
     with pytest.raises(ValueError, match="^gates: "):
         learned.update((0.0, 0.0, 0.0), [[1.0, 2.0]], gates=[[0.0, 0.0]])
+    with pytest.raises(ValueError, match="^weights: "):
+        learned.update((0.0, 0.0, 0.0), [[1.0, 2.0]], weights=[1.5])
+    with pytest.raises(ValueError, match="^weights: "):
+        learned.update((0.0, 0.0, 0.0), [[1.0, 2.0]], weights=[np.nan])
+    with pytest.raises(ValueError, match="^weights: "):
+        learned.update((0.0, 0.0, 0.0), [[1.0, 2.0]], weights=[0.5, 0.5])
     assert (learned.counts.tobytes(), learned.exposure) == before

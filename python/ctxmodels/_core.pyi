@@ -252,9 +252,11 @@ class ClutterMap:
         positions: _Floats,
         ranges: _Floats | None = None,
         gates: _Floats | None = None,
+        weights: _Floats | None = None,
     ) -> None:
         """One scan: its detections' world `positions` (M, 2), measured `ranges` (M,) or None
-        (NaN entries: from the position), and `gates` (G, 3: x, y, radius) around tracks."""
+        (NaN entries: from the position), `gates` (G, 3: x, y, radius) around tracks, and
+        optionally each detection's clutter probability `weights` (M,) in [0, 1]."""
     def intensity(self, pose: _Pose, positions: _Floats, ranges: _Floats | None = None) -> _Floats:
         """λ of the map alone at world `positions` (M, 2) (the prior outside the grid)."""
     def intensities(self) -> _Floats:

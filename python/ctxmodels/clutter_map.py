@@ -147,18 +147,24 @@ class ClutterMap(LearnedComponent):
                                 self.pooling,
                                 number(self.pooling_scans, "pooling_scans"))
 
-    def update(self, pose: Pose | Sequence[float], positions, ranges=None, gates=None) -> None:
-        """One scan: the world ``positions`` (M, 2) of its detections, for a bearing–range
+    def update(self, pose: Pose | Sequence[float], positions, ranges=None, gates=None,
+               weights=None) -> None:
+        r"""One scan: the world ``positions`` (M, 2) of its detections, for a bearing–range
         map their measured ``ranges`` (M,) (NaN or None: from the position), and ``gates``
         (G, 3: world x, y, radius in m) around the tracks' positions, whose detections are
         not clutter and whose area is not exposed. An empty scan counts too: it is evidence
-        of little clutter."""
+        of little clutter. ``weights`` (M,) in [0, 1], optional: each detection counts as
+        that fraction of a clutter point — its probability of being clutter, where the
+        tracker gives one (a PHD update's :math:`\lambda / (\lambda + \sum P_D w g)`, a
+        JPDA's no-target association) — so the map learns the expected clutter count."""
         positions = as_rows(positions, "positions", ncols=2)
         if ranges is not None:
             ranges = as_array(ranges, "ranges", 1, "(M,) ranges")
         if gates is not None:
             gates = as_rows(gates, "gates", ncols=3)
-        self._core.update(pose_tuple(pose), positions, ranges, gates)
+        if weights is not None:
+            weights = as_array(weights, "weights", 1, "(M,) weights")
+        self._core.update(pose_tuple(pose), positions, ranges, gates, weights)
 
     def intensity(self, pose: Pose | Sequence[float], positions, ranges=None) -> np.ndarray:
         """The map's λ at world ``positions`` (M, 2) seen from ``pose``."""

@@ -52,11 +52,12 @@ impl PyClutterMap {
     }
 
     /// One scan: its detections' world `positions` (M, 2), measured `ranges` (M,) or None
-    /// (NaN entries: from the position), and `gates` (G, 3: x, y, radius) around tracks.
-    #[pyo3(signature = (pose, positions, ranges = None, gates = None))]
+    /// (NaN entries: from the position), `gates` (G, 3: x, y, radius) around tracks, and
+    /// optionally each detection's clutter probability `weights` (M,) in [0, 1].
+    #[pyo3(signature = (pose, positions, ranges = None, gates = None, weights = None))]
     fn update(
         &self, pose: (f64, f64, f64), positions: Bound<'_, PyArray2<f64>>, ranges: Option<Bound<'_, PyArray1<f64>>>,
-        gates: Option<Bound<'_, PyArray2<f64>>>,
+        gates: Option<Bound<'_, PyArray2<f64>>>, weights: Option<Bound<'_, PyArray1<f64>>>,
     ) -> PyResult<()> {
         let pose = pose_of(pose)?;
         let positions = borrow(&positions, "positions")?;
@@ -65,8 +66,10 @@ impl PyClutterMap {
         let r = ranges.as_ref().map(|r| slice(r, "ranges")).transpose()?;
         let gates = gates.map(|g| borrow(&g, "gates")).transpose()?;
         let g = gates.as_ref().map(|g| slice(g, "gates")).transpose()?.unwrap_or(&[]);
+        let weights = weights.map(|w| borrow(&w, "weights")).transpose()?;
+        let w = weights.as_ref().map(|w| slice(w, "weights")).transpose()?;
         let map = &self.0;
-        guarded(|| map.write().unwrap_or_else(|poisoned| poisoned.into_inner()).update(&pose, p, r, g))
+        guarded(|| map.write().unwrap_or_else(|poisoned| poisoned.into_inner()).update_weighted(&pose, p, r, w, g))
     }
 
     /// λ of the map alone at world `positions` (M, 2) (the prior outside the grid).
