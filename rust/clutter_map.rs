@@ -155,22 +155,20 @@ impl ClutterMap {
             return Err(ModelError::invalid("pooling", "range rings need a bearing-range map"));
         }
         positive("pooling_scans", pooled_scans)?;
-        let pools = match pooling {
-            Pooling::None => 0,
-            Pooling::Range => self.shape()[1],
-            Pooling::Grid => 1,
-        };
-        self.pooling = pooling;
-        self.pooled_scans = pooled_scans;
         let columns = self.shape()[1];
-        let mut volumes = vec![0.0; columns];
+        let mut rings = vec![0.0; columns];
         for row in self.volumes.chunks_exact(columns) {
-            for (total, v) in volumes.iter_mut().zip(row) {
+            for (total, v) in rings.iter_mut().zip(row) {
                 *total += v;
             }
         }
-        self.pool_volumes = if pooling == Pooling::Grid { vec![volumes.iter().sum()] } else { volumes };
-        self.pool_volumes.truncate(pools);
+        self.pool_volumes = match pooling {
+            Pooling::None => Vec::new(),
+            Pooling::Range => rings,
+            Pooling::Grid => vec![rings.iter().sum()],
+        };
+        self.pooling = pooling;
+        self.pooled_scans = pooled_scans;
         self.refresh_pools();
         Ok(self)
     }

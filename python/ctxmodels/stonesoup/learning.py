@@ -24,11 +24,31 @@ from ..detection_estimate import DetectionEstimate
 from .ordering import in_stable_order, in_track_order
 
 
-def _gate_radius(radius) -> float:
-    if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)) \
-            or not (math.isfinite(radius) and radius >= 0):
-        raise ValueError(f"gate_radius: must be a finite number of metres >= 0, got {radius!r}")
-    return float(radius)
+class _GatedLearner(Base):
+    """What the gate-based learners share: a gate of ``gate_radius`` around each track's
+    position at the scan, whose detections are the track's."""
+
+    gate_radius: float = Property(doc="Radius (m) of the disc around each track's position "
+                                      "at the scan whose detections are the track's.")
+    position_mapping: Sequence[int] = Property(default=(0, 2),
+                                               doc="Indices of x and y in the track states.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        radius = self.gate_radius
+        if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer,
+                                                               np.floating)) \
+                or not (math.isfinite(radius) and radius >= 0):
+            raise ValueError(f"gate_radius: must be a finite number of metres >= 0, got "
+                             f"{radius!r}")
+
+    def _tracked(self, time, tracks) -> tuple[list, np.ndarray]:
+        """The tracks with a state at the scan (in track order) and their positions (T, 2)."""
+        x, y = self.position_mapping
+        tracked = [t for t in in_track_order(tracks) if len(t) and t.timestamp == time]
+        states = np.array([[float(t.state_vector[x, 0]), float(t.state_vector[y, 0])]
+                           for t in tracked], dtype=np.float64).reshape(-1, 2)
+        return tracked, states
 
 
 def _learned_factors(detections, part: str, kind: type):
@@ -48,7 +68,7 @@ def _scan_positions(detections, model) -> np.ndarray:
     return detection_positions(ordered, model.position_mapping)
 
 
-class ClutterMapLearner(Base):
+class ClutterMapLearner(_GatedLearner):
     r"""Updates the :class:`~ctxmodels.ClutterMap` factors of each scan's sensor with that
     scan: its detections are clutter unless they lie in a *gate*, a disc of
     ``gate_radius`` around the position of a track at the scan; a gate's area is also left
@@ -58,15 +78,6 @@ class ClutterMapLearner(Base):
     ``gate_radius`` should hold a track's own detections: a few standard deviations of the
     measurement error in position (a radar with σ_bearing = 1° at 1.6 km: 28 m).
     """
-
-    gate_radius: float = Property(doc="Radius (m) of the disc around each track's position "
-                                      "at the scan whose detections are the track's.")
-    position_mapping: Sequence[int] = Property(default=(0, 2),
-                                               doc="Indices of x and y in the track states.")
-
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        _gate_radius(self.gate_radius)
 
     def learn(self, time, detections, tracks) -> None:
         """After the scan at ``time``: ``detections`` as the tracker received them (a
@@ -81,16 +92,13 @@ class ClutterMapLearner(Base):
             ranges = measured_ranges(ordered)
         else:
             positions, ranges = np.empty((0, 2)), None
-        x, y = self.position_mapping
-        gates = np.array([[float(t.state_vector[x, 0]), float(t.state_vector[y, 0]),
-                           float(self.gate_radius)]
-                          for t in in_track_order(tracks) if len(t) and t.timestamp == time],
-                         dtype=np.float64).reshape(-1, 3)
+        _, states = self._tracked(time, tracks)
+        gates = np.column_stack([states, np.full(len(states), float(self.gate_radius))])
         for learned in maps:
             learned.update(context.pose, positions, ranges, gates)
 
 
-class DetectionLearner(Base):
+class DetectionLearner(_GatedLearner):
     r"""Updates the :class:`~ctxmodels.DetectionEstimate` factors of each scan's sensor with
     that scan. A track is *detected* at a scan when a detection of the scan lies within
     ``gate_radius`` of its position at the scan (the association, read from the output of
@@ -109,16 +117,11 @@ class DetectionLearner(Base):
     state at that scan).
     """
 
-    gate_radius: float = Property(doc="Radius (m) of the disc around each track's position "
-                                      "at the scan within which a detection is the track's.")
     confirmation: int = Property(default=3, doc="Detections by the sensor a track needs "
                                                 "on earlier scans to count as a trial.")
-    position_mapping: Sequence[int] = Property(default=(0, 2),
-                                               doc="Indices of x and y in the track states.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        _gate_radius(self.gate_radius)
         if isinstance(self.confirmation, bool) or not isinstance(self.confirmation, (int, np.integer)) \
                 or self.confirmation < 0:
             raise ValueError(f"confirmation: must be an integer >= 0, got {self.confirmation!r}")
@@ -132,10 +135,7 @@ class DetectionLearner(Base):
         context, model, estimates = _learned_factors(detections, "detection", DetectionEstimate)
         if not estimates:
             return
-        x, y = self.position_mapping
-        tracked = [t for t in in_track_order(tracks) if len(t) and t.timestamp == time]
-        states = np.array([[float(t.state_vector[x, 0]), float(t.state_vector[y, 0])]
-                           for t in tracked], dtype=np.float64).reshape(-1, 2)
+        tracked, states = self._tracked(time, tracks)
         found = _scan_positions(detections, model)
         if len(states) and len(found):
             gaps = np.hypot(states[:, None, 0] - found[None, :, 0],
