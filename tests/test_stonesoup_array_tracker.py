@@ -49,10 +49,12 @@ from gmphd_setups import (
 pytestmark = pytest.mark.usefixtures("stock_in_stable_order")
 
 
-def lockstep(reference, tracker, compare_mixtures=False):
+def lockstep(reference, tracker, compare_mixtures=False, explained=None):
     """Runs both trackers scan by scan; after each, the same tracks (creation order) to
     within the returned worst relative difference; with ``compare_mixtures`` also the same
-    mixture (components in order, tags matched one to one)."""
+    mixture (components in order, tags matched one to one). Where the reference reports
+    its detections' clutter probabilities, the array tracker reports the same (to the
+    worst difference); ``explained`` (a list) collects those below 1."""
     worst, scans = 0.0, 0
     tag_map: dict = {}
     # (a LearningTracker is iterated as itself, its learners run; its tracker is compared)
@@ -62,6 +64,15 @@ def lockstep(reference, tracker, compare_mixtures=False):
         scans += 1
         worst = max(worst, tracks_difference(inner(reference).target_tracks.values(),
                                              inner(tracker).target_tracks.values(), f"scan {scans}"))
+        expected = inner(reference).clutter_probabilities
+        if expected is not None:
+            got = inner(tracker).clutter_probabilities
+            assert got[0] == expected[0] == t1 and got[1].keys() == expected[1].keys()
+            a = np.array(list(expected[1].values()))
+            b = np.array([got[1][d] for d in expected[1]])
+            worst = max(worst, float(np.max(np.abs(a - b), initial=0.0)))
+            if explained is not None:
+                explained.extend(a[a < 1])
         if compare_mixtures:
             expected = reference.gaussian_mixture.components
             got = tracker.gaussian_mixture.components
@@ -104,12 +115,16 @@ def test_radar_lidar_with_contexts_matches_after_every_scan(pd_evaluation):
     options = dict(birth=MeasurementDrivenBirth(birth_weight=1e-2),
                    surveillance_region=CircularRegion(centre=(0.0, 0.0), radius=1200.0),
                    max_position_std=60.0, extraction_threshold=0.5)
+    explained = []
     with seeded_uuids(2):
         reference, tracker = pair(
             scans, lambda: stock_components(scenario, context_updater=True), **options)
-        worst = lockstep(reference, tracker)
+        worst = lockstep(reference, tracker, explained=explained)
     assert worst <= RTOL
     assert len(reference.target_tracks) >= 1
+    # the tracked targets explain their detections: clutter probabilities near 0 as well as
+    # between (a detection near a weak component)
+    assert min(explained) < 0.01 and any(0.05 < p < 0.95 for p in explained)
 
 
 def test_radar_lidar_without_contexts_matches_with_the_mixture_read_each_scan():

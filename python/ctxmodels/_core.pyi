@@ -375,9 +375,10 @@ class GaussianMixtureArrays:
         skip_undetectable: bool,
         time: int,
         force_symmetric: bool = False,
-    ) -> None:
+    ) -> _Floats:
         """The GM-PHD update with one scan's `detections` (M, m), `prob_detection` per
-        component and `clutter` (λ) per detection."""
+        component and `clutter` (λ) per detection; returns each detection's posterior
+        clutter probability (M,)."""
     def retain(self, keep: Sequence[bool]) -> None:
         """Keeps the components whose flag is true."""
     def retain_inside_circle(

@@ -48,7 +48,7 @@ fn one_detection_gives_the_kalman_update_and_the_phd_weights() {
     let mut mixture = Mixture::new(4);
     let tag = mixture.reserve_tags(1);
     mixture.extend(&[0.0, 0.0, 0.0, 0.0], &diagonal([1.0; 4]), &[0.8], &[tag], &[0]).unwrap();
-    mixture.update(&position_model(), &[1.0, 0.0], &[0.5], &[0.1], &params()).unwrap();
+    let clutter_probability = mixture.update(&position_model(), &[1.0, 0.0], &[0.5], &[0.1], &params()).unwrap();
     assert_eq!(mixture.len(), 2);
     // S = 2 I, K = diag-ish 1/2 on positions: posterior x = 0.5, var 0.5
     assert!((mixture.mean(0)[0] - 0.5).abs() < 1e-15);
@@ -56,6 +56,9 @@ fn one_detection_gives_the_kalman_update_and_the_phd_weights() {
     let q = (-0.25f64).exp() / (2.0 * std::f64::consts::PI * 2.0);
     let detected = 0.5 * 0.8 * q;
     assert!((mixture.weights[0] - detected / (detected + 0.1)).abs() < 1e-15);
+    // the detection is clutter with the rest of its probability
+    assert_eq!(clutter_probability.len(), 1);
+    assert!((clutter_probability[0] - 0.1 / (detected + 0.1)).abs() < 1e-15);
     assert!((mixture.weights[1] - 0.4).abs() < 1e-15);
     assert_eq!(mixture.tags, vec![tag, tag]);
     assert_eq!(mixture.times, vec![7, 7]);
@@ -65,8 +68,10 @@ fn one_detection_gives_the_kalman_update_and_the_phd_weights() {
 fn births_get_fresh_tags_and_no_missed_term() {
     let mut mixture = Mixture::new(4);
     mixture.extend(&[0.0; 4], &diagonal([1.0; 4]), &[1e-4], &[BIRTH], &[0]).unwrap();
-    mixture.update(&position_model(), &[0.5, 0.5, 50.0, 50.0], &[1.0], &[1e-3, 1e-3], &params()).unwrap();
+    let clutter_probability = mixture.update(&position_model(), &[0.5, 0.5, 50.0, 50.0], &[1.0], &[1e-3, 1e-3], &params()).unwrap();
     assert_eq!(mixture.len(), 1, "the far detection is not gated; the missed birth is dropped");
+    assert!(clutter_probability[0] > 0.0 && clutter_probability[0] < 1.0);
+    assert_eq!(clutter_probability[1], 1.0, "nothing explains the far detection");
     assert_ne!(mixture.tags[0], BIRTH);
 }
 
@@ -75,8 +80,9 @@ fn undetectable_components_keep_their_weight() {
     let mut mixture = Mixture::new(4);
     let tag = mixture.reserve_tags(1);
     mixture.extend(&[0.0; 4], &diagonal([1.0; 4]), &[0.9], &[tag], &[0]).unwrap();
-    mixture.update(&position_model(), &[0.1, 0.1], &[0.0], &[1e-3], &params()).unwrap();
+    let clutter_probability = mixture.update(&position_model(), &[0.1, 0.1], &[0.0], &[1e-3], &params()).unwrap();
     assert_eq!(mixture.weights, vec![0.9]);
+    assert_eq!(clutter_probability, vec![1.0], "a component that cannot be detected explains nothing");
 }
 
 #[test]

@@ -147,8 +147,11 @@ fn check_inputs(mixture: &Mixture, model: &MeasurementModel, detections: &[f64],
 impl Mixture {
     /// Replaces the (predicted) mixture by its update with the detections of one scan:
     /// `detections` (M×m, bearings as floats), `prob_detection` per component, `clutter`
-    /// (λ) per detection.
-    pub fn update(&mut self, model: &MeasurementModel, detections: &[f64], prob_detection: &[f64], clutter: &[f64], params: &UpdateParams) -> Result<()> {
+    /// (λ) per detection. Returns each detection's posterior clutter probability
+    /// λ(z) / (λ(z) + Σᵢ p_S P_D,ᵢ wᵢ N(z; ẑᵢ, Sᵢ)) over the components that gate it — 1 for
+    /// a detection that no component explains (what it adds to the map of
+    /// a clutter learner, in expectation).
+    pub fn update(&mut self, model: &MeasurementModel, detections: &[f64], prob_detection: &[f64], clutter: &[f64], params: &UpdateParams) -> Result<Vec<f64>> {
         let count = check_inputs(self, model, detections, prob_detection, clutter, params)?;
         let (n, d, m) = (self.len(), self.ndim, model.ndim_meas());
         // (no detections: only the missed-detection terms, nothing to linearise)
@@ -184,6 +187,7 @@ impl Mixture {
         let mut raw = vec![0.0; m];
         let mut innovation = vec![0.0; m];
         let mut correction = vec![0.0; d];
+        let mut clutter_probability = vec![1.0; count];
         for (j, members) in gated.iter().enumerate() {
             let z = &detections[j * m..(j + 1) * m];
             let first = out.len();
@@ -221,6 +225,9 @@ impl Mixture {
                 out.tags.push(tag);
                 out.times.push(params.time);
             }
+            if weight_sum > 0.0 {
+                clutter_probability[j] = clutter[j] / (weight_sum + clutter[j]);
+            }
             if params.normalise {
                 let normaliser = weight_sum + clutter[j];
                 for weight in &mut out.weights[first..] {
@@ -245,6 +252,6 @@ impl Mixture {
             }
         }
         *self = out;
-        Ok(())
+        Ok(clutter_probability)
     }
 }

@@ -123,12 +123,13 @@ impl PyGaussianMixtureArrays {
     }
 
     /// The GM-PHD update with one scan's `detections` (M, m), `prob_detection` per
-    /// component and `clutter` (λ) per detection.
+    /// component and `clutter` (λ) per detection; returns each detection's posterior
+    /// clutter probability (M,).
     #[pyo3(signature = (model, detections, prob_detection, clutter, *, prob_survival, missed_distance, squared, include_all, normalise, skip_undetectable, time, force_symmetric = false))]
     #[allow(clippy::too_many_arguments)]
-    fn update(
+    fn update<'py>(
         &mut self,
-        py: Python<'_>,
+        py: Python<'py>,
         model: &PyScanMeasurementModel,
         detections: Bound<'_, PyArray2<f64>>,
         prob_detection: Bound<'_, PyArray1<f64>>,
@@ -141,7 +142,7 @@ impl PyGaussianMixtureArrays {
         skip_undetectable: bool,
         time: i64,
         force_symmetric: bool,
-    ) -> PyResult<()> {
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let m = model.0.ndim_meas();
         if detections.shape()[1] != m && detections.len() > 0 {
             return Err(shape_error("detections", format!("(M, {m})"), detections.shape()));
@@ -151,7 +152,8 @@ impl PyGaussianMixtureArrays {
         let params = UpdateParams { prob_survival, gate: missed_distance, squared, include_all, normalise, skip_undetectable, time, force_symmetric };
         let mixture = &mut self.0;
         let model = &model.0;
-        detached(py, || mixture.update(model, z, pd, lam, &params))
+        let clutter_probability = detached(py, || mixture.update(model, z, pd, lam, &params))?;
+        Ok(PyArray1::from_vec(py, clutter_probability))
     }
 
     /// Keeps the components whose flag is true.

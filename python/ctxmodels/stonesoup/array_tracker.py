@@ -314,11 +314,13 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
         if scan_model is None:  # no detections: only the missed-detection terms
             scan_model = _NO_DETECTIONS[arrays.ndim]
             z = np.empty((0, scan_model.ndim_meas))
-        arrays.update(scan_model, np.ascontiguousarray(z), prob_detection, clutter,
-                      prob_survival=plan.prob_survival, missed_distance=plan.missed_distance,
-                      squared=plan.squared, include_all=plan.include_all,
-                      normalise=plan.normalise, skip_undetectable=context is not None,
-                      time=now, force_symmetric=plan.force_symmetric)
+        clutter_probability = arrays.update(
+            scan_model, np.ascontiguousarray(z), prob_detection, clutter,
+            prob_survival=plan.prob_survival, missed_distance=plan.missed_distance,
+            squared=plan.squared, include_all=plan.include_all, normalise=plan.normalise,
+            skip_undetectable=context is not None, time=now,
+            force_symmetric=plan.force_symmetric)
+        self._clutter_probabilities = (time, dict(zip(detections, clutter_probability.tolist())))
         self._within_region(arrays)
         if self.max_position_std is not None:
             x, y = self.position_mapping

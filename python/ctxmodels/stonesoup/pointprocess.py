@@ -106,6 +106,10 @@ class _ContextPointProcessUpdate:
         Without ``detector_context`` this is the stock update. With it, P_D comes from the
         context per predicted component and κ(z) = λ(z; S) per detection; a component with
         P_D = 0 has no detection term (its missed-detection term keeps its weight).
+
+        The returned update's ``clutter_probabilities`` maps each detection that some
+        component explains to its posterior clutter probability
+        :math:`\kappa(z) / (\kappa(z) + \sum_l p_S P_D w q(z))` (the others: 1).
         """
         if detector_context is None:
             return super().update(hypotheses)
@@ -119,6 +123,7 @@ class _ContextPointProcessUpdate:
         updated_components = []
         weight_sums = []
         clutter_terms = []
+        clutter_probabilities = {}
         # Same floating-point operations, in the same order, as the stock update, with the
         # scalar P_D and clutter density replaced by the context's values.
         for multi_hypothesis in hypotheses[:-1]:
@@ -150,6 +155,9 @@ class _ContextPointProcessUpdate:
             weight_sums.append(weight_sum)
             clutter = scan.clutter(multi_hypothesis) if len(multi_hypothesis) else None
             clutter_terms.append(clutter)
+            if weight_sum > 0:
+                clutter_probabilities[multi_hypothesis.single_hypotheses[0].measurement] = \
+                    float(clutter / (weight_sum + clutter))
             for component in detection_components:
                 if self.normalisation:
                     component.weight /= (weight_sum + clutter)
@@ -173,7 +181,10 @@ class _ContextPointProcessUpdate:
         for component in updated_components:
             if component.weight == 0:
                 component.weight = np.finfo(float).eps
-        return GaussianMixtureUpdate(hypothesis=hypotheses, components=updated_components)
+        update = GaussianMixtureUpdate(hypothesis=hypotheses, components=updated_components)
+        # (not a Property: read once by the tracker, see clutter_probabilities there)
+        update.clutter_probabilities = clutter_probabilities
+        return update
 
     def _context_update_terms(self, weight_sums, clutter_terms, missed, missed_pd,
                               number_of_measurements):
@@ -325,6 +336,19 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
                 f"max_position_std: must be a finite number > 0 or None, got {limit!r}")
         self._pending_births: list[TaggedWeightedGaussianState] = []
         self._region = None  # this scan's region (see scan_region)
+        self._clutter_probabilities = None  # (time, {detection: probability}) of the last scan
+
+    @property
+    def clutter_probabilities(self) -> tuple[datetime.datetime, dict] | None:
+        r"""The last scan's time and its detections, each with its posterior probability
+        of being clutter in the update:
+        :math:`\kappa(z) / (\kappa(z) + \sum_j p_S P_D^{(j)} w^{(j)} q^{(j)}(z))` over the
+        predicted components (births included) that gate :math:`z`; 1 for a detection
+        that none explains. What a clutter learner counts, in expectation
+        (:class:`~ctxmodels.stonesoup.ClutterMapLearner` with ``weighting="posterior"``).
+        None before the first scan, and after a scan that a stock updater updated on the
+        component path (it does not report its terms)."""
+        return self._clutter_probabilities
 
     def _inside_mask(self, points: np.ndarray) -> np.ndarray:
         """Whether each (x, y) row of ``points`` lies in this scan's surveillance region."""
@@ -383,6 +407,9 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             self.gaussian_mixture = self.updater.update(hypotheses, detector_context=context)
         else:
             self.gaussian_mixture = self.updater.update(hypotheses)
+        reported = vars(self.gaussian_mixture).pop("clutter_probabilities", None)
+        self._clutter_probabilities = None if reported is None else (
+            time, {detection: reported.get(detection, 1.0) for detection in detections})
         if self._region is not None:
             self.gaussian_mixture.components = self._inside(self.gaussian_mixture.components)
         if self.max_position_std is not None:
