@@ -29,7 +29,8 @@ from ctxmodels import (AngularSector, ClutterDensityModel, ClutterMap, ConstantP
                        RangeBands, SensorModel)
 from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, ClutterMapLearner,
                                  ContextFeeder, DetectionLearner, LearningTracker,
-                                 MeasurementDrivenBirth, PHDUpdater, in_track_order)
+                                 MeasurementDrivenBirth, PHDUpdater, in_stable_order,
+                                 in_track_order)
 
 START = datetime.datetime(2026, 1, 1)
 TARGET = np.array([600.0, 300.0])
@@ -105,10 +106,13 @@ def test_learners_see_each_scan_and_change_nothing_else():
     assert wrapped.tracks == wrapped.tracker.tracks
 
 
-def test_a_gmphd_learns_the_clutter_and_not_its_target():
+@pytest.mark.parametrize("learner", [ClutterMapLearner(gate_radius=30.0),
+                                     ClutterMapLearner(weighting="posterior")],
+                         ids=["gates", "posterior"])
+def test_a_gmphd_learns_the_clutter_and_not_its_target(learner):
     scans = _scans(600, seed=2)
     learned = _map()
-    tracker = _learning_tracker(scans, learned, [ClutterMapLearner(gate_radius=30.0)])
+    tracker = _learning_tracker(scans, learned, [learner])
     everything = _map()  # fed every detection, no gates: the target is clutter to it
     held = 0
     for (time, tracks), (_, detections) in zip(tracker, scans):
@@ -130,9 +134,10 @@ def test_a_gmphd_learns_the_clutter_and_not_its_target():
     evidence = (1 - 0.995 ** 600) / 0.005
     expected = (TRUE_CLUTTER * evidence + 1e-3 * 10) / (evidence + 10)
     assert abs(grid[others].mean() / expected - 1) < 0.06
-    # the target's cell: its detections were gated out (and the gate's area unexposed), so
-    # λ there is the clutter's, within the cells' spread; the ungated map adds the target's
-    # 0.9 detections a scan over the cell's 157 rad·m, ≈ 3× the clutter
+    # the target's cell: its detections were gated out (and the gate's area unexposed) or
+    # had a clutter probability near 0, so λ there is the clutter's, within the cells'
+    # spread; the ungated map adds the target's 0.9 detections a scan over the cell's
+    # 157 rad·m, ≈ 3× the clutter
     spread = grid[others].std()
     assert spread < 0.2 * expected
     assert abs(grid[target_cell] - expected) < 3 * spread
@@ -197,9 +202,48 @@ def test_detection_learner_counts_confirmed_tracks_weighted_by_the_other_factors
     assert list(fresh.hits) == [1.0, 0.0, 1.0] and list(fresh.trials) == [1.0, 1.0, 1.0]
 
 
+def test_posterior_weights_are_the_trackers_clutter_probabilities():
+    """The map of a posterior learner is the map updated with each detection weighted by
+    the probability the tracker reported for it, in the scan's stable order."""
+    scans = _scans(30, seed=6)
+    learned, by_hand = _map(), _map()
+    tracker = _learning_tracker(scans, learned, [ClutterMapLearner(weighting="posterior")])
+    weights_seen = []
+    for (time, _), (_, detections) in zip(tracker, scans):
+        reported_time, reported = tracker.tracker.clutter_probabilities
+        assert reported_time == time and reported.keys() == detections
+        ordered = in_stable_order(detections)
+        weights = np.array([reported[d] for d in ordered])
+        positions = [[d.state_vector[1, 0] * math.cos(d.state_vector[0, 0]),
+                      d.state_vector[1, 0] * math.sin(d.state_vector[0, 0])] for d in ordered]
+        by_hand.update((0.0, 0.0, 0.0), positions, [d.state_vector[1, 0] for d in ordered],
+                       weights=weights)
+        weights_seen.extend(weights)
+    assert learned.intensity_grid().tobytes() == by_hand.intensity_grid().tobytes()
+    assert min(weights_seen) < 0.01 and max(weights_seen) == 1.0  # the target, and clutter
+
+
+def test_a_posterior_learner_needs_a_tracker_that_reports():
+    learner = ClutterMapLearner(weighting="posterior")
+    scans = _scans(2, seed=7)
+    context_scans = list(_learning_tracker(scans, _map(), []).tracker.detector)
+    with pytest.raises(RuntimeError, match="needs the tracker"):
+        learner.learn(context_scans[0][0], context_scans[0][1], set())
+    with pytest.raises(TypeError, match="^tracker: weighting='posterior'"):
+        learner.bind(object())
+    tracker = _learning_tracker(scans, _map(), []).tracker
+    learner.bind(tracker)  # bound, but the tracker has not run this scan
+    with pytest.raises(RuntimeError, match="no clutter probabilities"):
+        learner.learn(context_scans[0][0], context_scans[0][1], set())
+
+
 def test_bad_learners_are_named():
     with pytest.raises(ValueError, match="^gate_radius: "):
         ClutterMapLearner(gate_radius=-1.0)
+    with pytest.raises(ValueError, match="^gate_radius: "):
+        ClutterMapLearner()  # gates need a radius
+    with pytest.raises(ValueError, match="^weighting: "):
+        ClutterMapLearner(gate_radius=1.0, weighting="soft")
     with pytest.raises(ValueError, match="^gate_radius: "):
         DetectionLearner(gate_radius=float("nan"))
     with pytest.raises(ValueError, match="^confirmation: "):

@@ -36,11 +36,18 @@ class _GatedLearner(Base):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         radius = self.gate_radius
+        if radius is None and not self._gated:
+            return
         if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer,
                                                                np.floating)) \
                 or not (math.isfinite(radius) and radius >= 0):
             raise ValueError(f"gate_radius: must be a finite number of metres >= 0, got "
                              f"{radius!r}")
+
+    @property
+    def _gated(self) -> bool:
+        """Whether this learner uses its gates (and so needs ``gate_radius``)."""
+        return True
 
     def _tracked(self, time, tracks) -> tuple[list, np.ndarray]:
         """The tracks with a state at the scan (in track order) and their positions (T, 2)."""
@@ -68,16 +75,58 @@ def _scan_positions(detections, model) -> np.ndarray:
     return detection_positions(ordered, model.position_mapping)
 
 
+_WEIGHTINGS = ("gates", "posterior")
+
+
 class ClutterMapLearner(_GatedLearner):
     r"""Updates the :class:`~ctxmodels.ClutterMap` factors of each scan's sensor with that
-    scan: its detections are clutter unless they lie in a *gate*, a disc of
-    ``gate_radius`` around the position of a track at the scan; a gate's area is also left
-    out of its cell's exposure for the scan (see :class:`~ctxmodels.ClutterMap`), so the
-    tracks — including false ones — neither feed the map nor starve it.
+    scan. Which detections count as clutter, by ``weighting``:
 
-    ``gate_radius`` should hold a track's own detections: a few standard deviations of the
-    measurement error in position (a radar with σ_bearing = 1° at 1.6 km: 28 m).
+    * ``"gates"`` (any tracker): a detection is clutter unless it lies in a *gate*, a disc
+      of ``gate_radius`` around the position of a track at the scan; a gate's area is also
+      left out of its cell's exposure for the scan (see :class:`~ctxmodels.ClutterMap`), so
+      the tracks — including false ones — neither feed the map nor starve it. A target's
+      detections before its track is extracted are counted as clutter.
+    * ``"posterior"`` (a tracker that reports ``clutter_probabilities``, as the GM-PHD
+      trackers of :mod:`ctxmodels.stonesoup` do): each detection counts as its posterior
+      clutter probability :math:`\kappa(z) / (\kappa(z) + \sum_j p_S P_D^{(j)} w^{(j)}
+      q^{(j)}(z))` in the tracker's update, the expected number of clutter points it is
+      (an EM step), and the whole scan is exposure. Components below the extraction
+      threshold — a target's first scans — already explain their detections. The map
+      then learns from what the filter believes, so its errors feed back: a λ too low
+      lets clutter seed components that then explain (and hide) more clutter. Needs the
+      tracker: :class:`LearningTracker` calls :meth:`bind` with the tracker it wraps.
+
+    ``gate_radius`` (``"gates"`` only) should hold a track's own detections: a few standard
+    deviations of the measurement error in position (a radar with σ_bearing = 1° at
+    1.6 km: 28 m).
     """
+
+    gate_radius: float = Property(default=None, doc="Radius (m) of the disc around each "
+                                                    "track's position at the scan whose "
+                                                    "detections are the track's (needed "
+                                                    "with ``weighting='gates'``).")
+    weighting: str = Property(default="gates", doc="How detections count as clutter: "
+                                                   "``gates`` or ``posterior``.")
+
+    def __init__(self, *args, **kwargs):
+        weighting = kwargs.get("weighting", args[2] if len(args) > 2 else "gates")
+        if weighting not in _WEIGHTINGS:
+            raise ValueError(f"weighting: must be one of {', '.join(_WEIGHTINGS)}, got "
+                             f"{weighting!r}")
+        super().__init__(*args, **kwargs)
+        self._tracker = None
+
+    @property
+    def _gated(self) -> bool:
+        return self.weighting == "gates"
+
+    def bind(self, tracker) -> None:
+        """The tracker whose updates weight the detections (``weighting="posterior"``)."""
+        if self.weighting == "posterior" and not hasattr(tracker, "clutter_probabilities"):
+            raise TypeError(f"tracker: weighting='posterior' needs a tracker that reports "
+                            f"clutter_probabilities; {type(tracker).__name__} does not")
+        self._tracker = tracker
 
     def learn(self, time, detections, tracks) -> None:
         """After the scan at ``time``: ``detections`` as the tracker received them (a
@@ -92,10 +141,30 @@ class ClutterMapLearner(_GatedLearner):
             ranges = measured_ranges(ordered)
         else:
             positions, ranges = np.empty((0, 2)), None
-        _, states = self._tracked(time, tracks)
-        gates = np.column_stack([states, np.full(len(states), float(self.gate_radius))])
+        if self.weighting == "posterior":
+            gates, weights = None, self._posterior(time, ordered)
+        else:
+            _, states = self._tracked(time, tracks)
+            gates = np.column_stack([states, np.full(len(states), float(self.gate_radius))])
+            weights = None
         for learned in maps:
-            learned.update(context.pose, positions, ranges, gates)
+            learned.update(context.pose, positions, ranges, gates, weights)
+
+    def _posterior(self, time, ordered) -> np.ndarray:
+        """The clutter probabilities the bound tracker gave ``ordered`` in its scan at
+        ``time``."""
+        if self._tracker is None:
+            raise RuntimeError("weighting='posterior' needs the tracker: wrap it in a "
+                               "LearningTracker, or call bind(tracker) first")
+        reported = self._tracker.clutter_probabilities
+        if reported is None or reported[0] != time:
+            raise RuntimeError(f"the tracker reported no clutter probabilities for the scan "
+                               f"at {time} (a stock updater does not)")
+        try:
+            return np.array([reported[1][detection] for detection in ordered], dtype=np.float64)
+        except KeyError:
+            raise RuntimeError(f"the tracker's clutter probabilities at {time} are for other "
+                               "detections than the learner's") from None
 
 
 class DetectionLearner(_GatedLearner):
@@ -164,8 +233,9 @@ class DetectionLearner(_GatedLearner):
 class LearningTracker(Tracker):
     """Any Stone Soup tracker, with ``learners`` called after each of its scans as
     ``learner.learn(time, detections, tracks)`` — the detections the tracker received for
-    that scan and the tracks it returned. Iterate it as the tracker it wraps; its
-    ``tracks`` are that tracker's."""
+    that scan and the tracks it returned. A learner that reads more of the tracker (its
+    update's clutter probabilities) is handed it first, as ``learner.bind(tracker)``.
+    Iterate it as the tracker it wraps; its ``tracks`` are that tracker's."""
 
     tracker: Tracker = Property(doc="The tracker whose output the learners read.")
     learners: Sequence[Any] = Property(doc="Objects with ``learn(time, detections, tracks)``, "
@@ -184,6 +254,9 @@ class LearningTracker(Tracker):
         return self.tracker.tracks
 
     def __iter__(self):
+        for learner in self.learners:
+            if callable(getattr(learner, "bind", None)):
+                learner.bind(self.tracker)
         if self._scans is None:
             # Between the tracker and its detector: the scan the tracker is working on.
             self._scans = _LastScan(self.tracker.detector)
