@@ -2,7 +2,10 @@
 detections (issue target: ≤ 20 µs at 40 detections on a 100 × 64 grid), against the same
 estimator in NumPy (running scale, ``np.add.at``; the best a user could write per scan).
 
-    python benches/learned.py [--detections 40] [--repeats 7] [--pooling none|range]
+    python benches/learned.py [--detections 40] [--repeats 7] [--pooling none|range|estimated]
+
+(``estimated``: range rings with the pool weight estimated from each ring's spread, as the
+study's map; NumPy recomputes the rings' spreads once per scan, before reading λ.)
 
 Both sides do one scan's work as a tracker would: λ of the scan's detections from the map
 as it stands (through a detector context on our side), then the map's update with them.
@@ -24,13 +27,13 @@ PRIOR, PRIOR_SCANS, FORGETTING, POOLING_SCANS = 1e-3, 10.0, 0.99, 10.0
 
 class NumpyMap:
     """The map in NumPy; with ``pooled``, range rings (their counts kept as a running sum,
-    the cheapest way in NumPy)."""
+    the cheapest way in NumPy), with ``estimated`` their weights from their spreads."""
 
-    def __init__(self, pooled=False):
+    def __init__(self, pooled=False, estimated=False):
         self.volumes = np.outer(np.diff(BEARINGS), np.diff(RANGES))
         self.counts = np.zeros(self.volumes.shape)
         self.exposure, self.scale = 0.0, 1.0
-        self.pooled = pooled
+        self.pooled, self.estimated = pooled or estimated, estimated
         self.ring_volumes = self.volumes.sum(axis=0)
         self.ring_counts = np.zeros(self.volumes.shape[1])
 
@@ -49,7 +52,22 @@ class NumpyMap:
         n = self.counts[i[inside], j[inside]] / self.scale
         s = self.exposure / self.scale
         out.fill(PRIOR)
-        if self.pooled:
+        if self.estimated:
+            v = self.ring_volumes
+            rings = (PRIOR * PRIOR_SCANS * v + self.ring_counts / self.scale) / (PRIOR_SCANS * v + v * s)
+            exposed = self.volumes * s
+            x = max(0.0, 1.0 - s * (1.0 - FORGETTING))
+            per_scan = (1.0 - x * x) / (1.0 - FORGETTING ** 2) / s if s > 0 else 0.0
+            excess = ((self.counts / self.scale - rings * exposed) ** 2
+                      - rings * exposed * per_scan).sum(axis=0)
+            weight = (exposed ** 2).sum(axis=0)
+            spread = np.where(weight > 0, np.maximum(excess, 0.0) / np.where(weight > 0, weight, 1.0), 0.0)
+            ring, tau = rings[j[inside]], spread[j[inside]]
+            volume = self.volumes[i[inside], j[inside]]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                sp = ring / (tau * volume)
+                out[inside] = np.where(tau > 0, (ring * sp + n / volume) / (sp + s), ring)
+        elif self.pooled:
             v = self.ring_volumes[j[inside]]
             ring = (PRIOR * PRIOR_SCANS * v + self.ring_counts[j[inside]] / self.scale) / \
                 (PRIOR_SCANS * v + v * s)
@@ -81,11 +99,13 @@ def main(argv=None) -> int:
     parser.add_argument("--detections", type=int, default=40)
     parser.add_argument("--scans", type=int, default=2000)
     parser.add_argument("--repeats", type=int, default=7)
-    parser.add_argument("--pooling", choices=("none", "range"), default="none")
+    parser.add_argument("--pooling", choices=("none", "range", "estimated"), default="none")
     args = parser.parse_args(argv)
+    estimated = args.pooling == "estimated"
     config = dict(space="bearing-range", edges=(BEARINGS, RANGES), prior_intensity=PRIOR,
-                  prior_scans=PRIOR_SCANS, forgetting=FORGETTING, pooling=args.pooling,
-                  pooling_scans=POOLING_SCANS)
+                  prior_scans=PRIOR_SCANS, forgetting=FORGETTING,
+                  pooling="range" if estimated else args.pooling,
+                  pooling_scans=None if estimated else POOLING_SCANS)
     pooled = args.pooling == "range"
     rng = np.random.default_rng(1)
     pose = Pose(x=50.0, y=-20.0, heading=0.4)
@@ -104,7 +124,7 @@ def main(argv=None) -> int:
         context.clutter_spatial_density_array(positions, out=out)
         learned.update(pose, positions)
 
-    reference = NumpyMap(pooled)
+    reference = NumpyMap(pooled, estimated)
     ref_out = np.empty(args.detections)
     pose_array = np.array(pose.as_tuple())
 
@@ -112,7 +132,7 @@ def main(argv=None) -> int:
         reference.scan(pose_array, scans[k], ref_out)
 
     # the same numbers first: a fresh pair over the first 200 scans
-    check_map, check_ref = ClutterMap(**config), NumpyMap(pooled)
+    check_map, check_ref = ClutterMap(**config), NumpyMap(pooled, estimated)
     worst = 0.0
     for k in range(200):
         a = check_map.intensity(pose, scans[k])

@@ -31,10 +31,26 @@
 //! and a cell of the pool shrinks towards λ_g instead of λ₀, with weight s_p scans:
 //! λ_c = (λ_g s_p + N_c / V_c) / (s_p + S_c) (an empirical-Bayes plug-in: λ_g includes the
 //! cell's own counts). A ring pools tens of cells, so its level is learned in a few scans,
-//! while a cell with much evidence of its own (a coast) still departs from it. The pools'
-//! sums are recomputed from the cells after each update (O(cells), vectorised; an
-//! incremental sum would round differently from a restored one): they are a function of
-//! the state, which therefore stays (counts, deficit, exposure, scale) and restores exactly.
+//! while a cell with much evidence of its own (a coast) still departs from it.
+//!
+//! s_p can instead be *estimated* from how much the pool's cells differ (a Gamma–Poisson
+//! hierarchy: λ_c ~ Gamma with mean λ_g and variance τ_g², so a cell's prior weight is
+//! s_c = λ_g / (τ_g² V_c) scans). τ_g² is the method-of-moments estimate: the spread of the
+//! cells' counts about λ_g beyond the spread Poisson counts would have,
+//!
+//!   τ_g² = max(0, Σ_c [(N_c − λ_g V_c S_c)² − λ_g V_c S2_c]) / Σ_c (V_c S_c)²,
+//!
+//! with S2_c = Σ_j γ^(2(k−j)) the discounted count's variance per unit mean — derived from S
+//! as if every scan had exposed every cell (S2 = (1 − x²) / (1 − γ²), x = 1 − S (1 − γ)),
+//! times the cell's exposed share S_c / S. A pool whose cells agree (open sea) gets
+//! τ_g² ≈ 0 and its cells take its level; a pool with a coast in it lets them depart. (Counts
+//! weighted by clutter probabilities vary less than Poisson counts: τ_g² is then
+//! overestimated, i.e. the cells are shrunk less, not more.)
+//!
+//! The pools' sums (and spreads) are recomputed from the cells after each update
+//! (O(cells), vectorised; an incremental sum would round differently from a restored one):
+//! they are a function of the state, which therefore stays (counts, deficit, exposure,
+//! scale) and restores exactly.
 
 use crate::error::{ModelError, Result};
 use crate::pose::Pose;
@@ -84,14 +100,16 @@ pub struct ClutterMap {
     exposure: f64,
     scale: f64,
     pooling: Pooling,
-    /// s_p: the weight of a cell's pool in its prior, scans.
-    pooled_scans: f64,
+    /// s_p: the weight of a cell's pool in its prior, scans (None: from the pool's spread).
+    pooled_scans: Option<f64>,
     /// V_g per pool (empty without pooling).
     pool_volumes: Vec<f64>,
     /// Σ_c N_c × scale per pool.
     pool_counts: Vec<f64>,
     /// Σ_c V_c D_c × scale per pool.
     pool_deficit: Vec<f64>,
+    /// τ_g² per pool, when s_p is estimated (else empty).
+    pool_spread: Vec<f64>,
 }
 
 fn check_edges(argument: &'static str, edges: &[f64], lowest: f64, highest: f64) -> Result<()> {
@@ -144,17 +162,20 @@ impl ClutterMap {
         let cells = volumes.len();
         Ok(ClutterMap {
             space, edges, prior_intensity, prior_scans, forgetting, volumes, counts: vec![0.0; cells], deficit: vec![0.0; cells], exposure: 0.0, scale: 1.0,
-            pooling: Pooling::None, pooled_scans: prior_scans, pool_volumes: Vec::new(), pool_counts: Vec::new(), pool_deficit: Vec::new(),
+            pooling: Pooling::None, pooled_scans: Some(prior_scans), pool_volumes: Vec::new(), pool_counts: Vec::new(), pool_deficit: Vec::new(), pool_spread: Vec::new(),
         })
     }
 
     /// The map with its cells pooled (see the module docs): `pooled_scans` (s_p > 0) is the
-    /// weight of a cell's pool in its prior. Range rings need a bearing–range map.
-    pub fn with_pooling(mut self, pooling: Pooling, pooled_scans: f64) -> Result<Self> {
+    /// weight of a cell's pool in its prior; None estimates it from the pool's spread.
+    /// Range rings need a bearing–range map.
+    pub fn with_pooling(mut self, pooling: Pooling, pooled_scans: Option<f64>) -> Result<Self> {
         if pooling == Pooling::Range && self.space != MapSpace::BearingRange {
             return Err(ModelError::invalid("pooling", "range rings need a bearing-range map"));
         }
-        positive("pooling_scans", pooled_scans)?;
+        if let Some(weight) = pooled_scans {
+            positive("pooling_scans", weight)?;
+        }
         let columns = self.shape()[1];
         let mut rings = vec![0.0; columns];
         for row in self.volumes.chunks_exact(columns) {
@@ -204,6 +225,42 @@ impl ClutterMap {
         }
         self.pool_counts = counts;
         self.pool_deficit = deficit;
+        if self.pooled_scans.is_none() {
+            self.pool_spread = self.pool_spreads();
+        }
+    }
+
+    /// τ_g² of every pool (see the module docs), from the state and the pools' sums: per
+    /// range column over the rows in order (vectorised, as the sums), then for the whole
+    /// grid the columns together.
+    fn pool_spreads(&self) -> Vec<f64> {
+        let columns = self.edges[1].len() - 1;
+        let levels: Vec<f64> = (0..columns).map(|j| self.pool_intensity(self.pool_of(j).unwrap_or(0))).collect();
+        let inverse = 1.0 / self.scale;
+        let total = self.exposure * inverse;
+        let gamma = self.forgetting;
+        let squares = if gamma < 1.0 {
+            let x = (1.0 - total * (1.0 - gamma)).max(0.0);
+            (1.0 - x * x) / (1.0 - gamma * gamma)
+        } else {
+            total
+        };
+        // variance per unit exposed scan: S2_c = squares × S_c / S
+        let per_scan = if total > 0.0 { squares / total } else { 0.0 };
+        let (mut excess, mut weight) = (vec![0.0; columns], vec![0.0; columns]);
+        for ((n, d), v) in self.counts.chunks_exact(columns).zip(self.deficit.chunks_exact(columns)).zip(self.volumes.chunks_exact(columns)) {
+            for j in 0..columns {
+                let exposed = (self.exposure - d[j]) * inverse * v[j];
+                let residual = n[j] * inverse - levels[j] * exposed;
+                excess[j] += residual * residual - levels[j] * exposed * per_scan;
+                weight[j] += exposed * exposed;
+            }
+        }
+        if self.pooling == Pooling::Grid {
+            excess = vec![excess.iter().sum()];
+            weight = vec![weight.iter().sum()];
+        }
+        excess.iter().zip(&weight).map(|(e, w)| if *w > 0.0 { (e / w).max(0.0) } else { 0.0 }).collect()
     }
 
     /// The map with a saved state (see [`state`](Self::state)).
@@ -289,9 +346,16 @@ impl ClutterMap {
     #[inline]
     fn intensity_of(&self, cell: usize) -> f64 {
         let (n, s) = (self.counts[cell] / self.scale, (self.exposure - self.deficit[cell]) / self.scale);
-        let (prior, weight) = match self.pool_of(cell) {
-            Some(g) => (self.pool_intensity(g), self.pooled_scans),
-            None => (self.prior_intensity, self.prior_scans),
+        let (prior, weight) = match (self.pool_of(cell), self.pooled_scans) {
+            (Some(g), Some(weight)) => (self.pool_intensity(g), weight),
+            (Some(g), None) => {
+                let (level, spread) = (self.pool_intensity(g), self.pool_spread[g]);
+                if spread == 0.0 {
+                    return level; // the cells agree: an infinite prior weight
+                }
+                (level, level / (spread * self.volumes[cell]))
+            }
+            (None, _) => (self.prior_intensity, self.prior_scans),
         };
         (prior * weight + n / self.volumes[cell]) / (weight + s)
     }
@@ -501,7 +565,7 @@ mod tests {
     #[test]
     fn a_ring_pools_its_cells_and_a_cell_shrinks_towards_its_ring() {
         let (g, s0, sp) = (0.9f64, 5.0, 3.0);
-        let mut map = radar().with_pooling(Pooling::Range, sp).unwrap();
+        let mut map = radar().with_pooling(Pooling::Range, Some(sp)).unwrap();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         // two points ~100 m ahead, just to port (cell (4, 0)), one at 700 m port (cell (6, 1)), then an
         // empty scan
@@ -519,7 +583,7 @@ mod tests {
         assert!((grid[6 * 2 + 1] - cell(far, g)).abs() <= 1e-15 * grid[13]);
         assert!((grid[1] - cell(far, 0.0)).abs() <= 1e-15 * grid[1]);
         // the whole grid as one pool
-        let mut whole = radar().with_pooling(Pooling::Grid, sp).unwrap();
+        let mut whole = radar().with_pooling(Pooling::Grid, Some(sp)).unwrap();
         whole.update(&pose, &[100.0, 1.0, 100.0, 2.0, 0.0, 700.0], None, &[]).unwrap();
         whole.update(&pose, &[], None, &[]).unwrap();
         let level = (1e-3 * s0 * 2.0 * big + 3.0 * g) / (2.0 * s0 * big + 2.0 * big * exposure);
@@ -527,24 +591,111 @@ mod tests {
     }
 
     #[test]
+    fn an_estimated_pool_weight_follows_the_spread_of_its_cells() {
+        let (g, s0) = (0.9f64, 5.0);
+        let mut map = radar().with_pooling(Pooling::Range, None).unwrap();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        assert_eq!(map.intensities(), vec![1e-3; 16], "no evidence: the prior everywhere");
+        // the near ring: four points a scan in cell (4, 0); the far ring: one point in cell
+        // (6, 1), then one in (2, 1), beside a gate of radius 0 (no area, so no deficit)
+        let near_points = [100.0, 1.0, 100.0, 2.0, 110.0, 3.0, 120.0, 1.0];
+        map.update(&pose, &[&near_points[..], &[0.0, 700.0]].concat(), None, &[]).unwrap();
+        map.update(&pose, &[&near_points[..], &[0.0, -700.0]].concat(), None, &[0.0, -600.0, 0.0]).unwrap();
+        let (v, big) = (PI / 4.0 * 500.0, 2.0 * PI * 500.0);
+        let total = g + 1.0;
+        let squares = (1.0 - (1.0 - total * (1.0 - g)).powi(2)) / (1.0 - g * g); // g² + 1
+        assert!((squares - (g * g + 1.0)).abs() < 1e-12);
+        // near ring: every cell fully exposed; counts 4 (g + 1) in cell 4, 0 elsewhere
+        let n = 4.0 * (g + 1.0);
+        let near = (1e-3 * s0 * big + n) / (s0 * big + big * total);
+        let e = v * total;
+        let excess = (n - near * e).powi(2) + 7.0 * (near * e).powi(2) - 8.0 * near * v * squares;
+        let tau = excess / (8.0 * e * e);
+        assert!(tau > 0.0);
+        let weight = near / (tau * v);
+        let grid = map.intensities();
+        let cell = |n: f64| (near * weight + n / v) / (weight + total);
+        assert!((grid[8] - cell(n)).abs() <= 1e-12 * grid[8]);
+        assert!((grid[0] - cell(0.0)).abs() <= 1e-12 * grid[0]);
+        // far ring: one point per cell in two cells, one scan apart
+        let far = (1e-3 * s0 * big + g + 1.0) / (s0 * big + big * total);
+        let excess = (g - far * e).powi(2) + (1.0 - far * e).powi(2) + 6.0 * (far * e).powi(2) - 8.0 * far * v * squares;
+        let tau = (excess / (8.0 * e * e)).max(0.0);
+        let expected = if tau == 0.0 { far } else { (far * far / (tau * v) + g / v) / (far / (tau * v) + total) };
+        assert!((grid[6 * 2 + 1] - expected).abs() <= 1e-12 * expected);
+    }
+
+    #[test]
+    fn an_estimated_pool_weight_pools_a_flat_ring_and_keeps_a_hot_cell() {
+        // 36 bearings × 1 ring; Poisson-ish clutter of 0.5 points a cell a scan, and one cell
+        // with 5 a scan (a coast), from a fixed sequence
+        let bearings: Vec<f64> = (0..=36).map(|i| -PI + i as f64 * PI / 18.0).collect();
+        let mut map = ClutterMap::new(MapSpace::BearingRange, [bearings, vec![500.0, 1000.0]], 1e-3, 1.0, 0.99)
+            .unwrap()
+            .with_pooling(Pooling::Range, None)
+            .unwrap();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        let mut state = 12345u64;
+        let mut uniform = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..300 {
+            let mut points = Vec::new();
+            for cell in 0..36 {
+                let rate = if cell == 9 { 5.0 } else { 0.5 };
+                // a Poisson draw by inversion
+                let (mut k, mut p, u) = (0, (-rate as f64).exp(), uniform());
+                let mut total = p;
+                while u > total {
+                    k += 1;
+                    p *= rate / k as f64;
+                    total += p;
+                }
+                for _ in 0..k {
+                    let bearing = -PI + (cell as f64 + uniform()) * PI / 18.0;
+                    let range = 500.0 + 500.0 * uniform();
+                    points.extend([range * bearing.cos(), range * bearing.sin()]);
+                }
+            }
+            map.update(&pose, &points, None, &[]).unwrap();
+        }
+        let v = PI / 18.0 * 500.0;
+        let grid: Vec<f64> = map.intensities().iter().map(|l| l * v).collect(); // points a scan
+        assert!((grid[9] - 5.0).abs() < 0.5, "the hot cell departs from its ring: {}", grid[9]);
+        let quiet: Vec<f64> = grid.iter().enumerate().filter(|(c, _)| *c != 9).map(|(_, l)| *l).collect();
+        let mean = quiet.iter().sum::<f64>() / quiet.len() as f64;
+        assert!((mean - 0.5).abs() < 0.15, "the quiet cells' level: {mean}");
+        // the hot cell inflates the spread, so the quiet cells keep some of their own noise,
+        // but less than unpooled: a quiet cell's counts over ~100 scans vary by ±0.07
+        assert!(quiet.iter().all(|l| (l - 0.5).abs() < 0.25), "{quiet:?}");
+    }
+
+    #[test]
     fn a_pooled_state_restores_exactly_through_rescales_and_gates() {
         let pose = Pose::new(3.0, -2.0, 0.4).unwrap();
-        let fresh = || {
-            ClutterMap::new(MapSpace::BearingRange, [(0..=8).map(|i| -PI + i as f64 * PI / 4.0).collect(), vec![0.0, 500.0, 1000.0]], 1e-3, 5.0, 0.3)
-                .unwrap()
-                .with_pooling(Pooling::Range, 2.0)
-                .unwrap()
-        };
-        let mut map = fresh();
-        for k in 0..600 {
-            let t = k as f64;
-            let points = [200.0 * t.cos(), 300.0 * t.sin(), 600.0 + t % 7.0, -40.0 * (t % 3.0), 50.0, 20.0];
-            map.update(&pose, &points[..2 + 2 * (k % 3)], None, &[600.0 + t % 7.0, -40.0, 30.0]).unwrap();
+        for weight in [Some(2.0), None] {
+            let fresh = || {
+                ClutterMap::new(MapSpace::BearingRange, [(0..=8).map(|i| -PI + i as f64 * PI / 4.0).collect(), vec![0.0, 500.0, 1000.0]], 1e-3, 5.0, 0.3)
+                    .unwrap()
+                    .with_pooling(Pooling::Range, weight)
+                    .unwrap()
+            };
+            let mut map = fresh();
+            for k in 0..600 {
+                let t = k as f64;
+                // (a hot cell at (50, 20): three points every scan)
+                let points = [50.0, 20.0, 51.0, 20.0, 52.0, 21.0, 200.0 * t.cos(), 300.0 * t.sin(), 600.0 + t % 7.0, -40.0 * (t % 3.0), 50.0, 20.0];
+                map.update(&pose, &points[..8 + 2 * (k % 3)], None, &[600.0 + t % 7.0, -40.0, 30.0]).unwrap();
+            }
+            if weight.is_none() {
+                assert!(map.pool_spread.iter().any(|t| *t > 0.0), "the test exercises a spread");
+            }
+            let (counts, deficit, exposure, scale) = map.state();
+            let restored = fresh().with_state(counts.to_vec(), deficit.to_vec(), exposure, scale).unwrap();
+            assert_eq!(restored.intensities(), map.intensities());
+            assert_eq!(restored, map);
         }
-        let (counts, deficit, exposure, scale) = map.state();
-        let restored = fresh().with_state(counts.to_vec(), deficit.to_vec(), exposure, scale).unwrap();
-        assert_eq!(restored.intensities(), map.intensities());
-        assert_eq!(restored, map);
     }
 
     #[test]
@@ -579,9 +730,9 @@ mod tests {
         assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, [vec![1.0, 0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
         assert_eq!(argument(ClutterMap::new(MapSpace::BearingRange, [vec![-4.0, 0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
         let fresh = || ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.9).unwrap();
-        assert_eq!(argument(fresh().with_pooling(Pooling::Range, 1.0)), "pooling");
-        assert_eq!(argument(fresh().with_pooling(Pooling::Grid, 0.0)), "pooling_scans");
-        assert_eq!(argument(fresh().with_pooling(Pooling::Grid, f64::NAN)), "pooling_scans");
+        assert_eq!(argument(fresh().with_pooling(Pooling::Range, Some(1.0))), "pooling");
+        assert_eq!(argument(fresh().with_pooling(Pooling::Grid, Some(0.0))), "pooling_scans");
+        assert_eq!(argument(fresh().with_pooling(Pooling::Grid, Some(f64::NAN))), "pooling_scans");
         let mut map = ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.9).unwrap();
         let before = map.clone();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();

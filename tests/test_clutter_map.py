@@ -19,7 +19,9 @@ RANGES = np.array([0.0, 200.0, 600.0, 1000.0, 1600.0])
 class ReferenceMap:
     """The estimator as its formula reads: N ← γN + n, S ← γS + 1, D ← γD + min(1, gated
     fraction) over every cell; λ = (λ0 s0 + N/V) / (s0 + S − D). Pooled, the prior of a
-    cell is its pool's (λ0 s0 V_g + ΣN) / (s0 V_g + ΣV(S − D)), with weight s_p."""
+    cell is its pool's (λ0 s0 V_g + ΣN) / (s0 V_g + ΣV(S − D)), with weight s_p — or, with
+    s_p None, λ_g / (τ² V) from the pool's spread τ², with the discounted sum of squared
+    scan weights kept as S2 ← γ² S2 + 1."""
 
     def __init__(self, space, edges, prior, prior_scans, forgetting, pooling="none",
                  pooling_scans=10.0):
@@ -29,6 +31,7 @@ class ReferenceMap:
         self.volumes = np.outer(np.diff(self.edges[0]), np.diff(self.edges[1]))
         self.counts, self.exposure = np.zeros(self.volumes.shape), 0.0
         self.deficit = np.zeros(self.volumes.shape)
+        self.squares = 0.0
 
     def coordinates(self, pose, positions, ranges):
         x, y, heading = pose
@@ -78,6 +81,7 @@ class ReferenceMap:
         self.counts = self.gamma * self.counts + n
         self.deficit = self.gamma * self.deficit + np.minimum(fraction, 1.0)
         self.exposure = self.gamma * self.exposure + 1.0
+        self.squares = self.gamma ** 2 * self.squares + 1.0
 
     def grid(self):
         if self.pooling == "none":
@@ -88,8 +92,18 @@ class ReferenceMap:
         exposed = (self.volumes * (self.exposure - self.deficit)).sum(axis=axis, keepdims=True)
         pool = (self.prior * self.s0 * volume + self.counts.sum(axis=axis, keepdims=True)) / \
             (self.s0 * volume + exposed)
-        return (pool * self.sp + self.counts / self.volumes) / \
-            (self.sp + self.exposure - self.deficit)
+        scans = self.exposure - self.deficit
+        if self.sp is not None:
+            return (pool * self.sp + self.counts / self.volumes) / (self.sp + scans)
+        cell_exposure = self.volumes * scans
+        excess = ((self.counts - pool * cell_exposure) ** 2
+                  - pool * cell_exposure * self.squares / self.exposure).sum(axis=axis, keepdims=True)
+        weight = (cell_exposure ** 2).sum(axis=axis, keepdims=True)
+        self.spread = np.where(weight > 0, np.maximum(excess, 0) / np.where(weight > 0, weight, 1), 0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sp = pool / (self.spread * self.volumes)
+            cells = (pool * sp + self.counts / self.volumes) / (sp + scans)
+        return np.where(self.spread > 0, cells, pool)
 
     def intensity(self, pose, positions, ranges=None):
         i, j, inside = self.cells(pose, positions, ranges)
@@ -103,22 +117,26 @@ def _random_scan(rng, m):
     return np.column_stack([polar[:, 1] * np.cos(polar[:, 0]), polar[:, 1] * np.sin(polar[:, 0])])
 
 
-@pytest.mark.parametrize("space,edges,pooling", [
-    ("bearing-range", (BEARINGS, RANGES), "none"),
-    ("bearing-range", (BEARINGS, RANGES), "range"),
-    ("bearing-range", (BEARINGS, RANGES), "grid"),
-    ("body-xy", (np.linspace(-1500, 1500, 7), np.linspace(-1500, 1500, 5)), "none"),
-    ("body-xy", (np.linspace(-1500, 1500, 7), np.linspace(-1500, 1500, 5)), "grid"),
-    ("world-xy", (np.linspace(-1000, 2000, 6), np.linspace(-1500, 1500, 4)), "none")])
-def test_matches_the_numpy_reference(space, edges, pooling):
+@pytest.mark.parametrize("space,edges,pooling,pooling_scans", [
+    ("bearing-range", (BEARINGS, RANGES), "none", 6.0),
+    ("bearing-range", (BEARINGS, RANGES), "range", 6.0),
+    ("bearing-range", (BEARINGS, RANGES), "range", None),
+    ("bearing-range", (BEARINGS, RANGES), "grid", 6.0),
+    ("body-xy", (np.linspace(-1500, 1500, 7), np.linspace(-1500, 1500, 5)), "none", 6.0),
+    ("body-xy", (np.linspace(-1500, 1500, 7), np.linspace(-1500, 1500, 5)), "grid", 6.0),
+    ("body-xy", (np.linspace(-1500, 1500, 7), np.linspace(-1500, 1500, 5)), "grid", None),
+    ("world-xy", (np.linspace(-1000, 2000, 6), np.linspace(-1500, 1500, 4)), "none", 6.0)])
+def test_matches_the_numpy_reference(space, edges, pooling, pooling_scans):
     rng = np.random.default_rng(4)
     ours = ClutterMap(space=space, edges=edges, prior_intensity=2e-4, prior_scans=4.0,
-                      forgetting=0.97, pooling=pooling, pooling_scans=6.0)
-    reference = ReferenceMap(space, edges, 2e-4, 4.0, 0.97, pooling, 6.0)
+                      forgetting=0.97, pooling=pooling, pooling_scans=pooling_scans)
+    reference = ReferenceMap(space, edges, 2e-4, 4.0, 0.97, pooling, pooling_scans)
     pose = (120.0, -40.0, 2.5)
     probes = _random_scan(rng, 500) + pose[:2]
+    hot = np.array([[300.0, 250.0]]) + pose[:2]  # a spot with clutter in every scan
     for scan in range(150):
-        positions = _random_scan(rng, int(rng.integers(0, 40))) + pose[:2]
+        positions = np.concatenate([_random_scan(rng, int(rng.integers(0, 40))) + pose[:2],
+                                    hot + rng.uniform(-20, 20, (3, 2))])
         ranges = np.where(rng.random(len(positions)) < 0.5, np.nan,
                           np.hypot(*(positions - pose[:2]).T)) if space == "bearing-range" else None
         # gates around a few of the scan's own detections (tracks) and some elsewhere
@@ -133,6 +151,8 @@ def test_matches_the_numpy_reference(space, edges, pooling):
                                rtol=1e-12)
     assert np.ptp(reference.grid()) > 0  # the cells learned different intensities
     assert reference.deficit.max() > 0  # and gates took some exposure
+    if pooling_scans is None:  # the estimated spread is exercised
+        assert (reference.spread > 0).any()
 
 
 def test_converges_to_a_stationary_clutter_field():

@@ -238,7 +238,7 @@ class ClutterMap:
         exposure: float = 0.0,
         scale: float = 1.0,
         pooling: Literal["none", "range", "grid"] = "none",
-        pooling_scans: float = 10.0,
+        pooling_scans: float | None = ...,  # 10.0
     ) -> ClutterMap:
         """`space`: "bearing-range", "body-xy" or "world-xy"; `edges0`, `edges1`: the grid's
         edges on each axis (bearing or x, then range or y); the prior's intensity and weight

@@ -40,7 +40,24 @@ with weight :math:`s_p` (:attr:`~ClutterMap.pooling_scans`) scans:
 plug-in). Sea clutter depends mostly on range (the grazing angle), so a ring learns the
 level of tens of cells in a few scans, and a cell with much evidence of its own (a coast)
 still departs from it; but a cell that cannot see clutter (a blind sector) pulls its ring
-down, so leave such cells out of the grid. ``pooling='grid'`` pools the whole grid (any
+down, so leave such cells out of the grid.
+
+With ``pooling_scans=None`` the weight is estimated per pool, from how much its cells
+differ (a Gamma–Poisson hierarchy, :math:`\lambda_c \sim` Gamma with mean
+:math:`\hat\lambda_g` and variance :math:`\tau_g^2`): each cell's prior weight is
+:math:`\hat\lambda_g / (\tau_g^2 V_c)` scans, with the method-of-moments estimate
+
+.. math::
+    \tau_g^2 = \max\Bigl(0, \frac{\sum_{c \in g} (N_c - \hat\lambda_g V_c S_c)^2
+        - \hat\lambda_g V_c S^{(2)}_c}{\sum_{c \in g} (V_c S_c)^2}\Bigr),
+
+the spread of the cells' counts beyond what Poisson counts would show
+(:math:`S^{(2)}_c = \sum_j \gamma^{2(k-j)}` scaled by the cell's exposed share, the variance
+of a discounted count per unit mean). Cells that agree (open sea) then take their pool's
+level — a far cell that sees one clutter point in 20 scans is no longer left to its own
+noise — and a pool with a coast in it lets its cells depart. Counts weighted by clutter
+probabilities vary less than Poisson counts, which overestimates :math:`\tau_g^2`: the
+cells are then shrunk less, not more. ``pooling='grid'`` pools the whole grid (any
 space). Without pooling (the default) every cell shrinks towards :math:`\lambda_0` alone.
 Pooled, an update also recomputes the pools' sums from the cells (one vectorised pass,
 O(cells)), so that a restored map is exactly the saved one.
@@ -90,7 +107,8 @@ class ClutterMap(LearnedComponent):
                             "(the whole grid): see the module docs.")
     pooling_scans: float = Property(
         default=10.0, doc=r"Pooled: the weight :math:`s_p` of a cell's pool in its prior, "
-                          "scans (> 0).")
+                          "scans (> 0); None estimates it per pool from how much the "
+                          "pool's cells differ (see the module docs).")
     counts: np.ndarray = Property(
         default=None, doc="State: the discounted clutter counts per cell, (n0, n1), times "
                           ":attr:`scale`. None: a fresh map. Read back, it is the current state.")
@@ -145,7 +163,8 @@ class ClutterMap(LearnedComponent):
                                 number(self.forgetting, "forgetting"), counts, deficit,
                                 number(exposure, "exposure"), number(scale, "scale"),
                                 self.pooling,
-                                number(self.pooling_scans, "pooling_scans"))
+                                None if self.pooling_scans is None
+                                else number(self.pooling_scans, "pooling_scans"))
 
     def update(self, pose: Pose | Sequence[float], positions, ranges=None, gates=None,
                weights=None) -> None:

@@ -18,11 +18,11 @@ impl PyClutterMap {
     /// in scans; the forgetting factor per scan; optionally a saved state; the pooling
     /// ("none", "range" or "grid") and its weight in scans.
     #[new]
-    #[pyo3(signature = (space, edges0, edges1, prior_intensity, prior_scans, forgetting, counts = None, deficit = None, exposure = 0.0, scale = 1.0, pooling = "none", pooling_scans = 10.0))]
+    #[pyo3(signature = (space, edges0, edges1, prior_intensity, prior_scans, forgetting, counts = None, deficit = None, exposure = 0.0, scale = 1.0, pooling = "none", pooling_scans = Some(10.0)))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         space: &str, edges0: Vec<f64>, edges1: Vec<f64>, prior_intensity: f64, prior_scans: f64, forgetting: f64,
-        counts: Option<Vec<f64>>, deficit: Option<Vec<f64>>, exposure: f64, scale: f64, pooling: &str, pooling_scans: f64,
+        counts: Option<Vec<f64>>, deficit: Option<Vec<f64>>, exposure: f64, scale: f64, pooling: &str, pooling_scans: Option<f64>,
     ) -> PyResult<Self> {
         let space = match space {
             "bearing-range" => MapSpace::BearingRange,
