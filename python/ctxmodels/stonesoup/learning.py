@@ -110,6 +110,7 @@ class ClutterMapLearner(_GatedLearner):
                                                    "``gates`` or ``posterior``.")
 
     def __init__(self, *args, **kwargs):
+        # checked first: whether gate_radius is needed (checked by the base) depends on it
         weighting = kwargs.get("weighting", args[2] if len(args) > 2 else "gates")
         if weighting not in _WEIGHTINGS:
             raise ValueError(f"weighting: must be one of {', '.join(_WEIGHTINGS)}, got "
