@@ -27,6 +27,9 @@ def test_guide_examples_run(capsys):
     printed = capsys.readouterr().out
     assert "[0.4 0. ]" in printed
     assert "ahead 0.090, behind 9.5e-05" in printed  # the learned clutter map
+    # pooled: the rings' level, and with the weight estimated no scatter of its cells
+    assert "ring, weight 10: far λ 9.9e-03 ± 7e-03" in printed
+    assert "ring, weight estimated: far λ 9.7e-03 ± 2e-03" in printed
     found = re.search(r"GM-PHD: \d+ components, (\d+) tracks", printed)
     assert found and int(found.group(1)) > 0
     found = re.search(r"JPDA: (\d+) tracks", printed)
