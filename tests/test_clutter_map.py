@@ -250,10 +250,10 @@ def test_the_order_of_a_scans_detections_does_not_matter():
     assert (maps[0].exposure, maps[0].scale) == (maps[1].exposure, maps[1].scale)
 
 
-def _used_map(pooling="none"):
+def _used_map(pooling="none", pooling_scans=5.0):
     learned = ClutterMap(space="bearing-range", edges=(BEARINGS, RANGES),
                          prior_intensity=1e-3, prior_scans=3.0, forgetting=0.93,
-                         pooling=pooling, pooling_scans=5.0)
+                         pooling=pooling, pooling_scans=pooling_scans)
     rng = np.random.default_rng(8)
     for _ in range(40):
         scan = _random_scan(rng, 25)
@@ -261,15 +261,17 @@ def _used_map(pooling="none"):
     return learned
 
 
-@pytest.mark.parametrize("pooling", ["none", "range"])
+@pytest.mark.parametrize("pooling,pooling_scans", [("none", 5.0), ("range", 5.0),
+                                                   ("range", None)])
 @pytest.mark.parametrize("round_trip", ["pickle", "yaml"])
-def test_state_round_trips_exactly_and_continues_identically(round_trip, pooling):
-    learned = _used_map(pooling)
+def test_state_round_trips_exactly_and_continues_identically(round_trip, pooling, pooling_scans):
+    learned = _used_map(pooling, pooling_scans)
     if round_trip == "pickle":
         restored = pickle.loads(pickle.dumps(learned))
     else:
         restored = YAML().load(YAML().dumps(learned))
     assert type(restored) is ClutterMap and restored.pooling == pooling
+    assert restored.pooling_scans == pooling_scans
     assert restored.intensity_grid().tobytes() == learned.intensity_grid().tobytes()
     assert restored.counts.tobytes() == learned.counts.tobytes()
     assert restored.deficit.tobytes() == learned.deficit.tobytes() and learned.deficit.sum() > 0
