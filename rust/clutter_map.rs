@@ -44,8 +44,10 @@
 //! as if every scan had exposed every cell (S2 = (1 − x²) / (1 − γ²), x = 1 − S (1 − γ)),
 //! times the cell's exposed share S_c / S. A pool whose cells agree (open sea) gets
 //! τ_g² ≈ 0 and its cells take its level; a pool with a coast in it lets them depart. (Counts
-//! weighted by clutter probabilities vary less than Poisson counts: τ_g² is then
-//! overestimated, i.e. the cells are shrunk less, not more.)
+//! weighted by clutter probabilities vary less than Poisson counts of the same mean —
+//! Σw² ≤ Σw — so τ_g² is then underestimated: the cells are shrunk more, towards their
+//! pool. Differences that a tracker puts there itself — a target's partly counted returns,
+//! clutter hidden under a false track — count as spread, as a coast does.)
 //!
 //! The pools' sums (and spreads) are recomputed from the cells after each update
 //! (O(cells), vectorised; an incremental sum would round differently from a restored one):

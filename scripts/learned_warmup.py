@@ -22,19 +22,22 @@ from ctxmodels.experiment.runner import simulated_run, track_scans
 from ctxmodels.experiment.scoring import score_run
 from ctxmodels.stonesoup.ordering import in_track_order
 
-SETTINGS = ("MAP_PRIOR_SCANS", "MAP_POOLING", "MAP_POOLING_SCANS", "_seen_bearings")
+SETTINGS = ("MAP_PRIOR_SCANS", "MAP_POOLING", "MAP_POOLING_SCANS", "MAP_WEIGHTING",
+            "_seen_bearings")
 DEFAULTS = {name: getattr(trackers, name) for name in SETTINGS}
 STUDY = {"gmphd-learned-clutter": ("gmphd-learned-clutter", {}),
          "gmphd-learned": ("gmphd-learned", {})}
 VARIED = {
     "learned, ring prior 10 scans": ("gmphd-learned", {"MAP_PRIOR_SCANS": 10.0}),
+    "learned, pool weight 10 scans": ("gmphd-learned", {"MAP_POOLING_SCANS": 10.0}),
     "learned, pool weight 100 scans": ("gmphd-learned", {"MAP_POOLING_SCANS": 100.0}),
-    "learned, pool weight 1 scan": ("gmphd-learned", {"MAP_POOLING_SCANS": 1.0}),
-    "learned, no pooling (prior 10 scans)": ("gmphd-learned", {"MAP_POOLING": "none",
-                                                               "MAP_PRIOR_SCANS": 10.0}),
-    # the map before pooling: its grid also spanned the blind sector
-    "learned, no pooling, full circle": ("gmphd-learned", {
-        "MAP_POOLING": "none", "MAP_PRIOR_SCANS": 10.0,
+    "learned, gated feed": ("gmphd-learned", {"MAP_WEIGHTING": "gates"}),
+    # the second edition's map: gated feed, pool weight 10 scans
+    "learned, gated feed, pool weight 10 scans": ("gmphd-learned", {
+        "MAP_WEIGHTING": "gates", "MAP_POOLING_SCANS": 10.0}),
+    # the first edition's map: no pooling, its grid also spanned the blind sector
+    "learned, gated feed, no pooling, full circle": ("gmphd-learned", {
+        "MAP_WEIGHTING": "gates", "MAP_POOLING": "none", "MAP_PRIOR_SCANS": 10.0,
         "_seen_bearings": lambda model: (-math.pi, math.pi)}),
 }
 SCENARIOS, SEEDS = ("mixed-range", "formation"), range(10)

@@ -56,8 +56,10 @@ the spread of the cells' counts beyond what Poisson counts would show
 of a discounted count per unit mean). Cells that agree (open sea) then take their pool's
 level — a far cell that sees one clutter point in 20 scans is no longer left to its own
 noise — and a pool with a coast in it lets its cells depart. Counts weighted by clutter
-probabilities vary less than Poisson counts, which overestimates :math:`\tau_g^2`: the
-cells are then shrunk less, not more. ``pooling='grid'`` pools the whole grid (any
+probabilities vary less than Poisson counts of the same mean (:math:`\sum w^2 \le \sum w`),
+which underestimates :math:`\tau_g^2`: the cells are then shrunk more, towards their pool.
+Differences a tracker puts there itself — a target's partly counted returns, clutter
+hidden under a false track — count as spread, as a coast does. ``pooling='grid'`` pools the whole grid (any
 space). Without pooling (the default) every cell shrinks towards :math:`\lambda_0` alone.
 Pooled, an update also recomputes the pools' sums from the cells (one vectorised pass,
 O(cells)), so that a restored map is exactly the saved one.
