@@ -7,6 +7,7 @@ P_D converges to the target's; the P_D learner counts confirmed tracks only, wei
 the sensor's other factors."""
 import datetime
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -244,6 +245,24 @@ def test_bad_learners_are_named():
         ClutterMapLearner()  # gates need a radius
     with pytest.raises(ValueError, match="^weighting: "):
         ClutterMapLearner(gate_radius=1.0, weighting="soft")
+    with pytest.raises(ValueError, match="^gate_radius: not used"):
+        ClutterMapLearner(gate_radius=30.0, weighting="posterior")
+
+
+@pytest.mark.parametrize("weighting", ["gates", "posterior"])
+def test_a_learner_pickles_after_a_run_without_its_tracker(weighting):
+    """The bound tracker is not the learner's state: a learner pickles after a run (its
+    tracker's detector holds generators), and a LearningTracker binds it again."""
+    learner = ClutterMapLearner(weighting=weighting,
+                                gate_radius=30.0 if weighting == "gates" else None)
+    scans = _scans(5, seed=8)
+    wrapped = _learning_tracker(scans, _map(), [learner])
+    for _ in wrapped:
+        pass
+    restored = pickle.loads(pickle.dumps(learner))
+    assert repr(restored) == repr(learner) and restored._tracker is None
+    again = _learning_tracker(scans, _map(), [restored])
+    assert sum(1 for _ in again) == len(scans)  # bound again by the new LearningTracker
     with pytest.raises(ValueError, match="^gate_radius: "):
         DetectionLearner(gate_radius=float("nan"))
     with pytest.raises(ValueError, match="^confirmation: "):

@@ -91,11 +91,15 @@ class ClutterMapLearner(_GatedLearner):
       trackers of :mod:`ctxmodels.stonesoup` do): each detection counts as its posterior
       clutter probability :math:`\kappa(z) / (\kappa(z) + \sum_j p_S P_D^{(j)} w^{(j)}
       q^{(j)}(z))` in the tracker's update, the expected number of clutter points it is
-      (an EM step), and the whole scan is exposure. Components below the extraction
-      threshold — a target's first scans — already explain their detections. The map
-      then learns from what the filter believes, so its errors feed back: a λ too low
-      lets clutter seed components that then explain (and hide) more clutter. Needs the
-      tracker: :class:`LearningTracker` calls :meth:`bind` with the tracker it wraps.
+      (an EM step), and the whole scan is exposure. A target's detections count as
+      clutter in proportion to how little the filter already believes in it: fully at its
+      first scan (its birth enters at the next), then less as its components, extracted
+      or not, gain weight. The map then learns from what the filter believes, so its
+      errors feed back: a λ too low lets clutter seed components that then explain (and
+      hide) more clutter. Needs the tracker: :class:`LearningTracker` calls :meth:`bind`
+      with the tracker it wraps (one learner serves one tracker; the binding is not
+      pickled, and the next iteration binds again). A scan that the tracker's component
+      path updates with a stock updater reports no probabilities and raises.
 
     ``gate_radius`` (``"gates"`` only) should hold a track's own detections: a few standard
     deviations of the measurement error in position (a radar with σ_bearing = 1° at
@@ -110,12 +114,13 @@ class ClutterMapLearner(_GatedLearner):
                                                    "``gates`` or ``posterior``.")
 
     def __init__(self, *args, **kwargs):
-        # checked first: whether gate_radius is needed (checked by the base) depends on it
-        weighting = kwargs.get("weighting", args[2] if len(args) > 2 else "gates")
-        if weighting not in _WEIGHTINGS:
+        super().__init__(*args, **kwargs)  # (checks gate_radius where it is used)
+        if self.weighting not in _WEIGHTINGS:
             raise ValueError(f"weighting: must be one of {', '.join(_WEIGHTINGS)}, got "
-                             f"{weighting!r}")
-        super().__init__(*args, **kwargs)
+                             f"{self.weighting!r}")
+        if self.weighting == "posterior" and self.gate_radius is not None:
+            raise ValueError("gate_radius: not used with weighting='posterior' (leave it "
+                             "None)")
         self._tracker = None
 
     @property
@@ -123,11 +128,18 @@ class ClutterMapLearner(_GatedLearner):
         return self.weighting == "gates"
 
     def bind(self, tracker) -> None:
-        """The tracker whose updates weight the detections (``weighting="posterior"``)."""
-        if self.weighting == "posterior" and not hasattr(tracker, "clutter_probabilities"):
+        """The tracker whose updates weight the detections (``weighting="posterior"``;
+        with gates there is nothing to bind)."""
+        if self.weighting != "posterior":
+            return
+        if not hasattr(tracker, "clutter_probabilities"):
             raise TypeError(f"tracker: weighting='posterior' needs a tracker that reports "
                             f"clutter_probabilities; {type(tracker).__name__} does not")
         self._tracker = tracker
+
+    def __getstate__(self):
+        # the bound tracker (with its detector's generators) is not the learner's state
+        return {**vars(self), "_tracker": None}
 
     def learn(self, time, detections, tracks) -> None:
         """After the scan at ``time``: ``detections`` as the tracker received them (a
