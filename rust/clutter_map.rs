@@ -43,11 +43,15 @@
 //! with S2_c = Σ_j γ^(2(k−j)) the discounted count's variance per unit mean — derived from S
 //! as if every scan had exposed every cell (S2 = (1 − x²) / (1 − γ²), x = 1 − S (1 − γ)),
 //! times the cell's exposed share S_c / S. A pool whose cells agree (open sea) gets
-//! τ_g² ≈ 0 and its cells take its level; a pool with a coast in it lets them depart. (Counts
+//! τ_g² ≈ 0 and its cells take its level; a pool with a coast in it lets the coast's cells
+//! depart — and, with one spread per pool, its quiet cells nearly as much. (Counts
 //! weighted by clutter probabilities vary less than Poisson counts of the same mean —
 //! Σw² ≤ Σw — so τ_g² is then underestimated: the cells are shrunk more, towards their
 //! pool. Differences that a tracker puts there itself — a target's partly counted returns,
-//! clutter hidden under a false track — count as spread, as a coast does.)
+//! clutter hidden under a false track — count as spread, as a coast does. The residuals
+//! are taken about λ_g, which includes the λ₀ prior and each cell's own counts, with no
+//! correction for either: in a pool's first scans the prior's pull adds to τ_g², and in a
+//! pool of few cells the own-count share takes from it.)
 //!
 //! The pools' sums (and spreads) are recomputed from the cells after each update
 //! (O(cells), vectorised; an incremental sum would round differently from a restored one):
@@ -352,10 +356,11 @@ impl ClutterMap {
             (Some(g), Some(weight)) => (self.pool_intensity(g), weight),
             (Some(g), None) => {
                 let (level, spread) = (self.pool_intensity(g), self.pool_spread[g]);
-                if spread == 0.0 {
-                    return level; // the cells agree: an infinite prior weight
+                let weight = level / (spread * self.volumes[cell]);
+                if !weight.is_finite() {
+                    return level; // the cells agree (τ² = 0, or below what f64 resolves)
                 }
-                (level, level / (spread * self.volumes[cell]))
+                (level, weight)
             }
             (None, _) => (self.prior_intensity, self.prior_scans),
         };
@@ -629,13 +634,12 @@ mod tests {
 
     #[test]
     fn an_estimated_pool_weight_pools_a_flat_ring_and_keeps_a_hot_cell() {
-        // 36 bearings × 1 ring; Poisson-ish clutter of 0.5 points a cell a scan, and one cell
-        // with 5 a scan (a coast), from a fixed sequence
+        // 36 bearings × 2 rings; Poisson clutter of 0.5 points a cell a scan in both, and in
+        // the far ring one cell with 5 a scan (a coast), from a fixed sequence
         let bearings: Vec<f64> = (0..=36).map(|i| -PI + i as f64 * PI / 18.0).collect();
-        let mut map = ClutterMap::new(MapSpace::BearingRange, [bearings, vec![500.0, 1000.0]], 1e-3, 1.0, 0.99)
-            .unwrap()
-            .with_pooling(Pooling::Range, None)
-            .unwrap();
+        let edges = [bearings, vec![500.0, 1000.0, 1500.0]];
+        let mut map = ClutterMap::new(MapSpace::BearingRange, edges.clone(), 1e-3, 1.0, 0.99).unwrap().with_pooling(Pooling::Range, None).unwrap();
+        let mut alone = ClutterMap::new(MapSpace::BearingRange, edges, 1e-3, 1.0, 0.99).unwrap(); // the same evidence
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         let mut state = 12345u64;
         let mut uniform = || {
@@ -644,8 +648,8 @@ mod tests {
         };
         for _ in 0..300 {
             let mut points = Vec::new();
-            for cell in 0..36 {
-                let rate = if cell == 9 { 5.0 } else { 0.5 };
+            for (cell, ring) in (0..36).flat_map(|c| [(c, 0), (c, 1)]) {
+                let rate = if (cell, ring) == (9, 1) { 5.0 } else { 0.5 };
                 // a Poisson draw by inversion
                 let (mut k, mut p, u) = (0, (-rate as f64).exp(), uniform());
                 let mut total = p;
@@ -656,20 +660,29 @@ mod tests {
                 }
                 for _ in 0..k {
                     let bearing = -PI + (cell as f64 + uniform()) * PI / 18.0;
-                    let range = 500.0 + 500.0 * uniform();
+                    let range = 500.0 * (1.0 + ring as f64 + uniform());
                     points.extend([range * bearing.cos(), range * bearing.sin()]);
                 }
             }
             map.update(&pose, &points, None, &[]).unwrap();
+            alone.update(&pose, &points, None, &[]).unwrap();
         }
         let v = PI / 18.0 * 500.0;
-        let grid: Vec<f64> = map.intensities().iter().map(|l| l * v).collect(); // points a scan
-        assert!((grid[9] - 5.0).abs() < 0.5, "the hot cell departs from its ring: {}", grid[9]);
-        let quiet: Vec<f64> = grid.iter().enumerate().filter(|(c, _)| *c != 9).map(|(_, l)| *l).collect();
-        let mean = quiet.iter().sum::<f64>() / quiet.len() as f64;
-        assert!((mean - 0.5).abs() < 0.15, "the quiet cells' level: {mean}");
-        // the hot cell inflates the spread, so the quiet cells keep some of their own noise,
-        // but less than unpooled: a quiet cell's counts over ~100 scans vary by ±0.07
+        let ring = |m: &ClutterMap, r: usize| -> Vec<f64> { m.intensities().chunks_exact(2).map(|c| c[r] * v).collect() }; // points a scan
+        let spread = |values: &[f64]| {
+            let mean = values.iter().sum::<f64>() / values.len() as f64;
+            (values.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / values.len() as f64).sqrt()
+        };
+        // the flat ring: its cells take its level, where alone they scatter by ~±0.07
+        let (near, near_alone) = (ring(&map, 0), ring(&alone, 0));
+        assert!(spread(&near_alone) > 0.04, "the cells alone scatter: {}", spread(&near_alone));
+        assert!(spread(&near) < 0.5 * spread(&near_alone), "pooled {} vs alone {}", spread(&near), spread(&near_alone));
+        assert!(near.iter().all(|l| (l - 0.5).abs() < 0.1), "{near:?}");
+        // the ring with a coast: the hot cell departs from it (its quiet cells, with one
+        // spread per ring, are then left nearly alone: the price of a coast in a ring)
+        let far = ring(&map, 1);
+        assert!((far[9] - 5.0).abs() < 0.5, "the hot cell departs from its ring: {}", far[9]);
+        let quiet: Vec<f64> = far.iter().enumerate().filter(|(c, _)| *c != 9).map(|(_, l)| *l).collect();
         assert!(quiet.iter().all(|l| (l - 0.5).abs() < 0.25), "{quiet:?}");
     }
 

@@ -55,11 +55,16 @@ the spread of the cells' counts beyond what Poisson counts would show
 (:math:`S^{(2)}_c = \sum_j \gamma^{2(k-j)}` scaled by the cell's exposed share, the variance
 of a discounted count per unit mean). Cells that agree (open sea) then take their pool's
 level — a far cell that sees one clutter point in 20 scans is no longer left to its own
-noise — and a pool with a coast in it lets its cells depart. Counts weighted by clutter
+noise — and a pool with a coast in it lets the coast's cells depart (and, with one spread
+per pool, its quiet cells nearly as much: they are then about as noisy as unpooled ones).
+Counts weighted by clutter
 probabilities vary less than Poisson counts of the same mean (:math:`\sum w^2 \le \sum w`),
 which underestimates :math:`\tau_g^2`: the cells are then shrunk more, towards their pool.
 Differences a tracker puts there itself — a target's partly counted returns, clutter
-hidden under a false track — count as spread, as a coast does. ``pooling='grid'`` pools the whole grid (any
+hidden under a false track — count as spread, as a coast does. The residuals are taken
+about :math:`\hat\lambda_g`, prior and the cell's own counts included, uncorrected: in a
+pool's first scans the prior's pull adds to :math:`\tau_g^2`, and in a pool of few cells
+the own-count share takes from it. ``pooling='grid'`` pools the whole grid (any
 space). Without pooling (the default) every cell shrinks towards :math:`\lambda_0` alone.
 Pooled, an update also recomputes the pools' sums from the cells (one vectorised pass,
 O(cells)), so that a restored map is exactly the saved one.
@@ -107,10 +112,11 @@ class ClutterMap(LearnedComponent):
         default="none", doc="'none' (every cell on its own), 'range' (a bearing-range map's "
                             "range rings: the cells of one range cell, every bearing) or 'grid' "
                             "(the whole grid): see the module docs.")
-    pooling_scans: float = Property(
+    pooling_scans: float | None = Property(
         default=10.0, doc=r"Pooled: the weight :math:`s_p` of a cell's pool in its prior, "
                           "scans (> 0); None estimates it per pool from how much the "
-                          "pool's cells differ (see the module docs).")
+                          "pool's cells differ (see the module docs). Ignored without "
+                          "pooling.")
     counts: np.ndarray = Property(
         default=None, doc="State: the discounted clutter counts per cell, (n0, n1), times "
                           ":attr:`scale`. None: a fresh map. Read back, it is the current state.")

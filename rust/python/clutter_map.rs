@@ -16,7 +16,7 @@ impl PyClutterMap {
     /// `space`: "bearing-range", "body-xy" or "world-xy"; `edges0`, `edges1`: the grid's
     /// edges on each axis (bearing or x, then range or y); the prior's intensity and weight
     /// in scans; the forgetting factor per scan; optionally a saved state; the pooling
-    /// ("none", "range" or "grid") and its weight in scans.
+    /// ("none", "range" or "grid") and its weight in scans (None: estimated per pool).
     #[new]
     #[pyo3(signature = (space, edges0, edges1, prior_intensity, prior_scans, forgetting, counts = None, deficit = None, exposure = 0.0, scale = 1.0, pooling = "none", pooling_scans = Some(10.0)))]
     #[allow(clippy::too_many_arguments)]

@@ -326,14 +326,16 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
 #: (``pooling_scans=None``: a Gamma–Poisson hierarchy, :class:`~ctxmodels.ClutterMap`): a
 #: fixed weight of 10 scans left a far cell to the noise of its ~4 discounted points, ±50 %,
 #: while a ring whose cells agree should give them its level and a ring with a coast (~0.5
-#: points a scan in one cell) should let that cell go. The ring's prior, λ 1e-3 per rad·m
+#: points a scan in one cell) should let that cell go (its other cells go too: one spread
+#: per ring). The ring's prior, λ 1e-3 per rad·m
 #: (the uniform trackers' value, 10 times too low beyond 1 km by the paper's own λ_radar),
 #: is a guess and worth one scan of the ring (59 cell-scans). Forgetting 0.99 per scan (a
 #: memory of 100 scans, 2 minutes at 0.8 Hz: the scenes' clutter does not change faster).
 #: Each detection counts as its posterior clutter probability in the GM-PHD update
 #: (``weighting='posterior'``, :class:`~ctxmodels.stonesoup.ClutterMapLearner`): the
-#: expected clutter count under the tracker's own model, so a target's returns before its
-#: track is extracted are not counted as clutter. ``docs/study.md`` shows what depends on
+#: expected clutter count under the tracker's own model, so a target's returns count as
+#: clutter only in proportion to how little the filter already believes in it (fully at
+#: its first scan, less as its components gain weight, extracted or not). ``docs/study.md`` shows what depends on
 #: these choices (``scripts/learned_warmup.py --settings``, ``scripts/learned_target_leak.py``).
 MAP_BEARING_CELL, MAP_RANGE_CELL = math.radians(5.0), 50.0
 MAP_PRIOR, MAP_PRIOR_SCANS, MAP_FORGETTING = 1e-3, 1.0, 0.99
