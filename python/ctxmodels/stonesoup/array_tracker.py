@@ -320,7 +320,7 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
             squared=plan.squared, include_all=plan.include_all, normalise=plan.normalise,
             skip_undetectable=context is not None, time=now,
             force_symmetric=plan.force_symmetric)
-        self._clutter_probabilities = (time, dict(zip(detections, clutter_probability.tolist())))
+        self._clutter_probabilities = (time, detections, clutter_probability)
         self._within_region(arrays)
         if self.max_position_std is not None:
             x, y = self.position_mapping

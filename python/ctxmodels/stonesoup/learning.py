@@ -67,12 +67,13 @@ def _learned_factors(detections, part: str, kind: type):
     return context, model, list({id(f): f for f in factors if isinstance(f, kind)}.values())
 
 
-def _scan_positions(detections, model) -> np.ndarray:
-    """World positions (M, 2) of a scan's detections, in a reproducible order."""
+def _scan(detections, model) -> tuple[list, np.ndarray]:
+    """A scan's detections in a reproducible order (whatever the set's) and their world
+    positions (M, 2)."""
     ordered = in_stable_order(detections)
     if not ordered:
-        return np.empty((0, 2))
-    return detection_positions(ordered, model.position_mapping)
+        return ordered, np.empty((0, 2))
+    return ordered, detection_positions(ordered, model.position_mapping)
 
 
 _WEIGHTINGS = ("gates", "posterior")
@@ -148,12 +149,8 @@ class ClutterMapLearner(_GatedLearner):
         context, model, maps = _learned_factors(detections, "clutter", ClutterMap)
         if not maps:
             return
-        ordered = in_stable_order(detections)  # a reproducible order, whatever the set's
-        if ordered:
-            positions = detection_positions(ordered, model.position_mapping)
-            ranges = measured_ranges(ordered)
-        else:
-            positions, ranges = np.empty((0, 2)), None
+        ordered, positions = _scan(detections, model)
+        ranges = measured_ranges(ordered) if ordered else None
         if self.weighting == "posterior":
             gates, weights = None, self._posterior(time, ordered)
         else:
@@ -218,7 +215,7 @@ class DetectionLearner(_GatedLearner):
         if not estimates:
             return
         tracked, states = self._tracked(time, tracks)
-        found = _scan_positions(detections, model)
+        _, found = _scan(detections, model)
         if len(states) and len(found):
             gaps = np.hypot(states[:, None, 0] - found[None, :, 0],
                             states[:, None, 1] - found[None, :, 1])

@@ -336,7 +336,8 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
                 f"max_position_std: must be a finite number > 0 or None, got {limit!r}")
         self._pending_births: list[TaggedWeightedGaussianState] = []
         self._region = None  # this scan's region (see scan_region)
-        self._clutter_probabilities = None  # (time, {detection: probability}) of the last scan
+        # the last scan's (time, detections, their probabilities): a mapping only when read
+        self._clutter_probabilities = None
 
     @property
     def clutter_probabilities(self) -> tuple[datetime.datetime, dict] | None:
@@ -348,7 +349,10 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         (:class:`~ctxmodels.stonesoup.ClutterMapLearner` with ``weighting="posterior"``).
         None before the first scan, and after a scan that a stock updater updated on the
         component path (it does not report its terms)."""
-        return self._clutter_probabilities
+        if self._clutter_probabilities is None:
+            return None
+        time, detections, probabilities = self._clutter_probabilities
+        return time, dict(zip(detections, np.asarray(probabilities, dtype=float).tolist()))
 
     def _inside_mask(self, points: np.ndarray) -> np.ndarray:
         """Whether each (x, y) row of ``points`` lies in this scan's surveillance region."""
@@ -409,7 +413,7 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             self.gaussian_mixture = self.updater.update(hypotheses)
         reported = vars(self.gaussian_mixture).pop("clutter_probabilities", None)
         self._clutter_probabilities = None if reported is None else (
-            time, {detection: reported.get(detection, 1.0) for detection in detections})
+            time, detections, [reported.get(detection, 1.0) for detection in detections])
         if self._region is not None:
             self.gaussian_mixture.components = self._inside(self.gaussian_mixture.components)
         if self.max_position_std is not None:
