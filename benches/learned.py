@@ -4,8 +4,9 @@ estimator in NumPy (running scale, ``np.add.at``; the best a user could write pe
 
     python benches/learned.py [--detections 40] [--repeats 7] [--pooling none|range|estimated]
 
-(``estimated``: range rings with the pool weight estimated from each ring's spread, as the
-study's map; NumPy recomputes the rings' spreads once per scan, before reading λ.)
+(``estimated``: range rings with the pool weight estimated from each ring's spread, cells
+its level cannot explain set apart, as the study's map; NumPy recomputes the rings' cells
+apart, levels and spreads once per scan, before reading λ.)
 
 Both sides do one scan's work as a tracker would: λ of the scan's detections from the map
 as it stands (through a detector context on our side), then the map's update with them.
@@ -58,15 +59,26 @@ class NumpyMap:
             exposed = self.volumes * s
             x = max(0.0, 1.0 - s * (1.0 - FORGETTING))
             per_scan = (1.0 - x * x) / (1.0 - FORGETTING ** 2) / s if s > 0 else 0.0
-            excess = ((self.counts / self.scale - rings * exposed) ** 2
-                      - rings * exposed * per_scan).sum(axis=0)
-            weight = (exposed ** 2).sum(axis=0)
+            counts = self.counts / self.scale
+            # cells apart: Poisson deviance (effective counts) beyond ln(cells / 1 %)
+            effective = 1.0 / per_scan if per_scan > 0 else 0.0
+            k, mu = counts * effective, rings * exposed * effective
+            with np.errstate(divide="ignore", invalid="ignore"):
+                divergence = np.where(k > 0, k * np.log(k / mu) - k + mu, mu)
+            apart = (mu > 0) & (divergence > math.log(self.volumes.shape[0] / 0.01))
+            keep = ~apart
+            rings = (PRIOR * PRIOR_SCANS * v + (keep * counts).sum(axis=0)) / \
+                (PRIOR_SCANS * v + (keep * exposed).sum(axis=0))
+            excess = (keep * ((counts - rings * exposed) ** 2 - rings * exposed * per_scan)).sum(axis=0)
+            weight = (keep * exposed ** 2).sum(axis=0)
             spread = np.where(weight > 0, np.maximum(excess, 0.0) / np.where(weight > 0, weight, 1.0), 0.0)
             ring, tau = rings[j[inside]], spread[j[inside]]
             volume = self.volumes[i[inside], j[inside]]
             with np.errstate(divide="ignore", invalid="ignore"):
                 sp = ring / (tau * volume)
-                out[inside] = np.where(tau > 0, (ring * sp + n / volume) / (sp + s), ring)
+                pooled = np.where(tau > 0, (ring * sp + n / volume) / (sp + s), ring)
+            alone = (PRIOR * PRIOR_SCANS + n / volume) / (PRIOR_SCANS + s)
+            out[inside] = np.where(apart[i[inside], j[inside]], alone, pooled)
         elif self.pooled:
             v = self.ring_volumes[j[inside]]
             ring = (PRIOR * PRIOR_SCANS * v + self.ring_counts[j[inside]] / self.scale) / \

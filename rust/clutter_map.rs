@@ -43,17 +43,31 @@
 //! with S2_c = Σ_j γ^(2(k−j)) the discounted count's variance per unit mean — derived from S
 //! as if every scan had exposed every cell (S2 = (1 − x²) / (1 − γ²), x = 1 − S (1 − γ)),
 //! times the cell's exposed share S_c / S. A pool whose cells agree (open sea) gets
-//! τ_g² ≈ 0 and its cells take its level; a pool with a coast in it lets the coast's cells
-//! depart — and, with one spread per pool, its quiet cells nearly as much. (Counts
-//! weighted by clutter probabilities vary less than Poisson counts of the same mean —
-//! Σw² ≤ Σw — so τ_g² is then underestimated: the cells are shrunk more, towards their
-//! pool. Differences that a tracker puts there itself — a target's partly counted returns,
-//! clutter hidden under a false track — count as spread, as a coast does. The residuals
-//! are taken about λ_g, which includes the λ₀ prior and each cell's own counts, with no
+//! τ_g² ≈ 0 and its cells take its level.
+//!
+//! A pool can hold a few cells that are not of it: a point source of persistent returns (a
+//! buoy, a moored vessel, a rock), a stretch of coast, a patch that land hides. Moments are
+//! not robust to them: one buoy's cell (16 discounted points where its ring of 59 cells
+//! expects 0.6) makes τ_g² ten times λ_g² and so frees every cell of its ring (s_c ≈ 16
+//! scans against ~100 of their own) and lifts the ring's level by 40 %. So a cell whose
+//! counts its pool's level cannot explain *leaves the pool*: by the Chernoff bound on a
+//! Poisson tail, P(N ≥ n) or P(N ≤ n) ≤ exp(−(n ln(n/μ) − n + μ)), in effective counts
+//! (n = N_c S/S2, μ = λ_g V_c S_c S/S2: the discounted count scaled to a Poisson variance),
+//! below [`APART`] / (the pool's number of cells) — a Bonferroni bound, so chance sets a
+//! cell of a homogeneous pool apart less than 1 % of the time. A cell apart is estimated
+//! alone (the λ₀ prior, as without pooling); the pool's level and spread are then those of
+//! the cells that remain (the level's prior still weighs s₀ V_g). The test uses the level of
+//! every cell, which the cells apart lift: it errs towards keeping a cell.
+//!
+//! (Counts weighted by clutter probabilities vary less than Poisson counts of the same mean —
+//! Σw² ≤ Σw — so τ_g² is then underestimated: the cells are shrunk more, towards their pool.
+//! Differences that a tracker puts there itself — a target's partly counted returns,
+//! clutter hidden under a false track — count as spread, as a coast does. The residuals are
+//! taken about λ_g, which includes the λ₀ prior and each cell's own counts, with no
 //! correction for either: in a pool's first scans the prior's pull adds to τ_g², and in a
 //! pool of few cells the own-count share takes from it.)
 //!
-//! The pools' sums (and spreads) are recomputed from the cells after each update
+//! The pools' sums (levels, spreads, the cells apart) are recomputed from the cells after each update
 //! (O(cells), vectorised; an incremental sum would round differently from a restored one):
 //! they are a function of the state, which therefore stays (counts, deficit, exposure,
 //! scale) and restores exactly.
@@ -61,6 +75,9 @@
 use crate::error::{ModelError, Result};
 use crate::pose::Pose;
 use std::f64::consts::PI;
+
+mod pools;
+use pools::{Cells, Tests};
 
 /// The coordinates a map's grid is laid over.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -88,6 +105,9 @@ pub enum Pooling {
 /// Scales above this are brought back by [`RESCALE`] (both exact powers of two).
 const LARGE: f64 = 1.157920892373162e77; // 2^256
 const RESCALE: f64 = 8.636168555094445e-78; // 2^-256
+/// With an estimated pool weight: the chance, at most, that a cell of a homogeneous pool is
+/// set apart (see the module docs).
+pub const APART: f64 = 0.01;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClutterMap {
@@ -114,8 +134,12 @@ pub struct ClutterMap {
     pool_counts: Vec<f64>,
     /// Σ_c V_c D_c × scale per pool.
     pool_deficit: Vec<f64>,
-    /// τ_g² per pool, when s_p is estimated (else empty).
+    /// λ_g per pool over the cells not apart, when s_p is estimated (else empty).
+    pool_level: Vec<f64>,
+    /// τ_g² per pool over the cells not apart, when s_p is estimated (else empty).
     pool_spread: Vec<f64>,
+    /// Per cell, whether it has left its pool, when s_p is estimated (else empty).
+    apart: Vec<bool>,
 }
 
 fn check_edges(argument: &'static str, edges: &[f64], lowest: f64, highest: f64) -> Result<()> {
@@ -168,7 +192,7 @@ impl ClutterMap {
         let cells = volumes.len();
         Ok(ClutterMap {
             space, edges, prior_intensity, prior_scans, forgetting, volumes, counts: vec![0.0; cells], deficit: vec![0.0; cells], exposure: 0.0, scale: 1.0,
-            pooling: Pooling::None, pooled_scans: Some(prior_scans), pool_volumes: Vec::new(), pool_counts: Vec::new(), pool_deficit: Vec::new(), pool_spread: Vec::new(),
+            pooling: Pooling::None, pooled_scans: Some(prior_scans), pool_volumes: Vec::new(), pool_counts: Vec::new(), pool_deficit: Vec::new(), pool_level: Vec::new(), pool_spread: Vec::new(), apart: Vec::new(),
         })
     }
 
@@ -217,6 +241,11 @@ impl ClutterMap {
         if self.pooling == Pooling::None {
             return;
         }
+        if self.pooled_scans.is_none() {
+            self.estimate_pools();
+            return;
+        }
+        (self.pool_level, self.pool_spread, self.apart) = (Vec::new(), Vec::new(), Vec::new());
         let columns = self.edges[1].len() - 1;
         let (mut counts, mut deficit) = (vec![0.0; columns], vec![0.0; columns]);
         for ((n, d), v) in self.counts.chunks_exact(columns).zip(self.deficit.chunks_exact(columns)).zip(self.volumes.chunks_exact(columns)) {
@@ -231,17 +260,15 @@ impl ClutterMap {
         }
         self.pool_counts = counts;
         self.pool_deficit = deficit;
-        if self.pooled_scans.is_none() {
-            self.pool_spread = self.pool_spreads();
-        }
     }
 
-    /// τ_g² of every pool (see the module docs), from the state and the pools' sums: per
-    /// range column over the rows in order (vectorised, as the sums), then for the whole
-    /// grid the columns together.
-    fn pool_spreads(&self) -> Vec<f64> {
+    /// With an estimated pool weight (see the module docs): which cells leave their pools,
+    /// then the level λ_g and spread τ_g² of each pool over the cells that stay — from the
+    /// state and the pools' sums, per range column over the rows in order (vectorised, as
+    /// the sums), then for the whole grid the columns together.
+    fn estimate_pools(&mut self) {
         let columns = self.edges[1].len() - 1;
-        let levels: Vec<f64> = (0..columns).map(|j| self.pool_intensity(self.pool_of(j).unwrap_or(0))).collect();
+        let rows = self.counts.len() / columns;
         let inverse = 1.0 / self.scale;
         let total = self.exposure * inverse;
         let gamma = self.forgetting;
@@ -251,22 +278,69 @@ impl ClutterMap {
         } else {
             total
         };
-        // variance per unit exposed scan: S2_c = squares × S_c / S
+        // the discounted count's variance per unit mean, S2 / S, and its inverse (effective counts)
         let per_scan = if total > 0.0 { squares / total } else { 0.0 };
-        let (mut excess, mut weight) = (vec![0.0; columns], vec![0.0; columns]);
-        for ((n, d), v) in self.counts.chunks_exact(columns).zip(self.deficit.chunks_exact(columns)).zip(self.volumes.chunks_exact(columns)) {
+        let effective = if squares > 0.0 { total / squares } else { 0.0 };
+        let members = match self.pooling {
+            Pooling::Grid => self.counts.len(),
+            _ => rows,
+        };
+        let threshold = (members as f64 / APART).ln();
+        let cells = Cells { counts: &self.counts, deficit: &self.deficit, volumes: &self.volumes, columns, exposure: self.exposure, inverse };
+        let mut sums = cells.moments();
+        // every cell's pool level (of all its cells), per column
+        let levels: Vec<f64> = match self.pooling {
+            Pooling::Grid => vec![self.level(&self.pooled(&sums)[0], self.pool_volumes[0]); columns],
+            _ => sums.iter().zip(&self.pool_volumes).map(|(s, v)| self.level(s, *v)).collect(),
+        };
+        // cells apart: a bound on each cell's divergence first (vectorised, per row), the
+        // logarithm only in rows where the bound cannot keep every cell
+        let tests = Tests { levels: &levels, effective, threshold };
+        let mut apart = vec![false; self.counts.len()];
+        let mut changed = vec![false; columns];
+        for (row, _) in cells.rows_to_test(tests).iter().enumerate().filter(|(_, test)| **test) {
             for j in 0..columns {
-                let exposed = (self.exposure - d[j]) * inverse * v[j];
-                let residual = n[j] * inverse - levels[j] * exposed;
-                excess[j] += residual * residual - levels[j] * exposed * per_scan;
-                weight[j] += exposed * exposed;
+                let c = row * columns + j;
+                if tests.may_leave(cells.at(c), j) && tests.leaves(cells.at(c), j) {
+                    apart[c] = true;
+                    changed[j] = true;
+                }
             }
         }
-        if self.pooling == Pooling::Grid {
-            excess = vec![excess.iter().sum()];
-            weight = vec![weight.iter().sum()];
+        // a column with cells apart: its sums again over the cells that stay (rare; not by
+        // subtraction, where a coast's large counts would cancel against the rest)
+        for j in (0..columns).filter(|j| changed[*j]) {
+            sums[j] = cells.column_moments(j, |c| !apart[c]);
         }
-        excess.iter().zip(&weight).map(|(e, w)| if *w > 0.0 { (e / w).max(0.0) } else { 0.0 }).collect()
+        let sums = self.pooled(&sums);
+        let (mut level, mut spread) = (Vec::with_capacity(sums.len()), Vec::with_capacity(sums.len()));
+        for (s @ &[_, e, nn, ne, ee], volume) in sums.iter().zip(&self.pool_volumes) {
+            let l = self.level(s, *volume);
+            // Σ (n − λ e)² − λ (S2/S) Σ e, expanded
+            let excess = nn - 2.0 * l * ne + l * l * ee - l * per_scan * e;
+            level.push(l);
+            spread.push(if ee > 0.0 { (excess / ee).max(0.0) } else { 0.0 });
+        }
+        (self.pool_level, self.pool_spread, self.apart) = (level, spread, apart);
+    }
+
+    /// Per-column sums as per-pool sums: the columns together for the whole grid.
+    fn pooled(&self, sums: &[[f64; 5]]) -> Vec<[f64; 5]> {
+        if self.pooling != Pooling::Grid {
+            return sums.to_vec();
+        }
+        let mut whole = [0.0; 5];
+        for s in sums {
+            for (w, v) in whole.iter_mut().zip(s) {
+                *w += v;
+            }
+        }
+        vec![whole]
+    }
+
+    /// λ_g of a pool of `volume` from its cells' sums (Σ n, Σ e, …), with the λ₀ prior.
+    fn level(&self, sums: &[f64; 5], volume: f64) -> f64 {
+        (self.prior_intensity * self.prior_scans * volume + sums[0]) / (self.prior_scans * volume + sums[1])
     }
 
     /// The map with a saved state (see [`state`](Self::state)).
@@ -354,8 +428,9 @@ impl ClutterMap {
         let (n, s) = (self.counts[cell] / self.scale, (self.exposure - self.deficit[cell]) / self.scale);
         let (prior, weight) = match (self.pool_of(cell), self.pooled_scans) {
             (Some(g), Some(weight)) => (self.pool_intensity(g), weight),
+            (Some(_), None) if self.apart[cell] => (self.prior_intensity, self.prior_scans),
             (Some(g), None) => {
-                let (level, spread) = (self.pool_intensity(g), self.pool_spread[g]);
+                let (level, spread) = (self.pool_level[g], self.pool_spread[g]);
                 let weight = level / (spread * self.volumes[cell]);
                 if !weight.is_finite() {
                     return level; // the cells agree (τ² = 0, or below what f64 resolves)
@@ -603,26 +678,37 @@ mod tests {
         let mut map = radar().with_pooling(Pooling::Range, None).unwrap();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         assert_eq!(map.intensities(), vec![1e-3; 16], "no evidence: the prior everywhere");
-        // the near ring: four points a scan in cell (4, 0); the far ring: one point in cell
-        // (6, 1), then one in (2, 1), beside a gate of radius 0 (no area, so no deficit)
-        let near_points = [100.0, 1.0, 100.0, 2.0, 110.0, 3.0, 120.0, 1.0];
+        // the near ring: four points a scan in cell (4, 0), two in (5, 0); the far ring: one
+        // point in cell (6, 1), then one in (2, 1), beside a gate of radius 0 (no area, so no
+        // deficit)
+        let near_points = [100.0, 1.0, 100.0, 2.0, 110.0, 3.0, 120.0, 1.0, 60.0, 80.0, 50.0, 85.0];
         map.update(&pose, &[&near_points[..], &[0.0, 700.0]].concat(), None, &[]).unwrap();
         map.update(&pose, &[&near_points[..], &[0.0, -700.0]].concat(), None, &[0.0, -600.0, 0.0]).unwrap();
         let (v, big) = (PI / 4.0 * 500.0, 2.0 * PI * 500.0);
         let total = g + 1.0;
         let squares = (1.0 - (1.0 - total * (1.0 - g)).powi(2)) / (1.0 - g * g); // g² + 1
         assert!((squares - (g * g + 1.0)).abs() < 1e-12);
-        // near ring: every cell fully exposed; counts 4 (g + 1) in cell 4, 0 elsewhere
-        let n = 4.0 * (g + 1.0);
-        let near = (1e-3 * s0 * big + n) / (s0 * big + big * total);
-        let e = v * total;
-        let excess = (n - near * e).powi(2) + 7.0 * (near * e).powi(2) - 8.0 * near * v * squares;
-        let tau = excess / (8.0 * e * e);
+        // near ring: every cell fully exposed; counts 4 (g + 1) in cell 4, 2 (g + 1) in cell 5
+        let (n4, n5, e) = (4.0 * total, 2.0 * total, v * total);
+        // cell 4 leaves the ring (its divergence from the level of all 8 cells, in effective
+        // counts, beyond ln(8 / APART)); cell 5 stays
+        let all = (1e-3 * s0 * big + n4 + n5) / (s0 * big + big * total);
+        let divergence = |n: f64| {
+            let (n, mu) = (n * total / squares, all * e * total / squares);
+            n * (n / mu).ln() - n + mu
+        };
+        let threshold = (8.0 / APART).ln();
+        assert!(divergence(n4) > threshold && divergence(n5) < threshold);
+        // the ring's level and spread over its other 7 cells
+        let near = (1e-3 * s0 * big + n5) / (s0 * big + 7.0 * e);
+        let excess = (n5 - near * e).powi(2) + 6.0 * (near * e).powi(2) - 7.0 * near * v * squares;
+        let tau = excess / (7.0 * e * e);
         assert!(tau > 0.0);
         let weight = near / (tau * v);
         let grid = map.intensities();
         let cell = |n: f64| (near * weight + n / v) / (weight + total);
-        assert!((grid[8] - cell(n)).abs() <= 1e-12 * grid[8]);
+        assert!((grid[8] - (1e-3 * s0 + n4 / v) / (s0 + total)).abs() <= 1e-12 * grid[8], "alone");
+        assert!((grid[10] - cell(n5)).abs() <= 1e-12 * grid[10]);
         assert!((grid[0] - cell(0.0)).abs() <= 1e-12 * grid[0]);
         // far ring: one point per cell in two cells, one scan apart
         let far = (1e-3 * s0 * big + g + 1.0) / (s0 * big + big * total);
@@ -633,7 +719,7 @@ mod tests {
     }
 
     #[test]
-    fn an_estimated_pool_weight_pools_a_flat_ring_and_keeps_a_hot_cell() {
+    fn an_estimated_pool_weight_pools_a_flat_ring_and_sets_a_hot_cell_apart() {
         // 36 bearings × 2 rings; Poisson clutter of 0.5 points a cell a scan in both, and in
         // the far ring one cell with 5 a scan (a coast), from a fixed sequence
         let bearings: Vec<f64> = (0..=36).map(|i| -PI + i as f64 * PI / 18.0).collect();
@@ -678,12 +764,16 @@ mod tests {
         assert!(spread(&near_alone) > 0.04, "the cells alone scatter: {}", spread(&near_alone));
         assert!(spread(&near) < 0.5 * spread(&near_alone), "pooled {} vs alone {}", spread(&near), spread(&near_alone));
         assert!(near.iter().all(|l| (l - 0.5).abs() < 0.1), "{near:?}");
-        // the ring with a coast: the hot cell departs from it (its quiet cells, with one
-        // spread per ring, are then left nearly alone: the price of a coast in a ring)
-        let far = ring(&map, 1);
+        // the ring with a coast: the hot cell leaves it, and its quiet cells keep the ring's
+        // level (of the quiet cells alone: the coast does not lift it) as the flat ring's do
+        assert_eq!(map.apart.iter().filter(|a| **a).count(), 1, "only the coast's cell leaves");
+        assert!(map.apart[9 * 2 + 1]);
+        let (far, far_alone) = (ring(&map, 1), ring(&alone, 1));
         assert!((far[9] - 5.0).abs() < 0.5, "the hot cell departs from its ring: {}", far[9]);
-        let quiet: Vec<f64> = far.iter().enumerate().filter(|(c, _)| *c != 9).map(|(_, l)| *l).collect();
-        assert!(quiet.iter().all(|l| (l - 0.5).abs() < 0.25), "{quiet:?}");
+        let others = |values: &[f64]| -> Vec<f64> { values.iter().enumerate().filter(|(c, _)| *c != 9).map(|(_, l)| *l).collect() };
+        let (quiet, quiet_alone) = (others(&far), others(&far_alone));
+        assert!(spread(&quiet) < 0.5 * spread(&quiet_alone), "pooled {} vs alone {}", spread(&quiet), spread(&quiet_alone));
+        assert!(quiet.iter().all(|l| (l - 0.5).abs() < 0.1), "{quiet:?}");
     }
 
     #[test]
@@ -700,11 +790,14 @@ mod tests {
             for k in 0..600 {
                 let t = k as f64;
                 // (a hot cell at (50, 20): three points every scan)
-                let points = [50.0, 20.0, 51.0, 20.0, 52.0, 21.0, 200.0 * t.cos(), 300.0 * t.sin(), 600.0 + t % 7.0, -40.0 * (t % 3.0), 50.0, 20.0];
-                map.update(&pose, &points[..8 + 2 * (k % 3)], None, &[600.0 + t % 7.0, -40.0, 30.0]).unwrap();
+                // (and in the far ring a point in one of three cells in turn: a spread)
+                let turn = (k % 3) as f64 * PI / 4.0;
+                let points = [50.0, 20.0, 51.0, 20.0, 52.0, 21.0, 700.0 * turn.cos(), 700.0 * turn.sin(), 800.0 * turn.cos(), 800.0 * turn.sin(), 200.0 * t.cos(), 300.0 * t.sin(), 600.0 + t % 7.0, -40.0 * (t % 3.0), 50.0, 20.0];
+                map.update(&pose, &points[..12 + 2 * (k % 3)], None, &[600.0 + t % 7.0, -40.0, 30.0]).unwrap();
             }
             if weight.is_none() {
-                assert!(map.pool_spread.iter().any(|t| *t > 0.0), "the test exercises a spread");
+                assert!(map.pool_spread.iter().any(|t| *t > 0.0), "the test exercises a spread: {:?} {:?}", map.pool_spread, map.apart);
+                assert!(map.apart.iter().any(|a| *a), "and a cell apart");
             }
             let (counts, deficit, exposure, scale) = map.state();
             let restored = fresh().with_state(counts.to_vec(), deficit.to_vec(), exposure, scale).unwrap();

@@ -10,10 +10,11 @@ findings are; positive favours the learned model; 95 % paired-t interval):
   an *oracle* variant of it whose map is fed only the detections that are not a vessel's
   (the simulator's ``metadata['source']``; a diagnostic no real tracker could be).
 
-    python scripts/learned_target_leak.py [FAR_CLUTTER BEARING_DEG [SEEDS]]
+    python scripts/learned_target_leak.py [FAR_CLUTTER BEARING_DEG [SEEDS [FIRST_SEED]]]
 
 FAR_CLUTTER: the radar's clutter returns per scan beyond 1 km (default 32), BEARING_DEG its
-bearing σ in degrees (default 1): a setting of the sweep. About 4 minutes on 2 cores.
+bearing σ in degrees (default 1): a setting of the sweep; SEEDS seeds (default 10) from
+FIRST_SEED (default 0). About 4 minutes on 2 cores.
 """
 import dataclasses
 import math
@@ -71,7 +72,8 @@ def job(args):
 def main():
     far = float(sys.argv[1]) if len(sys.argv) > 1 else 32.0
     bearing = float(sys.argv[2]) if len(sys.argv) > 2 else 1.0
-    seeds = range(int(sys.argv[3]) if len(sys.argv) > 3 else 10)
+    first = int(sys.argv[4]) if len(sys.argv) > 4 else 0
+    seeds = range(first, first + (int(sys.argv[3]) if len(sys.argv) > 3 else 10))
     jobs = [(v, s, seed, far, bearing) for v in VARIANTS for s in SCENARIOS for seed in seeds]
     with ProcessPoolExecutor(2) as pool:
         scores = dict(pool.map(job, jobs))
@@ -82,7 +84,7 @@ def main():
                 metrics.combine_gospa([p.gospa for p in parts]).rms)
 
     t = stats.t.ppf(0.975, len(seeds) - 1)
-    print(f"far clutter {far:g}/scan, bearing σ {bearing:g}°, seeds 0-{len(seeds) - 1}")
+    print(f"far clutter {far:g}/scan, bearing σ {bearing:g}°, seeds {seeds[0]}-{seeds[-1]}")
     for variant in list(VARIANTS)[1:]:
         hota = np.array([combined(variant, s)[0] - combined("context", s)[0] for s in seeds])
         gospa = np.array([combined("context", s)[1] - combined(variant, s)[1] for s in seeds])

@@ -21,7 +21,8 @@ class ReferenceMap:
     fraction) over every cell; λ = (λ0 s0 + N/V) / (s0 + S − D). Pooled, the prior of a
     cell is its pool's (λ0 s0 V_g + ΣN) / (s0 V_g + ΣV(S − D)), with weight s_p — or, with
     s_p None, λ_g / (τ² V) from the pool's spread τ², with the discounted sum of squared
-    scan weights kept as S2 ← γ² S2 + 1."""
+    scan weights kept as S2 ← γ² S2 + 1, the level and spread over the cells whose counts
+    the pool explains, and the others estimated alone."""
 
     def __init__(self, space, edges, prior, prior_scans, forgetting, pooling="none",
                  pooling_scans=10.0):
@@ -96,14 +97,26 @@ class ReferenceMap:
         if self.sp is not None:
             return (pool * self.sp + self.counts / self.volumes) / (self.sp + scans)
         cell_exposure = self.volumes * scans
-        excess = ((self.counts - pool * cell_exposure) ** 2
-                  - pool * cell_exposure * self.squares / self.exposure).sum(axis=axis, keepdims=True)
-        weight = (cell_exposure ** 2).sum(axis=axis, keepdims=True)
+        # cells apart: a two-sided Poisson deviance in effective counts (N S/S2) beyond
+        # ln(cells of the pool / 1 %), against the level of every cell
+        effective = self.exposure / self.squares
+        n, mu = self.counts * effective, pool * cell_exposure * effective
+        with np.errstate(divide="ignore", invalid="ignore"):
+            divergence = np.where(n > 0, n * np.log(n / mu) - n + mu, mu)
+        members = self.volumes.shape[0] if axis == 0 else self.volumes.size
+        self.apart = (mu > 0) & (divergence > math.log(members / 0.01))
+        keep = ~self.apart
+        level = (self.prior * self.s0 * volume + (keep * self.counts).sum(axis=axis, keepdims=True)) / \
+            (self.s0 * volume + (keep * cell_exposure).sum(axis=axis, keepdims=True))
+        excess = (keep * ((self.counts - level * cell_exposure) ** 2
+                          - level * cell_exposure * self.squares / self.exposure)).sum(axis=axis, keepdims=True)
+        weight = (keep * cell_exposure ** 2).sum(axis=axis, keepdims=True)
         self.spread = np.where(weight > 0, np.maximum(excess, 0) / np.where(weight > 0, weight, 1), 0)
         with np.errstate(divide="ignore", invalid="ignore"):
-            sp = pool / (self.spread * self.volumes)
-            cells = (pool * sp + self.counts / self.volumes) / (sp + scans)
-        return np.where(self.spread > 0, cells, pool)
+            sp = level / (self.spread * self.volumes)
+            cells = (level * sp + self.counts / self.volumes) / (sp + scans)
+        alone = (self.prior * self.s0 + self.counts / self.volumes) / (self.s0 + scans)
+        return np.where(self.apart, alone, np.where(self.spread > 0, cells, level))
 
     def intensity(self, pose, positions, ranges=None):
         i, j, inside = self.cells(pose, positions, ranges)
@@ -151,8 +164,13 @@ def test_matches_the_numpy_reference(space, edges, pooling, pooling_scans):
                                rtol=1e-12)
     assert np.ptp(reference.grid()) > 0  # the cells learned different intensities
     assert reference.deficit.max() > 0  # and gates took some exposure
-    if pooling_scans is None:  # the estimated spread is exercised
-        assert (reference.spread > 0).any()
+    if pooling_scans is None:
+        if pooling == "range":  # the hot spot's cell leaves its ring; the rings' spreads are used
+            assert (reference.spread > 0).any()
+            assert reference.apart.any() and not reference.apart.all()
+        else:  # clutter uniform in range and bearing is dense near the sensor: on an x/y grid
+            assert reference.apart.all()  # every cell differs from the grid's level and leaves
+
 
 
 def test_converges_to_a_stationary_clutter_field():

@@ -55,8 +55,20 @@ the spread of the cells' counts beyond what Poisson counts would show
 (:math:`S^{(2)}_c = \sum_j \gamma^{2(k-j)}` scaled by the cell's exposed share, the variance
 of a discounted count per unit mean). Cells that agree (open sea) then take their pool's
 level — a far cell that sees one clutter point in 20 scans is no longer left to its own
-noise — and a pool with a coast in it lets the coast's cells depart (and, with one spread
-per pool, its quiet cells nearly as much: they are then about as noisy as unpooled ones).
+noise.
+
+A pool can hold cells that are not of it: a buoy's or a moored vessel's persistent returns,
+a stretch of coast, a patch that land hides. Moments are not robust to them (one buoy's
+cell in a ring of 59 made :math:`\tau_g^2` ten times :math:`\hat\lambda_g^2`, freeing every
+cell of the ring, and lifted the ring's level by 40 %), so a cell whose counts the level
+of its pool's cells cannot explain *leaves the pool*: when the Chernoff bound on the
+Poisson tail, :math:`\exp(-(n \ln(n/\mu) - n + \mu))`, in effective counts
+(:math:`n = N_c S / S^{(2)}`, :math:`\mu = \hat\lambda_g V_c S_c S / S^{(2)}`), falls below
+1 % divided by the pool's number of cells (so chance sets a cell of a homogeneous pool
+apart less than 1 % of the time). A cell apart is estimated alone, with the
+:math:`\lambda_0` prior; the pool's level and spread are those of the cells that stay. A
+coast's cells then follow their own counts while the quiet cells of their ring keep its
+level.
 Counts weighted by clutter
 probabilities vary less than Poisson counts of the same mean (:math:`\sum w^2 \le \sum w`),
 which underestimates :math:`\tau_g^2`: the cells are then shrunk more, towards their pool.
@@ -64,9 +76,10 @@ Differences a tracker puts there itself — a target's partly counted returns, c
 hidden under a false track — count as spread, as a coast does. The residuals are taken
 about :math:`\hat\lambda_g`, prior and the cell's own counts included, uncorrected: in a
 pool's first scans the prior's pull adds to :math:`\tau_g^2`, and in a pool of few cells
-the own-count share takes from it. ``pooling='grid'`` pools the whole grid (any
+the own-count share takes from it; the test for leaving uses the level of every cell of the
+pool, which the cells apart lift, so it errs towards keeping a cell. ``pooling='grid'`` pools the whole grid (any
 space). Without pooling (the default) every cell shrinks towards :math:`\lambda_0` alone.
-Pooled, an update also recomputes the pools' sums from the cells (one vectorised pass,
+Pooled, an update also recomputes the pools' sums from the cells (vectorised passes,
 O(cells)), so that a restored map is exactly the saved one.
 
 The map is *state*, not a value like the other components: it changes with each
