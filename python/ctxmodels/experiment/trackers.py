@@ -312,9 +312,9 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
 
 #: The learned radar clutter map (``gmphd-learned``), from the radar: its first edition's
 #: settings were fixed before any run; the pooling, the ring prior's weight and the grid's
-#: bearings were revised after its results showed the warm-up loss, and the pool weight and
-#: the feed after the second edition's sweep showed a loss with accurate bearings
-#: (``docs/study.md``): cells of 5° × 50 m in its bearing–range space — 5σ of its bearing
+#: bearings were revised after its results showed the warm-up loss, the pool weight and
+#: the feed after the second edition's sweep showed a loss with accurate bearings, and the
+#: estimator (cells apart) after a 10-seed check of the third (``docs/study.md``): cells of 5° × 50 m in its bearing–range space — 5σ of its bearing
 #: noise and 10σ of its range noise, so a point source's returns stay in one cell, and fine
 #: enough to follow the sea clutter's step at 1 km and a coastline — over the bearings the
 #: radar sees (its blind sector is not in the grid: no clutter is reported there, so its
@@ -326,8 +326,10 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
 #: (``pooling_scans=None``: a Gamma–Poisson hierarchy, :class:`~ctxmodels.ClutterMap`): a
 #: fixed weight of 10 scans left a far cell to the noise of its ~4 discounted points, ±50 %,
 #: while a ring whose cells agree should give them its level and a ring with a coast (~0.5
-#: points a scan in one cell) should let that cell go (its other cells go too: one spread
-#: per ring). The ring's prior, λ 1e-3 per rad·m
+#: points a scan in one cell) should let that cell go. A cell its ring's level cannot
+#: explain — a coast, or a static object's returns every scan — leaves the ring (and its
+#: spread and level) by the map's Poisson tail test: such a source is not sea clutter,
+#: and one of them made a whole ring's cells nearly unpooled. The ring's prior, λ 1e-3 per rad·m
 #: (the uniform trackers' value, 10 times too low beyond 1 km by the paper's own λ_radar),
 #: is a guess and worth one scan of the ring (59 cell-scans). Forgetting 0.99 per scan (a
 #: memory of 100 scans, 2 minutes at 0.8 Hz: the scenes' clutter does not change faster).
