@@ -130,9 +130,9 @@ pub struct ClutterMap {
     pooled_scans: Option<f64>,
     /// V_g per pool (empty without pooling).
     pool_volumes: Vec<f64>,
-    /// Σ_c N_c × scale per pool.
+    /// Σ_c N_c × scale per pool (with a fixed s_p; an estimated one keeps its own sums).
     pool_counts: Vec<f64>,
-    /// Σ_c V_c D_c × scale per pool.
+    /// Σ_c V_c D_c × scale per pool (likewise).
     pool_deficit: Vec<f64>,
     /// λ_g per pool over the cells not apart, when s_p is estimated (else empty).
     pool_level: Vec<f64>,
@@ -264,8 +264,8 @@ impl ClutterMap {
 
     /// With an estimated pool weight (see the module docs): which cells leave their pools,
     /// then the level λ_g and spread τ_g² of each pool over the cells that stay — from the
-    /// state and the pools' sums, per range column over the rows in order (vectorised, as
-    /// the sums), then for the whole grid the columns together.
+    /// state alone (the passes of [`pools`], per range column over the rows in order), then
+    /// for the whole grid the columns together.
     fn estimate_pools(&mut self) {
         let columns = self.edges[1].len() - 1;
         let rows = self.counts.len() / columns;
