@@ -276,6 +276,13 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
     in one call into the Rust core (GIL released, rows split over cores). The first P_D
     call prepares the scan (:mod:`~ctxmodels.scan_calls`), so that a call per hypothesis,
     as Stone Soup's trackers make, costs a fraction of a microsecond.
+
+    Learned P_D factors (:class:`~ctxmodels.DetectionEstimate`) are read once per context:
+    the first P_D call, by whichever method, fixes them as they stand
+    (:meth:`~ctxmodels.DetectionProbabilityModel.frozen`), and every later P_D call of the
+    context, by any method and any input layout, evaluates that snapshot (it also goes into
+    pickles and copies). λ reads a :class:`~ctxmodels.ClutterMap` as it stands at each
+    call, on every method alike: update maps after a scan's tracking.
     """
 
     sensor_model: SensorModel = Property(doc="The sensor's model.")
@@ -287,14 +294,17 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
     #: Built on the first P_D call (see :mod:`~ctxmodels.scan_calls`); dropped when a
     #: Property is set and left out of pickles and copies.
     _scan_calls: ScanCalls | None = None
+    #: The detection model the context evaluates, fixed at its first P_D call; dropped when
+    #: a Property is set, kept in pickles and copies.
+    _snapshot = None
 
     def __eq__(self, other):
         return self is other
 
     def __setattr__(self, name, value):
         super().__setattr__(name, value)
-        if "_scan_calls" in self.__dict__:
-            del self.__dict__["_scan_calls"]
+        self.__dict__.pop("_scan_calls", None)
+        self.__dict__.pop("_snapshot", None)
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -302,7 +312,10 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         return state
 
     def _calls(self) -> ScanCalls:
-        calls = self.__dict__["_scan_calls"] = ScanCalls(self.sensor_model, self.pose)
+        snapshot = self._snapshot
+        if snapshot is None:
+            snapshot = self.__dict__["_snapshot"] = self.sensor_model.detection.frozen()
+        calls = self.__dict__["_scan_calls"] = ScanCalls(self.sensor_model, snapshot, self.pose)
         return calls
 
     # --- detection probability -----------------------------------------------------------
@@ -318,8 +331,8 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         model = self.sensor_model
         mapping = tuple(model.position_mapping)
         if covars is None or calls.mean_only:
-            return model.detection.evaluate(self.pose, means, mapping, out=out)
-        return model.detection.expected(self.pose, means, covars, mapping,
+            return calls.detection.evaluate(self.pose, means, mapping, out=out)
+        return calls.detection.expected(self.pose, means, covars, mapping,
                                         model.pd_evaluation, model.pd_order, out=out)
 
     def prob_detection_particles(self, particles, *, log: bool = False, missed: bool = False
@@ -363,9 +376,9 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
             ``particles`` is not 2-D, has fewer rows than ``position_mapping`` reads, or a
             particle's position is NaN or infinite (naming the first such particle).
         """
-        model = self.sensor_model
-        return model.detection.evaluate_particles(self.pose, particles,
-                                                  tuple(model.position_mapping),
+        calls = self._scan_calls or self._calls()
+        return calls.detection.evaluate_particles(self.pose, particles,
+                                                  tuple(self.sensor_model.position_mapping),
                                                   log=log, missed=missed)
 
     def prob_detection_states(self, states: Sequence) -> np.ndarray:

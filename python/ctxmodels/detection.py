@@ -65,6 +65,17 @@ class DetectionProbabilityModel(ModelComponent):
             return _core.DetectionModel(parts)
         return self._cached("core", build)
 
+    def frozen(self) -> "DetectionProbabilityModel":
+        """This model with every :class:`DetectionEstimate` factor replaced by its
+        :meth:`~DetectionEstimate.bands` as they stand now (itself when it has none): the
+        snapshot a :class:`~ctxmodels.DetectorContext` evaluates for its whole scan, on
+        every path, whatever updates the estimates get meanwhile."""
+        if not any(isinstance(factor, DetectionEstimate) for factor in self.factors):
+            return self
+        return DetectionProbabilityModel(factors=[
+            factor.bands() if isinstance(factor, DetectionEstimate) else factor
+            for factor in self.factors])
+
     def evaluate(self, pose: Pose, states, position_mapping=(0, 2), *, out=None) -> np.ndarray:
         """P_D at each row of ``states`` (N, D) for a sensor at ``pose``."""
         rows = as_rows(states, "states")

@@ -37,6 +37,7 @@ from stonesoup.base import Property
 from . import _core
 from ._component import LearnedComponent, as_array, as_float, as_rows
 from .pose import Pose, pose_tuple
+from .range_bands import RangeBands
 
 
 class DetectionEstimate(LearnedComponent):
@@ -99,6 +100,14 @@ class DetectionEstimate(LearnedComponent):
     def probabilities(self) -> np.ndarray:
         """The posterior mean P_D of every band, (B,)."""
         return self._core.probabilities()
+
+    def bands(self) -> RangeBands:
+        """The estimate as it stands, as fixed :class:`~ctxmodels.RangeBands`: ``outside``
+        below the first edge and from the last on, :meth:`probabilities` between, each edge
+        in the band above it. What a scan's P_D reads (the same bits)."""
+        return RangeBands(edges=self.edges,
+                          values=(self.outside, *self.probabilities().tolist(), self.outside),
+                          upper_owns=True)
 
 
 

@@ -5,10 +5,11 @@ hypothesisers and updaters) or once per batch of a few states. Each call used to
 context's Properties, convert the pose, check the position mapping and wrap the result in
 a new :class:`~stonesoup.types.numeric.Probability`: several microseconds of Python around
 a fraction of a microsecond in the core. :class:`ScanCalls` does that work once per
-context: the core's detection model at the scan's pose and mapping (and the sensor model's
-rule for the expected P_D of a Gaussian), its clutter model at the pose, and one
-``Probability`` per distinct P_D value (a scan has a handful: products of band, sector
-and land values).
+context: the snapshot of the detection model that the whole scan evaluates (its learned
+factors fixed as they stand, :meth:`~ctxmodels.DetectionProbabilityModel.frozen`), that
+snapshot in the core at the scan's pose and mapping (and the sensor model's rule for the
+expected P_D of a Gaussian), the clutter model at the pose, and one ``Probability`` per
+distinct P_D value (a scan has a handful: products of band, sector and land values).
 """
 from __future__ import annotations
 
@@ -18,16 +19,19 @@ from . import _core
 
 
 class ScanCalls:
-    """The detection and clutter models of ``sensor_model`` fixed at ``pose`` for the thin
-    calls; the values are the general path's, bit for bit (tested)."""
+    """The ``detection`` snapshot and the clutter model of ``sensor_model`` fixed at ``pose``
+    for the thin calls; the values are the general path's, bit for bit (tested)."""
 
-    __slots__ = ("at_pose", "clutter_at_pose", "mean_only", "_probabilities")
+    __slots__ = ("detection", "at_pose", "clutter_at_pose", "mean_only", "_probabilities")
 
     #: Distinct P_D values whose Probability is kept (a scan has a handful).
     max_probabilities = 256
 
-    def __init__(self, sensor_model, pose):
-        self.at_pose = _core.DetectionAtPose(sensor_model.detection._compiled(),
+    def __init__(self, sensor_model, detection, pose):
+        #: What every P_D path of the context evaluates: ``sensor_model``'s detection model
+        #: with its learned factors fixed (one snapshot for the scan).
+        self.detection = detection
+        self.at_pose = _core.DetectionAtPose(self.detection._compiled(),
                                              pose.as_tuple(),
                                              tuple(sensor_model.position_mapping),
                                              sensor_model.pd_evaluation, sensor_model.pd_order)
