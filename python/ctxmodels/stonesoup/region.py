@@ -1,13 +1,15 @@
 """Surveillance regions for the point-process trackers: where the PHD is estimated.
 
-A region answers ``contains(points)`` for (N, 2) world x/y positions. A region that moves
+A region answers ``contains(points)`` for (N, 2) world x/y positions (one (x, y) pair is one
+point; other shapes raise, naming ``points``). A region that moves
 with the platform also has ``at(timestamp)``, which gives the region of one scan; the
 trackers ask for it once per scan (:class:`PoseCentredRegion`).
 """
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import numbers
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from stonesoup.base import Base, Property
@@ -24,14 +26,16 @@ class CircularRegion(Base):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        centre = np.asarray(self.centre, dtype=np.float64).ravel()
-        if centre.shape != (2,) or not np.all(np.isfinite(centre)):
-            raise ValueError(f"centre: must be a finite (x, y) pair, got {self.centre!r}")
-        self.centre, self.radius = (float(centre[0]), float(centre[1])), _radius(self.radius)
+        self.centre, self.radius = _centre(self.centre), _radius(self.radius)
 
     def contains(self, points) -> np.ndarray:
-        """Whether each (x, y) row of ``points`` lies in the disc (boundary included)."""
-        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        """Whether each (x, y) row of ``points`` lies in the disc (boundary included).
+
+        ``points``: an (N, 2) array of world x/y rows (N may be 0), or one (x, y) pair. Any
+        other shape — (N, 3) states, a flat list of several points — raises
+        :class:`ValueError` naming ``points``, rather than being re-read as pairs. A NaN row
+        is outside."""
+        points = _points(points)
         offsets = points - np.asarray(self.centre)
         return np.einsum("ij,ij->i", offsets, offsets) <= self.radius ** 2
 
@@ -62,13 +66,54 @@ class PoseCentredRegion(Base):
 
 
 def _radius(value) -> float:
-    try:
-        radius = float(value)
-    except (TypeError, ValueError):
-        raise TypeError(f"radius: expected a number, got {value!r}") from None
+    """A finite radius > 0 in metres: a real number (Python or NumPy, not a bool — ``True``
+    is not 1 m — nor a string or an array)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+            value, (numbers.Real, np.integer, np.floating)):
+        raise TypeError(f"radius: expected a positive number of metres, got "
+                        f"{type(value).__name__} {value!r}")
+    radius = float(value)
     if not math.isfinite(radius) or radius <= 0:
-        raise ValueError(f"radius: must be finite and > 0, got {value!r}")
+        raise ValueError(f"radius: must be a finite number of metres > 0, got {value!r}")
     return radius
+
+
+def _centre(value) -> tuple[float, float]:
+    """A finite (x, y) pair of real numbers (not bools or strings)."""
+    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, (Sequence, np.ndarray)):
+        raise TypeError(f"centre: expected a finite (x, y) pair of numbers, got {value!r}")
+    items = np.asarray(value, dtype=object).ravel() if isinstance(value, np.ndarray) \
+        else list(value)
+    if len(items) != 2:
+        raise ValueError(f"centre: must be a finite (x, y) pair, got {len(items)} values: "
+                         f"{value!r}")
+    for item in items:
+        if isinstance(item, (bool, np.bool_)) or not isinstance(
+                item, (numbers.Real, np.integer, np.floating)):
+            raise TypeError(f"centre: expected a finite (x, y) pair of numbers, got {value!r}")
+    x, y = float(items[0]), float(items[1])
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ValueError(f"centre: must be a finite (x, y) pair, got {value!r}")
+    return x, y
+
+
+def _points(points) -> np.ndarray:
+    """``points`` as an (N, 2) float64 array: (N, 2) rows or one (x, y) pair."""
+    if isinstance(points, (str, bytes, Mapping)):
+        raise TypeError(f"points: expected (N, 2) x/y rows, got {type(points).__name__}")
+    try:
+        array = np.asarray(points)
+    except (TypeError, ValueError) as err:  # ragged rows
+        raise ValueError(f"points: expected (N, 2) x/y rows ({err})") from None
+    if array.dtype == object or array.dtype == np.bool_ \
+            or not np.issubdtype(array.dtype, np.number) or np.iscomplexobj(array):
+        raise TypeError(f"points: expected (N, 2) real x/y rows, got dtype {array.dtype}")
+    if array.ndim == 1 and array.shape[0] in (0, 2):
+        array = array.reshape(-1, 2)  # no points, or one (x, y) pair
+    if array.ndim != 2 or array.shape[1] != 2:
+        raise ValueError(f"points: expected (N, 2) x/y rows (or one (x, y) pair), got shape "
+                         f"{array.shape}")
+    return array.astype(np.float64, copy=False)
 
 
 def scan_region(region, timestamp):
