@@ -31,14 +31,27 @@ class RangeBands(ModelComponent):
     upper_owns: bool | Sequence[bool] = Property(
         default=True,
         doc="Per edge (or one flag for all): whether a range exactly on the edge belongs to "
-            "the band above it (True) or below it (False).")
+            "the band above it (True) or below it (False). NumPy booleans are accepted and "
+            "stored as Python bools (a sequence or array as a tuple of them), so the "
+            "component serialises like any other.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
+        as_float_tuple(self.edges, "edges")  # (named before the flags are counted against it)
+        flags = self.upper_owns
+        if isinstance(flags, np.ndarray) and flags.ndim == 0:
+            flags = flags[()]  # one flag as a 0-d array
+        owners = self._owners()  # checks the flags, naming upper_owns
+        # np.bool_ is not a bool: Stone Soup's YAML cannot write it, and an array of flags
+        # would compare unequal to the same tuple. Store plain bools.
+        self._replace("upper_owns", bool(flags) if isinstance(flags, (bool, np.bool_))
+                      else tuple(owners))
         self._compiled()  # validate now, not at the first scan
 
     def _owners(self) -> list[bool]:
         flags = self.upper_owns
+        if isinstance(flags, np.ndarray) and flags.ndim == 0:
+            flags = flags[()]
         if isinstance(flags, (bool, np.bool_)):
             return [bool(flags)] * len(self.edges)
         if isinstance(flags, (str, bytes)) or not isinstance(flags, (Sequence, np.ndarray)):
