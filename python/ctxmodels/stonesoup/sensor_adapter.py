@@ -18,6 +18,19 @@ platform's yaw plus the sensor's rotation offset, plus the dwell centre for a ro
 radar, whose field of view turns with it). Ask for the pose at each scan, when the
 simulator or the platform has moved the sensor.
 
+Range at the edge: Stone Soup 1.9.1's ``is_detectable`` takes the range from its
+measurement model — the offset :math:`(x - x_s, y - y_s, 0)` rotated into the sensor's body
+frame by ``build_rotation_matrix`` (a 3×3 NumPy matrix product), then
+``sqrt(x_r**2 + y_r**2)`` — and compares it with ``max_range``. The model built here is
+evaluated by the core, which takes the range in the world frame,
+:math:`\sqrt{\Delta x^2 + \Delta y^2}` with the square root's rounding decided exactly
+(:class:`~ctxmodels.RangeBands`). The two are the same number up to the rotation's
+rounding, a few units in the last place: they agree everywhere except within about
+:math:`10^{-15}\,r_{\max}` of the edge, where the sensor's rotated range and ours can fall
+on different sides of ``max_range`` (a few bearings in a hundred for targets placed exactly
+there). Deciding that sliver as the sensor does needs the core to compute the range in
+the rotated frame as Stone Soup does; it is not done here.
+
 Coverage is planar: a 3-D sensor (``RadarElevationBearingRange``) is read on the x/y
 plane of its ``position_mapping``, exact for targets at the sensor's height; roll or
 pitch would tilt the coverage out of the plane and raise. The clutter density is the
@@ -27,7 +40,7 @@ measurement space.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -35,6 +48,7 @@ from stonesoup.base import Property
 from stonesoup.buffered_generator import BufferedGenerator
 from stonesoup.feeder.base import DetectionFeeder
 
+from .._component import as_float, as_position_mapping
 from ..clutter import ClutterDensityModel
 from ..context import DetectionSet
 from ..detection import DetectionProbabilityModel
@@ -80,26 +94,46 @@ def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: 
     within its ``max_range`` (and rotating field of view), 0 outside; λ the constant
     ``clutter_density``. Use it with :func:`sensor_pose` at each scan."""
     kind = _kind(sensor)
-    p = float(prob_detection)
+    p = as_float(prob_detection, "prob_detection", finite=False)
     if not 0.0 <= p <= 1.0:
         raise ValueError(f"prob_detection: must lie in [0, 1], got {prob_detection!r}")
+    density = as_float(clutter_density, "clutter_density", finite=False)
+    if not (math.isfinite(density) and density > 0):
+        raise ValueError(f"clutter_density: must be a finite density > 0 (per unit of the "
+                         f"detections' measurement space), got {clutter_density!r}")
+    if not isinstance(name, str):
+        raise TypeError(f"name: expected a string label, got {type(name).__name__} {name!r}")
     factors: list = [p]
-    max_range = float(sensor.max_range)
+    max_range = _sensor_number(sensor, "max_range")
     if math.isnan(max_range) or max_range < 0:
         raise ValueError(f"sensor: max_range must be >= 0, got {sensor.max_range!r}")
     if math.isfinite(max_range):
         # r <= max_range is detectable: the edge belongs to the band below.
         factors.append(RangeBands(edges=(max_range,), values=(1.0, 0.0), upper_owns=(False,)))
     if kind in ROTATING:
-        fov = float(sensor.fov_angle)
+        fov = _sensor_number(sensor, "fov_angle")
         if not fov > 0:
             raise ValueError(f"sensor: fov_angle must be > 0, got {sensor.fov_angle!r}")
         if fov < 2 * math.pi:
             factors.append(AngularSector.field_of_view(0.0, fov))
-    mapping = tuple(int(m) for m in sensor.position_mapping[:2])
+    try:
+        mapping = as_position_mapping(tuple(sensor.position_mapping)[:2], "sensor")
+    except (TypeError, ValueError) as err:
+        raise type(err)(f"sensor: position_mapping {sensor.position_mapping!r} is not two "
+                        f"state indices of x and y ({str(err)[len('sensor: '):]})") from None
     return SensorModel(detection=DetectionProbabilityModel(factors=factors),
-                       clutter=ClutterDensityModel(factors=[float(clutter_density)]),
+                       clutter=ClutterDensityModel(factors=[density]),
                        position_mapping=mapping, name=name)
+
+
+def _sensor_number(sensor, attribute: str) -> float:
+    """A number the sensor holds (``max_range``, ``fov_angle``), named if it is none."""
+    value = getattr(sensor, attribute, None)
+    try:
+        return as_float(value, "sensor", finite=False)
+    except TypeError:
+        raise TypeError(f"sensor: {attribute} must be a number, got {type(value).__name__} "
+                        f"{value!r}") from None
 
 
 def sensor_pose(sensor) -> Pose:
@@ -156,28 +190,78 @@ class PlatformContextFeeder(DetectionFeeder):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         sensors = self._sensors()
-        models = list(self.sensor_models)
-        if len(models) != len(sensors) or not all(isinstance(m, SensorModel) for m in models):
+        models = self.sensor_models
+        if isinstance(models, SensorModel):
+            raise TypeError("sensor_models: expected a list of SensorModels, one per sensor of "
+                            "the simulator's platforms, got one SensorModel; wrap it in a list")
+        if isinstance(models, (str, bytes, Mapping)) or not isinstance(models, (Sequence,
+                                                                             np.ndarray)):
+            raise TypeError(f"sensor_models: expected a list of SensorModels, one per sensor "
+                            f"of the simulator's platforms, got {type(models).__name__}")
+        models = list(models)
+        for i, model in enumerate(models):
+            if not isinstance(model, SensorModel):
+                raise TypeError(f"sensor_models: item {i} is a {type(model).__name__}, not a "
+                                f"SensorModel")
+        if len(models) != len(sensors):
             raise ValueError(f"sensor_models: expected {len(sensors)} SensorModels (one per "
                              f"sensor of the simulator's platforms), got {len(models)}")
         if any(m.mounting is not None for m in models):
             raise ValueError("sensor_models: the sensors' poses already hold their mounting "
                              "offsets; give models without a mounting")
-        for sensor in sensors:
-            _kind(sensor)
+        for (where, sensor) in zip(self._places(), sensors):
+            try:
+                _kind(sensor)
+            except (TypeError, ValueError) as err:
+                raise type(err)(f"reader: {where}: {err}") from None
+        # The sensors as built: each scan's model is looked up by its sensor, so a sensor
+        # mounted later is named, not silently given another sensor's model.
+        self._models = {id(sensor): (sensor, model) for sensor, model in zip(sensors, models)}
 
-    def _sensors(self) -> list:
+    def _platforms(self) -> list:
         platforms = getattr(self.reader, "platforms", None)
-        if platforms is None:
+        if platforms is None or isinstance(platforms, (str, bytes)) \
+                or not isinstance(platforms, Iterable):
             raise TypeError(f"reader: expected a Stone Soup PlatformDetectionSimulator, got "
                             f"{type(self.reader).__name__}")
-        return [sensor for platform in platforms for sensor in platform.sensors]
+        platforms = list(platforms)
+        for i, platform in enumerate(platforms):
+            sensors = getattr(platform, "sensors", None)
+            if sensors is None or not isinstance(sensors, Iterable):
+                raise TypeError(f"reader: platform {i} ({type(platform).__name__}) has no "
+                                f"sensors list")
+        return platforms
+
+    def _sensors(self) -> list:
+        return [sensor for platform in self._platforms() for sensor in platform.sensors]
+
+    def _places(self) -> list[str]:
+        return [f"platform {i} sensor {j} ({type(sensor).__name__})"
+                for i, platform in enumerate(self._platforms())
+                for j, sensor in enumerate(platform.sensors)]
 
     @BufferedGenerator.generator_method
     def data_gen(self):
-        sensors, models = self._sensors(), list(self.sensor_models)
-        for k, (time, detections) in enumerate(self.reader):
-            sensor, model = sensors[k % len(sensors)], models[k % len(sensors)]
+        # The simulator yields, at each time, one scan per sensor of its platforms in order
+        # (read again at each scan: platforms may gain or lose sensors as it runs).
+        previous, step = None, 0
+        for time, detections in self.reader:
+            step = step + 1 if time == previous else 0
+            previous = time
+            sensors = self._sensors()
+            if not sensors:
+                raise ValueError(f"reader: a scan at {time}, but the simulator's platforms "
+                                 f"have no sensors now")
+            index = step % len(sensors)
+            sensor = sensors[index]
+            known = self._models.get(id(sensor))
+            if known is None or known[0] is not sensor:
+                where = self._places()[index]
+                raise ValueError(
+                    f"sensor_models: no model for {where}, which made the scan at {time}: it "
+                    f"was mounted after the PlatformContextFeeder was built (the models are "
+                    f"one per sensor then); build the feeder once every sensor is mounted")
+            model = known[1]
             yield time, DetectionSet(detections, model.context(sensor_pose(sensor), time))
 
 
