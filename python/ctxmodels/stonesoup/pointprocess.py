@@ -99,7 +99,7 @@ class _ContextPointProcessUpdate:
     """The context path shared by the PHD and LCC updaters (mixed into their stock classes)."""
 
     def update(self, hypotheses, detector_context: DetectorContext | None = None):
-        """Update the mixture with the hypotheses of one scan, ordered by detection with the
+        r"""Update the mixture with the hypotheses of one scan, ordered by detection with the
         missed-detection hypotheses last (``GaussianMixtureHypothesiser(...,
         order_by_detection=True)``).
 
