@@ -325,11 +325,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
                                 if key == id(model) or isinstance(key, tuple)}
         return cached
 
-    # --- the scan -------------------------------------------------------------------------
-    def __next__(self):
-        time, detections = next(self.detector_iter)
-        return self._scan(time, in_stable_order(detections))
-
+    # --- the scan (``__next__``: the parent's, which checks the scan first) --------------
     def _scan(self, time, detections):
         result = self._array_scan(time, detections)
         if result is None:

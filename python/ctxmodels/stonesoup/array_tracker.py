@@ -225,8 +225,8 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
             arrays.retain(self._inside_mask(arrays.means()[:, list(mapping)]).tolist())
 
     # --- a scan -----------------------------------------------------------------------------
-    def __next__(self) -> tuple[datetime.datetime, set[Track]]:
-        time, detections = next(self.detector_iter)
+    def _scan(self, time, detections) -> tuple[datetime.datetime, set[Track]]:
+        """One checked scan (the parent's ``__next__`` checks it and calls this)."""
         plan = _Plan.of(self)
         if plan is not None:  # (the component path sets it itself)
             self._region = scan_region(self.surveillance_region, time)
@@ -413,21 +413,16 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
 
 
 class _ComponentScan:
-    """Runs the parent's ``__next__`` for one scan on an already-fetched scan."""
+    """Runs the parent's scan (the component path) on an already-fetched, checked scan."""
 
     def __init__(self, tracker, time, detections):
         self.tracker, self.scan = tracker, (time, detections)
 
     def run(self):
         tracker = self.tracker
-        iterator = tracker.detector_iter
-        tracker.detector_iter = iter([self.scan])
-        try:
-            mixture = tracker.gaussian_mixture  # objects become authoritative
-            tracker.gaussian_mixture = mixture
-            return PointProcessMultiTargetTracker.__next__(tracker)
-        finally:
-            tracker.detector_iter = iterator
+        mixture = tracker.gaussian_mixture  # objects become authoritative
+        tracker.gaussian_mixture = mixture
+        return PointProcessMultiTargetTracker._scan(tracker, *self.scan)
 
 
 class _NoDetections(dict):

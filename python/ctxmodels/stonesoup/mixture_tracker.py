@@ -36,6 +36,7 @@ from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
 from .ordering import context_kwargs, in_stable_order, in_track_order
+from .scan_checks import checked_scan, naming_scan_errors
 
 
 class MultiTargetMixtureTracker(_StockMixtureTracker):
@@ -58,8 +59,11 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
         return list(order)
 
     def __next__(self) -> tuple[datetime.datetime, set[Track]]:
-        time, detections = next(self.detector_iter)
-        return self._scan(time, in_stable_order(detections))
+        # the scan checked first (see ctxmodels.stonesoup.scan_checks), so the array and
+        # component paths refuse the same scans with the same message
+        time, detections = checked_scan(self, next(self.detector_iter))
+        with naming_scan_errors(self, time, detections):
+            return self._scan(time, in_stable_order(detections))
 
     def _scan(self, time, detections) -> tuple[datetime.datetime, set[Track]]:
         """One scan of the stock loop on ``detections`` already in stable order."""

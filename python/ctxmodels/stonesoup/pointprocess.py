@@ -47,6 +47,7 @@ from ..foreign import as_array_context
 from .birth import MeasurementDrivenBirth
 from .ordering import context_kwargs, declares_context, in_stable_order
 from .reduction import reduce_mixture
+from .scan_checks import checked_scan, naming_scan_errors
 # CircularRegion lived here: YAML written with !ctxmodels.stonesoup.pointprocess.CircularRegion
 # still loads through this import.
 from .region import CircularRegion, scan_region  # noqa: F401
@@ -384,7 +385,14 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
         return [c for c, kept in zip(components, keep) if kept]
 
     def __next__(self) -> tuple[datetime.datetime, set[Track]]:
-        time, detections = next(self.detector_iter)
+        # the scan checked first (see ctxmodels.stonesoup.scan_checks), so the array and
+        # component paths refuse the same scans with the same message
+        time, detections = checked_scan(self, next(self.detector_iter))
+        with naming_scan_errors(self, time, detections):
+            return self._scan(time, detections)
+
+    def _scan(self, time, detections) -> tuple[datetime.datetime, set[Track]]:
+        """One scan of the component path on a checked scan."""
         context = getattr(detections, "detector_context", None)
         # Detections in value order, not set (address) order: hypothesis order, and so the
         # merge order among equal weights, is then the same in every process.
