@@ -27,7 +27,13 @@ Supported (anything else runs the component path of
   Soup's finite-difference Jacobian reproduced operation for operation) or
   :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange` (closed form);
 * scans with and without a ctxmodels detector context (P_D per track from the context's
-  array form, λ per detection, as the ctxmodels hypothesiser computes them).
+  array form, λ per detection, as the ctxmodels hypothesiser computes them);
+* tracks whose last state is a :class:`~stonesoup.types.state.GaussianState` (or a
+  subclass whose Properties a prediction copies) with a float64 or integer state vector
+  and covariance of the transition model's size, and a timestamp. Integer states (a track
+  started at ``[[0], [1], [0], [1]]``) are converted to float64, as NumPy converts them in
+  the stock predictor's product with the float64 transition matrix: the same numbers.
+  Other element types (object arrays, float32, long double) run the component path.
 
 Numbers: the same mathematics in other floating-point operations (f64 arithmetic where
 Stone Soup uses ``Probability`` log-space arithmetic, Cholesky inverses, another summation
@@ -99,6 +105,13 @@ from .mixture_tracker import MultiTargetMixtureTracker
 from .ordering import OrderedDetections, context_kwargs, in_stable_order, in_track_order
 
 _ASSOCIATORS = (JPDAwithEHM2, JPDAwithEHM, JPDA)
+#: Prior state vector and covariance types the array path takes: float64 and the integer
+#: types (a track started at ``[[0], [1], [0], [1]]``). The stock predictor multiplies an
+#: integer array by the float64 transition matrix, and NumPy converts it to float64 first:
+#: converted here once, the prediction is the same number.
+_PRIOR_DTYPES = frozenset(np.dtype(kind) for kind in (
+    np.float64, np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32,
+    np.uint64))
 _HYPOTHESISERS = (_StockPDAHypothesiser, PDAHypothesiser)
 
 
@@ -366,9 +379,9 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             vector, covar = getattr(prior, "state_vector", None), getattr(prior, "covar", None)
             stamp = getattr(prior, "timestamp", None)
             if not (_gaussian_prior_type(type(prior))
-                    and isinstance(vector, np.ndarray) and vector.dtype == np.float64
+                    and isinstance(vector, np.ndarray) and vector.dtype in _PRIOR_DTYPES
                     and vector.shape == (ndim, 1) and isinstance(covar, np.ndarray)
-                    and covar.dtype == np.float64 and covar.shape == (ndim, ndim)
+                    and covar.dtype in _PRIOR_DTYPES and covar.shape == (ndim, ndim)
                     and stamp is not None):
                 return None
             priors.append(prior)
