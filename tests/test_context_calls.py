@@ -93,7 +93,7 @@ def test_non_finite_or_unmappable_rows_raise_naming_the_argument():
     context = _sensor().context((0.0, 0.0, 0.0))
     states = _states(5)
     states[3, 2] = np.nan
-    with pytest.raises(ValueError, match="states"):
+    with pytest.raises(ValueError, match="^means: row 3"):
         context.prob_detection_array(states)
     with pytest.raises(ValueError, match="position_mapping"):
         context.prob_detection_array(np.zeros((2, 2)))
@@ -191,5 +191,5 @@ def test_scalar_expected_pd_refuses_what_the_general_path_refuses():
     bad = np.diag([-4.0, 1.0, 9.0, 1.0])  # not positive semi-definite
     with pytest.raises(ValueError, match="covars"):
         context.prob_detection(GaussianStatePrediction(StateVector([100.0, 0, 0, 0]), bad))
-    with pytest.raises(ValueError, match="means"):
+    with pytest.raises(ValueError, match="^hypothesis_or_state: row 0"):
         context.prob_detection(GaussianStatePrediction(StateVector([np.inf, 0, 0, 0]), np.eye(4)))

@@ -53,7 +53,7 @@ def test_position_mapping_out_of_range_or_invalid():
         raises(ValueError, "position_mapping", SensorModel, detection=RADAR, clutter=CLUTTER,
                position_mapping=mapping)
     context = SensorModel(detection=RADAR, clutter=CLUTTER, position_mapping=(0, 6)).context(POSE)
-    message = raises(ValueError, "states", context.prob_detection_array, np.zeros((3, 4)))
+    message = raises(ValueError, "means", context.prob_detection_array, np.zeros((3, 4)))
     assert "(0, 6)" in message
 
 
@@ -146,7 +146,7 @@ def test_non_finite_positions_name_states_and_the_first_bad_row(n, bad_rows):
         assert f"row {bad_rows[0]}" in message
     message = raises(ValueError, "means", RADAR.expected, POSE, states, np.tile(np.eye(4), (n, 1, 1)))
     assert f"row {bad_rows[0]}" in message
-    message = raises(ValueError, "states", SENSOR.context(POSE).prob_detection_array, states)
+    message = raises(ValueError, "means", SENSOR.context(POSE).prob_detection_array, states)
     assert f"row {bad_rows[0]}" in message
 
 

@@ -159,9 +159,13 @@ class ModelComponent(Base):
                 self._replace(name, frozen)
 
 
+#: Types NumPy or Python count as numbers that are not quantities here (flags, durations).
+_NOT_NUMBERS = (bool, np.bool_, np.timedelta64, np.datetime64)
+
+
 def as_float(value: Any, name: str, *, finite: bool = True) -> float:
     """`value` as a float, with a clear error naming the argument."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+    if isinstance(value, _NOT_NUMBERS) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name}: expected a number, got {type(value).__name__}")
     value = float(value)
     if finite and not math.isfinite(value):
@@ -184,7 +188,7 @@ def as_sequence(values: Any, name: str, what: str = "items") -> tuple:
 
 def as_int(value: Any, name: str, *, low: int = 0, high: int | None = None) -> int:
     """An integer of any type (Python or NumPy, not bool) in [low, high], naming `name`."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Integral, np.integer)):
+    if isinstance(value, _NOT_NUMBERS) or not isinstance(value, (numbers.Integral, np.integer)):
         raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {value!r}")
     value = int(value)
     if value < low or (high is not None and value > high):
@@ -214,6 +218,10 @@ def as_position_mapping(mapping: Any, name: str = "position_mapping") -> tuple[i
     return x, y
 
 
+#: NumPy dtype kinds read as real numbers: booleans, integers, floats.
+_REAL_KINDS = "biuf"
+
+
 def as_array(array: Any, name: str, ndim: int, shape_text: str | None = None) -> np.ndarray:
     """A C-contiguous, aligned float64 array of `ndim` dimensions from `array`, or a clear
     error naming it. Unaligned input (a view into a byte buffer) is copied: the core reads
@@ -225,17 +233,18 @@ def as_array(array: Any, name: str, ndim: int, shape_text: str | None = None) ->
         values = np.asarray(array)
     except Exception as err:  # ragged lists and the like
         raise TypeError(f"{name}: cannot be read as a numeric array ({err})") from None
-    if values.dtype == object or not (np.issubdtype(values.dtype, np.number) or values.dtype == np.bool_):
-        raise TypeError(f"{name}: must be a numeric array, got dtype {values.dtype}")
-    if np.iscomplexobj(values):
-        raise TypeError(f"{name}: must be real, got dtype {values.dtype}")
+    if values.dtype.kind not in _REAL_KINDS:  # (timedelta64 counts as an integer to NumPy)
+        raise TypeError(f"{name}: must be a real numeric array, got dtype {values.dtype}")
     if values.ndim != ndim:
         raise ValueError(f"{name}: must be {shape_text or f'a {ndim}-D array'}, got shape {values.shape}")
     return np.require(values, dtype=np.float64, requirements=["C", "A"])
 
 
 def as_rows(array: Any, name: str, *, ncols: int | None = None) -> np.ndarray:
-    """A C-contiguous, aligned (N, D) float64 array from `array`, or a clear error naming it."""
+    """A C-contiguous, aligned (N, D) float64 array from `array`, or a clear error naming it;
+    with ``ncols`` an empty sequence is the (0, ncols) array (a scan without detections)."""
+    if ncols is not None and isinstance(array, (list, tuple)) and len(array) == 0:
+        return np.empty((0, ncols))
     rows = as_array(array, name, 2, "a 2-D array of rows")
     if ncols is not None and rows.shape[1] != ncols:
         raise ValueError(f"{name}: must have {ncols} columns, got shape {rows.shape}")

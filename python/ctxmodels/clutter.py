@@ -10,7 +10,7 @@ from . import _core
 from ._component import ModelComponent, as_array, as_float, as_rows, as_sequence, check_out
 from .clutter_map import ClutterMap
 from .coast import CoastalClutter
-from .pose import Pose
+from .pose import Pose, pose_tuple
 from .range_bands import RangeBands
 
 
@@ -165,5 +165,5 @@ class ClutterDensityModel(ModelComponent):
             if ranges.shape != (n,):
                 raise ValueError(f"ranges: must have {n} entries, got shape {ranges.shape}")
             inputs["ranges"] = ranges
-        return self._compiled().evaluate(pose.as_tuple(), positions, metadata,
+        return self._compiled().evaluate(pose_tuple(pose), positions, metadata,
                                          check_out(out, n, **inputs), ranges)

@@ -267,6 +267,15 @@ def _particle_weights(weights, n: int) -> np.ndarray:
     return w
 
 
+def _renamed(err: Exception, inner: str, outer: str) -> Exception:
+    """``err`` with the argument name ``inner`` that starts its message (the model's) as the
+    caller's ``outer``: the error names what the caller passed."""
+    message = str(err)
+    if message.startswith(f"{inner}:"):
+        return type(err)(f"{outer}:{message[len(inner) + 1:]}")
+    return err
+
+
 class DetectorContext(Base, *_UPSTREAM_CONTEXT):
     r"""The observability of one sensor at one scan: :math:`P_D(x; S)` and
     :math:`\lambda(z; S)` for the sensor state :math:`S` (its pose at the scan).
@@ -298,6 +307,17 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
     #: a Property is set, kept in pickles and copies.
     _snapshot = None
 
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        if not isinstance(self.sensor_model, SensorModel):
+            raise TypeError(f"sensor_model: expected a SensorModel, got "
+                            f"{type(self.sensor_model).__name__}")
+        if not isinstance(self.pose, Pose):
+            raise TypeError(f"pose: expected a Pose, got {type(self.pose).__name__}")
+        if self.timestamp is not None and not isinstance(self.timestamp, datetime.datetime):
+            raise TypeError(f"timestamp: expected a datetime.datetime or None, got "
+                            f"{type(self.timestamp).__name__} {self.timestamp!r}")
+
     def __eq__(self, other):
         return self is other
 
@@ -323,17 +343,20 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         """P_D for N states: ``means`` (N, D); with ``covars`` (N, D, D) and a sensor model
         whose ``pd_evaluation`` is not ``'mean'``, the expectation over each Gaussian."""
         calls = self._scan_calls or self._calls()
-        if covars is None or calls.mean_only:
-            # the common case (float64 rows, usable out) in one call; else converted here
-            pd = calls.at_pose.evaluate(means, out)
-            if pd is not None:
-                return pd
         model = self.sensor_model
-        mapping = tuple(model.position_mapping)
-        if covars is None or calls.mean_only:
-            return calls.detection.evaluate(self.pose, means, mapping, out=out)
-        return calls.detection.expected(self.pose, means, covars, mapping,
-                                        model.pd_evaluation, model.pd_order, out=out)
+        try:
+            if covars is None or calls.mean_only:
+                # the common case (float64 rows, usable out) in one call; else converted here
+                pd = calls.at_pose.evaluate(means, out)
+                if pd is not None:
+                    return pd
+                return calls.detection.evaluate(self.pose, means, tuple(model.position_mapping),
+                                                out=out)
+            return calls.detection.expected(self.pose, means, covars,
+                                            tuple(model.position_mapping), model.pd_evaluation,
+                                            model.pd_order, out=out)
+        except (TypeError, ValueError) as err:
+            raise _renamed(err, "states", "means") from None
 
     def prob_detection_particles(self, particles, *, log: bool = False, missed: bool = False
                                  ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
@@ -404,9 +427,12 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         if pd is not None:
             return calls.probability(pd)
         try:
-            vector = np.asarray(vector, dtype=np.float64)
+            vector = np.asarray(vector)
+            if vector.dtype.kind in "mMUSV":  # (NumPy would read timedelta64 as integers)
+                raise TypeError
+            vector = vector.astype(np.float64, copy=False)  # object: Stone Soup's angles
         except (TypeError, ValueError):
-            raise TypeError(f"hypothesis_or_state: cannot read a state vector from "
+            raise TypeError(f"hypothesis_or_state: cannot read a numeric state vector from "
                             f"{type(hypothesis_or_state).__name__}") from None
         if vector.ndim == 2 and vector.shape[1] > 1:  # particles: (D, N)
             pd = self.prob_detection_array(vector.T)
@@ -417,7 +443,10 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         mean = vector.reshape(1, -1)
         covar = getattr(state, "covar", None)
         covars = None if covar is None else np.asarray(covar, dtype=np.float64)[np.newaxis]
-        return Probability(float(self.prob_detection_array(mean, covars)[0]))
+        try:
+            return Probability(float(self.prob_detection_array(mean, covars)[0]))
+        except (TypeError, ValueError) as err:
+            raise _renamed(err, "means", "hypothesis_or_state") from None
 
     # --- clutter ---------------------------------------------------------------------------
     def clutter_spatial_density_array(self, positions, metadata=None, *, ranges=None,

@@ -11,7 +11,7 @@ from ._component import (ModelComponent, as_array, as_columns, as_float, as_int,
                          as_position_mapping, as_rows, as_sequence, check_out)
 from .detection_estimate import DetectionEstimate
 from .land import LandMask, LineOfSight
-from .pose import Pose
+from .pose import Pose, pose_tuple
 from .range_bands import RangeBands
 from .sector import AngularSector
 
@@ -80,7 +80,7 @@ class DetectionProbabilityModel(ModelComponent):
         """P_D at each row of ``states`` (N, D) for a sensor at ``pose``."""
         rows = as_rows(states, "states")
         mapping = _mapping_within(position_mapping, rows, "states")
-        return self._compiled().evaluate(pose.as_tuple(), rows, mapping,
+        return self._compiled().evaluate(pose_tuple(pose), rows, mapping,
                                          check_out(out, rows.shape[0], states=rows))
 
     def evaluate_particles(self, pose: Pose, particles, position_mapping=(0, 2), *, log=False,
@@ -90,7 +90,7 @@ class DetectionProbabilityModel(ModelComponent):
         :meth:`~ctxmodels.DetectorContext.prob_detection_particles`."""
         columns = as_columns(particles, "particles")
         mapping = as_position_mapping(position_mapping)
-        return self._compiled().evaluate_particles(pose.as_tuple(), columns, mapping,
+        return self._compiled().evaluate_particles(pose_tuple(pose), columns, mapping,
                                                    bool(log), bool(missed))
 
     def expected(self, pose: Pose, means, covars, position_mapping=(0, 2), rule="cubature",
@@ -100,7 +100,7 @@ class DetectionProbabilityModel(ModelComponent):
         covars = as_array(covars, "covars", 3, "(N, D, D)")
         mapping = _mapping_within(position_mapping, means, "means")
         order = as_int(order, "order", low=1, high=MAX_ORDER)
-        return self._compiled().expected(pose.as_tuple(), means, covars, mapping, rule, order,
+        return self._compiled().expected(pose_tuple(pose), means, covars, mapping, rule, order,
                                          check_out(out, means.shape[0], means=means, covars=covars))
 
 

@@ -34,9 +34,28 @@ class Pose(ModelComponent):
         return float(self.x), float(self.y), float(self.heading)
 
 
-def pose_tuple(pose) -> tuple[float, float, float]:
+def as_pose(pose, name: str = "pose") -> Pose:
+    """``pose``, a :class:`Pose` or an (x, y, heading) sequence of finite numbers, as a
+    :class:`Pose`; TypeError or ValueError naming ``name`` for anything else."""
+    if isinstance(pose, Pose):
+        return pose
+    if isinstance(pose, (str, bytes)) or not isinstance(pose, (Sequence, np.ndarray)):
+        raise TypeError(f"{name}: expected a Pose or an (x, y, heading) sequence, got "
+                        f"{type(pose).__name__}")
+    values = tuple(np.ravel(pose)) if isinstance(pose, np.ndarray) else tuple(pose)
+    if len(values) != 3:
+        raise TypeError(f"{name}: expected a Pose or an (x, y, heading) sequence, got "
+                         f"{len(values)} values")
+    try:
+        x, y, heading = (as_float(v, axis) for v, axis in zip(values, ("x", "y", "heading")))
+    except (TypeError, ValueError) as err:
+        raise type(err)(f"{name}: {err}") from None
+    return _computed_pose(x, y, heading)
+
+
+def pose_tuple(pose, name: str = "pose") -> tuple[float, float, float]:
     """``pose`` (a :class:`Pose` or an (x, y, heading) sequence) as the core's tuple."""
-    return pose.as_tuple() if isinstance(pose, Pose) else Pose(*pose).as_tuple()
+    return as_pose(pose, name).as_tuple()
 
 
 def _computed_pose(x: float, y: float, heading: float) -> Pose:

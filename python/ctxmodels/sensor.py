@@ -9,7 +9,7 @@ from stonesoup.base import Property
 from ._component import ModelComponent, as_int, as_position_mapping
 from .clutter import ClutterDensityModel
 from .detection import MAX_ORDER, PD_RULES, DetectionProbabilityModel
-from .pose import Mounting, Pose
+from .pose import Mounting, Pose, as_pose
 
 
 class SensorModel(ModelComponent):
@@ -72,10 +72,5 @@ class SensorModel(ModelComponent):
         """The :class:`~ctxmodels.DetectorContext` of a scan taken with the *platform* at
         ``pose`` (a :class:`Pose` or an (x, y, heading) triple)."""
         from .context import DetectorContext
-        if not isinstance(pose, Pose):
-            try:
-                x, y, heading = pose
-            except (TypeError, ValueError):
-                raise TypeError(f"pose: expected a Pose or (x, y, heading), got {pose!r}") from None
-            pose = Pose(x=x, y=y, heading=heading)
-        return DetectorContext(sensor_model=self, pose=self.sensor_pose(pose), timestamp=timestamp)
+        return DetectorContext(sensor_model=self, pose=self.sensor_pose(as_pose(pose)),
+                               timestamp=timestamp)
