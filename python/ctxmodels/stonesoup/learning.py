@@ -10,13 +10,14 @@ the scans that follow. :class:`ClutterMapLearner` is the learner of clutter maps
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 from stonesoup.base import Base, Property
 from stonesoup.tracker.base import Tracker
 
+from .._component import as_position_mapping
 from ..clutter_map import ClutterMap
 from ..context import detection_positions, measured_ranges
 from ..detection import DetectionProbabilityModel
@@ -35,10 +36,13 @@ class _GatedLearner(Base):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
+        # Checked now (any integer type, stored as a tuple of ints); whether the tracks'
+        # states hold these indices is checked at each scan, naming the track.
+        self.position_mapping = as_position_mapping(self.position_mapping)
         radius = self.gate_radius
         if radius is None and not self._gated:
             return
-        if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer,
+        if isinstance(radius, (bool, np.bool_)) or not isinstance(radius, (int, float, np.integer,
                                                                np.floating)) \
                 or not (math.isfinite(radius) and radius >= 0):
             raise ValueError(f"gate_radius: must be a finite number of metres >= 0, got "
@@ -52,9 +56,19 @@ class _GatedLearner(Base):
     def _tracked(self, time, tracks) -> tuple[list, np.ndarray]:
         """The tracks with a state at the scan (in track order) and their positions (T, 2)."""
         x, y = self.position_mapping
+        if tracks is None or isinstance(tracks, (str, bytes)) or not isinstance(tracks, Iterable):
+            raise TypeError(f"tracks: expected the tracker's tracks (a set of Tracks) at the "
+                            f"scan at {time}, got {type(tracks).__name__}")
         tracked = [t for t in in_track_order(tracks) if len(t) and t.timestamp == time]
-        states = np.array([[float(t.state_vector[x, 0]), float(t.state_vector[y, 0])]
-                           for t in tracked], dtype=np.float64).reshape(-1, 2)
+        rows = []
+        for track in tracked:
+            vector = np.asarray(track.state_vector)
+            if vector.ndim != 2 or max(x, y) >= vector.shape[0]:
+                raise ValueError(f"position_mapping: ({x}, {y}) is out of range for the "
+                                 f"{vector.shape[0] if vector.ndim else 0}-D state of track "
+                                 f"{getattr(track, 'id', '?')} at the scan at {time}")
+            rows.append([float(vector[x, 0]), float(vector[y, 0])])
+        states = np.array(rows, dtype=np.float64).reshape(-1, 2)
         return tracked, states
 
 
@@ -116,7 +130,7 @@ class ClutterMapLearner(_GatedLearner):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)  # (checks gate_radius where it is used)
-        if self.weighting not in _WEIGHTINGS:
+        if not isinstance(self.weighting, str) or self.weighting not in _WEIGHTINGS:
             raise ValueError(f"weighting: must be one of {', '.join(_WEIGHTINGS)}, got "
                              f"{self.weighting!r}")
         if self.weighting == "posterior" and self.gate_radius is not None:
@@ -201,8 +215,8 @@ class DetectionLearner(_GatedLearner):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        if isinstance(self.confirmation, bool) or not isinstance(self.confirmation, (int, np.integer)) \
-                or self.confirmation < 0:
+        if isinstance(self.confirmation, (bool, np.bool_)) \
+                or not isinstance(self.confirmation, (int, np.integer)) or self.confirmation < 0:
             raise ValueError(f"confirmation: must be an integer >= 0, got {self.confirmation!r}")
         self._detections = {}  # track id -> detections by the sensor so far
         self._others = {}  # id(model) -> (model, {id(estimate): its other factors' model})
@@ -253,7 +267,19 @@ class LearningTracker(Tracker):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        for i, learner in enumerate(self.learners):
+        tracker = self.tracker
+        if tracker is None or not hasattr(tracker, "detector") \
+                or not callable(getattr(tracker, "__iter__", None)):
+            raise TypeError(f"tracker: expected a Stone Soup tracker (iterable, with a "
+                            f"detector), got {type(tracker).__name__}")
+        learners = self.learners
+        if callable(getattr(learners, "learn", None)):
+            raise TypeError(f"learners: expected a list of learners, got one "
+                            f"{type(learners).__name__}; wrap it in a list")
+        if isinstance(learners, (str, bytes, Mapping)) or not isinstance(learners, Sequence):
+            raise TypeError(f"learners: expected a list of objects with learn(time, "
+                            f"detections, tracks), got {type(learners).__name__}")
+        for i, learner in enumerate(learners):
             if not callable(getattr(learner, "learn", None)):
                 raise TypeError(f"learners: learner {i} ({type(learner).__name__}) has no "
                                 "learn(time, detections, tracks)")
