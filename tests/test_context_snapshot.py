@@ -133,3 +133,35 @@ def test_the_snapshot_is_the_estimate_bit_for_bit():
     assert DetectionProbabilityModel(factors=[learned]).frozen().factors[0] == learned.bands()
     plain = DetectionProbabilityModel(factors=[0.5, RangeBands(edges=[1.0], values=[1.0, 0.0])])
     assert plain.frozen() is plain
+
+
+def test_every_clutter_path_reads_the_map_as_it_stands():
+    """λ has one rule on every path: a ClutterMap is read as it stands at the call."""
+    from stonesoup.models.measurement.linear import LinearGaussian
+    from stonesoup.types.detection import Detection
+    from ctxmodels import ClutterMap
+    learned = ClutterMap(space="world-xy", edges=([0.0, 10.0, 20.0], [-10.0, 10.0]),
+                         prior_intensity=1e-3, prior_scans=2.0, forgetting=1.0)
+    sensor_model = SensorModel(detection=DetectionProbabilityModel(factors=[0.9]),
+                               clutter=ClutterDensityModel(factors=[2.0, learned]))
+    context = sensor_model.context(Pose(x=0.0, y=0.0))
+    positions = np.array([[5.0, 0.0], [15.0, 1.0], [30.0, 0.0]])
+    model = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
+    detections = [Detection(StateVector(p), measurement_model=model) for p in positions]
+    paths = {
+        "array C float64": lambda: context.clutter_spatial_density_array(positions),
+        "array list": lambda: context.clutter_spatial_density_array(positions.tolist()),
+        "array Fortran": lambda: context.clutter_spatial_density_array(np.asfortranarray(positions)),
+        "array ranges": lambda: context.clutter_spatial_density_array(
+            positions, ranges=np.full(3, np.nan)),
+        "detections": lambda: context.clutter_spatial_density_detections(detections),
+        "one by one": lambda: np.array([context.clutter_spatial_density(d) for d in detections]),
+    }
+    for path in paths.values():
+        path()  # every path has been called once before the update
+    for _ in range(30):
+        learned.update((0.0, 0.0, 0.0), [[5.0, 0.0]] * 4)
+    expected = 2.0 * learned.intensity((0.0, 0.0, 0.0), positions)
+    assert expected[0] > 10 * 2.0 * 1e-3  # the update moved the cell a lot
+    for name, path in paths.items():
+        np.testing.assert_array_equal(path(), expected, err_msg=name)
