@@ -10,10 +10,14 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import json
+import math
 import os
 import signal
 import threading
 from pathlib import Path
+
+import numpy as np
 
 
 def write_atomic(path: Path, text: str) -> None:
@@ -27,6 +31,37 @@ def write_atomic(path: Path, text: str) -> None:
     except BaseException:
         partial.unlink(missing_ok=True)
         raise
+
+
+def _plain(value):
+    """``value`` with NumPy scalars and arrays as Python numbers and lists, and every NaN
+    or infinity as None (JSON has no token for them)."""
+    if isinstance(value, dict):
+        return {key: _plain(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(item) for item in value]
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, (int, np.integer)) and not isinstance(value, np.bool_):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    number = float(value)  # float, NumPy floats (and anything else float() takes)
+    return number if math.isfinite(number) else None
+
+
+def json_text(value) -> str:
+    """The study's one JSON writer (results, findings, sweep): indented, NumPy values as
+    plain numbers, and NaN/±infinity as ``null`` — strict JSON, which every parser reads
+    (Python's ``json`` would otherwise write the non-standard ``NaN`` token)."""
+    return json.dumps(_plain(value), indent=2, allow_nan=False)
+
+
+def write_json(path: Path, value) -> None:
+    """:func:`json_text` of ``value`` written with :func:`write_atomic`."""
+    write_atomic(path, json_text(value))
 
 
 def worker_ignores_sigint() -> None:

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -18,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from . import findings as findings_
-from .executors import write_atomic
+from .executors import write_atomic, write_json
 from .findings import COMBINED, seed_scores
 from .statistics import bootstrap_mean
 
@@ -182,7 +181,7 @@ class ExperimentResults:
                    "track_counts": self.track_counts()}
         write_atomic(paths["markdown"], self.markdown() + "\n")
         write_atomic(paths["csv"], table.getvalue())
-        write_atomic(paths["json"], json.dumps(summary, indent=2, default=float))
+        write_json(paths["json"], summary)  # (NaN, e.g. the interval of one seed: null)
         write_atomic(paths["findings"], findings_.findings_markdown(self.findings()) + "\n")
-        write_atomic(paths["findings_json"], json.dumps(findings, indent=2, default=float))
+        write_json(paths["findings_json"], findings)
         return paths

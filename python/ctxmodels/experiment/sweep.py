@@ -17,7 +17,6 @@ share one pool. Each finding is evaluated per cell exactly as in the main study
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import time
 from collections.abc import Sequence
@@ -27,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from . import findings as findings_
-from .executors import write_atomic
+from .executors import write_atomic, write_json
 from .report import ExperimentResults
 from .runner import ExperimentConfig, run_jobs
 from .scenarios import LidarConfig, RadarConfig
@@ -165,9 +164,9 @@ class SweepResults:
             for cell, result in by_cell.items():
                 rows.append({**dataclasses.asdict(cell), **result.as_dict()})
         write_atomic(paths["markdown"], self.markdown() + "\n")
-        write_atomic(paths["json"], json.dumps(
-            {"seeds": list(self.config.base.seeds), "duration": self.config.base.duration,
-             "cells": rows, "scores": self.tracker_scores()}, indent=2, default=float))
+        write_json(paths["json"], {"seeds": list(self.config.base.seeds),
+                                   "duration": self.config.base.duration,
+                                   "cells": rows, "scores": self.tracker_scores()})
         if plots:
             paths.update(self._plot(folder))
         return paths
