@@ -144,9 +144,13 @@ class ExperimentResults:
         return "\n".join(lines)
 
     def timing_line(self) -> str:
-        cpu = sum(r.seconds for r in self.results)
+        """Wall time of the study; the runs' tracking as CPU time (each run's process CPU
+        time while its tracker ran, summed) and as wall time (each run's tracking wall
+        time, summed: more than the CPU time when runs share a busy core)."""
+        cpu = sum(r.cpu_seconds for r in self.results)
+        busy = sum(r.seconds for r in self.results)
         return (f"{len(self.results)} runs; wall time {self.wall_seconds:.0f} s; tracking "
-                f"{cpu:.0f} CPU-s in total.")
+                f"{cpu:.0f} CPU-s in total ({busy:.0f} s of the runs' wall time).")
 
     def markdown(self) -> str:
         return "\n\n".join([

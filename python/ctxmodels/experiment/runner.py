@@ -76,6 +76,9 @@ class JobResult:
     #: track-count report.
     tracks_per_time: tuple = ()
     truths_per_time: tuple = ()
+    #: CPU time of the job's process while its tracker ran (``seconds`` is the wall time:
+    #: more than this when the job shared a busy core).
+    cpu_seconds: float = 0.0
 
 
 @contextlib.contextmanager
@@ -125,7 +128,9 @@ def run_job(job: Job) -> JobResult:
     with collector_paused():
         run = simulated_run(job.scenario, job.seed, job.duration, job.radar, job.lidar)
         tracker = build_tracker(spec, run, fast=not job.stock)
+        cpu_started = time.process_time()
         seconds, scans, all_tracks = track_scans(tracker)
+        cpu_seconds = time.process_time() - cpu_started
         # By content, not set (address) order: the metrics then see the same track order
         # in every process.
         reported = [track for track in in_track_order(all_tracks) if len(track)]
@@ -134,7 +139,8 @@ def run_job(job: Job) -> JobResult:
         digest = tracks_digest(reported) if job.digest else ""
         del tracker, all_tracks, reported
     return JobResult(job, score.hota, score.gospa, seconds, scans, score.track_count, kept,
-                     digest, score.tracks_per_time, score.truths_per_time)
+                     digest, score.tracks_per_time, score.truths_per_time,
+                     cpu_seconds=cpu_seconds)
 
 
 def kept_paths(tracks, epoch) -> list:
