@@ -77,7 +77,9 @@ class JobResult:
     tracks_per_time: tuple = ()
     truths_per_time: tuple = ()
     #: CPU time of the job's process while its tracker ran (``seconds`` is the wall time:
-    #: more than this when the job shared a busy core).
+    #: more than this when the job shared a busy core). Jobs run one at a time in a process
+    #: of the default pool; an executor running jobs in threads of one process counts the
+    #: other threads' CPU time too.
     cpu_seconds: float = 0.0
 
 
@@ -283,27 +285,41 @@ def run_jobs(jobs: list[Job], workers: int | None = None,
 
 class _Progress:
     """A progress bar over the jobs' estimated cost (:func:`job_cost`), so its time estimate
-    holds from the first finished job although a JPDA run costs twenty radar-only runs."""
+    holds from the first finished job although a JPDA run costs twenty radar-only runs.
+
+    The bar counts integer milli-units of estimated cost: the total is the sum of the very
+    integers the finished jobs add, so the count ends exactly on the total. (Rounding the
+    total and each job's cost separately let the count overshoot it: tqdm warned "clamping
+    frac to range [0, 1]" and showed a negative time left.)"""
 
     def __init__(self, jobs: list[Job], enabled: bool):
         self._total, self._done = len(jobs), 0
         self._bar = None
+        if not enabled:
+            return
         try:
             from tqdm import tqdm
-        except ImportError:  # tqdm is an optional extra
+        except ImportError:  # (a base dependency; an install that lost it runs without a bar)
             return
+        total = sum(_progress_weight(job) for job in jobs)
         # The mean rate since the start (smoothing 0), not a moving average: the jobs finish
         # in bursts (a group's short jobs together), which would make the estimate swing.
-        self._bar = tqdm(total=round(sum(job_cost(j) for j in jobs), 1), disable=not enabled,
-                         unit="cpu-s", smoothing=0, bar_format="{l_bar}{bar}| {postfix} [{elapsed}<{remaining}]")
+        self._bar = tqdm(total=total, unit="est-ms", smoothing=0,
+                         bar_format="{l_bar}{bar}| {postfix} [{elapsed}<{remaining}]")
         self._bar.set_postfix_str(f"0/{self._total} runs")
 
     def done(self, job: Job) -> None:
         self._done += 1
         if self._bar is not None:
             self._bar.set_postfix_str(f"{self._done}/{self._total} runs", refresh=False)
-            self._bar.update(round(job_cost(job), 1))
+            self._bar.update(_progress_weight(job))
 
     def close(self) -> None:
         if self._bar is not None:
             self._bar.close()
+
+
+def _progress_weight(job: Job) -> int:
+    """A job's share of the progress bar: its estimated cost in integer milli-units (at
+    least 1, so every finished job moves the bar)."""
+    return max(1, round(1000 * job_cost(job)))
