@@ -63,9 +63,25 @@ def number(low: float = -math.inf, high: float = math.inf, above: bool = False):
     return parse
 
 
+def require_module(module: str, option: str, why: str, instead: str = "") -> None:
+    """UsageError unless ``module`` can be imported (looked up, not imported): a study
+    must not run for minutes and then fail on a missing figure library."""
+    import importlib.util
+    try:
+        found = importlib.util.find_spec(module) is not None
+    except (ImportError, ValueError):
+        found = False
+    if not found:
+        raise UsageError(f"argument {option}: {why} need{'' if why.endswith('s') else 's'} "
+                         f"{module}, which is not installed: pip install \"ctxmodels[experiment]\""
+                         + (f" (or {instead})" if instead else ""))
+
+
 def check_experiment(args) -> None:
     """Checks what argparse cannot alone; normalises ``args.scenarios``/``args.trackers``
     and sets ``args.skipped``: the (tracker, scenario) pairs that will not run."""
+    if not getattr(args, "no_plots", False):
+        require_module("matplotlib", "--no-plots", "the figures", "pass --no-plots")
     from .experiment.scenarios import SCENARIOS
     from .experiment.trackers import TRACKERS, applicable
     args.scenarios = list(dict.fromkeys(args.scenarios))
@@ -132,6 +148,7 @@ def check_coverage(args) -> None:
     """Loads the --model files into ``args.models`` and checks the output file."""
     args.sensors = list(dict.fromkeys(args.sensors))
     args.models = load_models(args.model) if args.model else None
+    require_module("matplotlib", "--output", "a coverage map")
     output = Path(args.output)
     if output.is_dir():
         raise UsageError(f"argument --output: {output} is a folder; name a PNG file")
