@@ -93,32 +93,46 @@ def checked_scan(tracker, scan):
         if time < previous:
             raise ValueError(f"detector: {where} is earlier than the previous scan "
                              f"({previous}): scans must come in time order")
-    vectors = []
+    vectors, models = [], []
+    last_stamp = None  # (a scan's detections mostly share one timestamp object)
     for i, detection in enumerate(items):
-        vector = getattr(detection, "state_vector", None)
-        stamp = getattr(detection, "timestamp", False)
-        if vector is None or stamp is False or not hasattr(detection, "measurement_model"):
+        try:
+            vector = detection.state_vector
+            stamp = detection.timestamp
+            model = detection.measurement_model
+        except AttributeError:
+            vector = None
+        if vector is None:
             raise TypeError(f"detections: item {i} of {where} is a "
                             f"{type(detection).__name__}, not a detection (a state_vector, "
                             "a timestamp and a measurement_model)")
-        if isinstance(stamp, datetime.datetime) and _is_aware(stamp) != aware:
-            raise ValueError(
-                f"detections: the detection at {_vector_text(detection)} of {where} is "
-                f"timezone-{'aware' if not aware else 'naive'} ({stamp}) but the scan's time "
-                "is not: Python cannot subtract naive and aware times")
+        if stamp is not last_stamp:
+            if isinstance(stamp, datetime.datetime) and _is_aware(stamp) != aware:
+                raise ValueError(
+                    f"detections: the detection at {_vector_text(detection)} of {where} is "
+                    f"timezone-{'aware' if not aware else 'naive'} ({stamp}) but the scan's "
+                    "time is not: Python cannot subtract naive and aware times")
+            last_stamp = stamp
         vectors.append(vector)
-    _check_vectors(items, vectors, where)
+        models.append(model)
+    _check_vectors(items, vectors, models, where)
     tracker.__dict__["_scan_checks"] = (index + 1, time)
     return time, items
 
 
-def _check_vectors(items, vectors, where) -> None:
+def _length(vector) -> int:
+    shape = np.shape(vector)
+    return shape[0] if shape else 1
+
+
+def _check_vectors(items, vectors, models, where) -> None:
     """Every measurement vector finite, and as long as its own measurement model measures."""
     if not vectors:
         return
     try:
         rows = np.array(vectors, dtype=np.float64)
         finite = np.isfinite(rows).reshape(len(vectors), -1).all(axis=1)
+        length = rows.shape[1] if rows.ndim >= 2 else None  # shared by every vector
     except (TypeError, ValueError):  # vectors of different lengths (several sensors), or odd
         finite = []
         for vector in vectors:
@@ -127,23 +141,23 @@ def _check_vectors(items, vectors, where) -> None:
             except (TypeError, ValueError):
                 finite.append(False)
         finite = np.array(finite)
+        length = None
     if not finite.all():
         bad = [d for d, ok in zip(items, finite.tolist()) if not ok]
         row = min(_ordered_index(items, d) for d in bad)
         detection = in_stable_order(items)[row]
         raise ValueError(f"detections: row {row} of {where} is not finite "
-                         f"({_vector_text(detection)}): a measurement holds NaN or infinity")
-    sizes: dict[int, int | None] = {}
-    for detection, vector in zip(items, vectors):
-        model = detection.measurement_model
-        if model is None:
-            continue
-        size = sizes.get(id(model), -1)
-        if size == -1:
-            size = sizes[id(model)] = getattr(model, "ndim_meas", None)
-        if size is not None and np.shape(vector)[0] != size:
+                         f"({_vector_text(detection)}): a measurement holds NaN or infinity "
+                         "(or something that is not a number)")
+    distinct = {id(model): model for model in models if model is not None}
+    sizes = {key: getattr(model, "ndim_meas", None) for key, model in distinct.items()}
+    if length is not None and all(size in (None, length) for size in sizes.values()):
+        return  # one length, which every model measures
+    for detection, vector, model in zip(items, vectors, models):
+        size = None if model is None else sizes[id(model)]
+        if size is not None and _length(vector) != size:
             row = _ordered_index(items, detection)
-            raise ValueError(f"detections: row {row} of {where} has {np.shape(vector)[0]} "
+            raise ValueError(f"detections: row {row} of {where} has {_length(vector)} "
                              f"elements ({_vector_text(detection)}) but its measurement model "
                              f"measures {size}")
 
