@@ -102,7 +102,7 @@ from .fast_association import _copied_properties
 from .hypothesiser import PDAHypothesiser, is_detection_backed, scan_context
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiTargetMixtureTracker
-from .ordering import OrderedDetections, context_kwargs, in_stable_order, in_track_order
+from .ordering import OrderedDetections, context_kwargs, in_track_order
 
 _ASSOCIATORS = (JPDAwithEHM2, JPDAwithEHM, JPDA)
 #: Prior state vector and covariance types the array path takes: float64 and the integer
