@@ -304,14 +304,14 @@ class _Progress:
         total = sum(_progress_weight(job) for job in jobs)
         # The mean rate since the start (smoothing 0), not a moving average: the jobs finish
         # in bursts (a group's short jobs together), which would make the estimate swing.
-        self._bar = tqdm(total=total, unit="est-ms", smoothing=0,
-                         bar_format="{l_bar}{bar}| {postfix} [{elapsed}<{remaining}]")
-        self._bar.set_postfix_str(f"0/{self._total} runs")
+        # (the runs count as the description: tqdm puts a comma before a postfix)
+        self._bar = tqdm(total=total, unit="est-ms", smoothing=0, desc=f"0/{self._total} runs",
+                         bar_format="{desc} {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]")
 
     def done(self, job: Job) -> None:
         self._done += 1
         if self._bar is not None:
-            self._bar.set_postfix_str(f"{self._done}/{self._total} runs", refresh=False)
+            self._bar.set_description_str(f"{self._done}/{self._total} runs", refresh=False)
             self._bar.update(_progress_weight(job))
 
     def close(self) -> None:
