@@ -12,13 +12,16 @@ from __future__ import annotations
 
 import datetime
 import heapq
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+
+import numpy as np
 
 from stonesoup.base import Property
 from stonesoup.buffered_generator import BufferedGenerator
 from stonesoup.feeder.base import DetectionFeeder
 from stonesoup.reader import Reader
 
+from ..clutter import MetadataThreshold
 from ..context import DetectionSet
 from ..pose import PoseSource, time_kind
 from ..sensor import SensorModel
@@ -48,8 +51,8 @@ def _scans(source: Iterable, name: str, label: str = "",
         try:
             time, detections = item
         except (TypeError, ValueError):
-            raise TypeError(f"{name}: each item must be a (time, detections) pair, "
-                            f"got {item!r}") from None
+            raise TypeError(f"{name}: each item{label} must be a (time, detections) pair, "
+                            f"got {_short(item)}") from None
         kind = time_kind(time)
         if kind is not None:
             if first.kind is None:
@@ -68,11 +71,55 @@ def _scans(source: Iterable, name: str, label: str = "",
             raise ValueError(f"{name}: scans must come in time order, but a scan at {time} "
                              f"follows one at {previous}")
         previous = time
+        _check_detections(time, detections, name, label)
         yield time, detections
 
 
+def _check_detections(time, detections, name: str, label: str) -> None:
+    """A scan's detections must be a collection of detections (objects with a
+    ``state_vector``): None, text or a lone detection say so, naming the scan."""
+    if detections is None or isinstance(detections, (str, bytes, Mapping)) \
+            or hasattr(detections, "state_vector") or not isinstance(detections, Iterable):
+        raise TypeError(f"{name}: the scan at {time}{label} holds "
+                        f"{type(detections).__name__} {_short(detections)}, not a set of "
+                        f"detections (give an empty set for a scan without any)")
+    for detection in detections:
+        if not hasattr(detection, "state_vector"):
+            raise TypeError(f"{name}: the scan at {time}{label} holds "
+                            f"{type(detection).__name__} {_short(detection)}, not a detection")
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _required_metadata(model: SensorModel) -> tuple[str, ...]:
+    """The metadata keys every detection of the sensor must carry: those of its clutter
+    rules without a ``missing`` density."""
+    return tuple(dict.fromkeys(f.key for f in model.clutter.factors
+                               if isinstance(f, MetadataThreshold) and f.missing is None))
+
+
+def _check_metadata(time, detections, keys, name: str, label: str) -> None:
+    for detection in detections:
+        metadata = getattr(detection, "metadata", None) or {}
+        for key in keys:
+            if key not in metadata:
+                raise ValueError(f"{name}: a detection of the scan at {time}{label} has no "
+                                 f"{key!r} in its metadata, which the sensor's clutter rule "
+                                 f"on {key!r} reads (it has no `missing` density): "
+                                 f"{_short(detection)}")
+            value = metadata[key]
+            if isinstance(value, (bool, np.bool_)) or not isinstance(
+                    value, (int, float, np.integer, np.floating)):
+                raise TypeError(f"{name}: a detection of the scan at {time}{label} has "
+                                f"metadata {key!r} = {_short(value)}, not a number")
+
+
 def _sensor_label(feeder) -> str:
-    name = getattr(getattr(feeder, "sensor_model", None), "name", "")
+    name = getattr(feeder, "sensor_name", None) or \
+        getattr(getattr(feeder, "sensor_model", None), "name", "")
     return f" (sensor {name!r})" if name else ""
 
 
@@ -96,9 +143,14 @@ class ContextFeeder(DetectionFeeder):
     sensor_model: SensorModel = Property(doc="The sensor's observability model.")
     pose_source: PoseSource = Property(
         doc="The platform's pose at each scan time (mounting is applied by the sensor model).")
+    sensor_name: str = Property(
+        default="", doc="The sensor's name in messages about its scans (default: the sensor "
+                        "model's ``name``).")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
+        if not isinstance(self.sensor_name, str):
+            raise TypeError(f"sensor_name: expected a str, got {type(self.sensor_name).__name__}")
         if not isinstance(self.sensor_model, SensorModel):
             raise TypeError(f"sensor_model: expected a ctxmodels SensorModel, "
                             f"got {type(self.sensor_model).__name__}")
@@ -111,11 +163,17 @@ class ContextFeeder(DetectionFeeder):
     @BufferedGenerator.generator_method
     def data_gen(self):
         label = _sensor_label(self)
+        required = _required_metadata(self.sensor_model)
         for time, detections in _scans(self.reader, "reader", label):
+            if required:
+                _check_metadata(time, detections, required, "reader", label)
             try:
                 pose = self.pose_source.pose_at(time)
-            except TypeError as err:  # e.g. naive scan times against an aware navigation log
-                raise TypeError(f"pose_source: no pose for the scan at {time}{label}: {err}") from err
+            except (TypeError, ValueError) as err:
+                # e.g. naive scan times against an aware navigation log, or a scan after the
+                # log ends: name the scan and the sensor
+                raise type(err)(f"pose_source: no pose for the scan at {time}{label}: "
+                                f"{err}") from err
             context = self.sensor_model.context(pose, time)
             yield time, DetectionSet(detections, context)
 
@@ -137,20 +195,37 @@ class MultiSensorFeeder(DetectionFeeder):
     feeders: Sequence[Reader] = Property(
         doc="One feeder per sensor (typically :class:`ContextFeeder`), or any iterables of "
             "(time, detections) pairs in time order.")
+    sensor_names: Sequence[str] = Property(
+        default=None, doc="The sensors' names, one per feeder, for messages about their scans "
+                          "(default: a feeder's sensor model's name, if it has one).")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        if isinstance(self.feeders, (str, bytes)) or not isinstance(self.feeders, Iterable):
+        if isinstance(self.feeders, Reader) or hasattr(self.feeders, "data_gen"):
+            raise TypeError(f"feeders: expected a list of feeders, got one "
+                            f"{type(self.feeders).__name__}; wrap it in a list")
+        if isinstance(self.feeders, (str, bytes, Mapping)) or not isinstance(self.feeders, Iterable):
             raise TypeError(f"feeders: expected a sequence of feeders, "
                             f"got {type(self.feeders).__name__}")
         self.feeders = list(self.feeders)
         if not self.feeders:
             raise ValueError("feeders: need at least one feeder")
+        names = self.sensor_names
+        if names is not None:
+            if isinstance(names, (str, bytes, Mapping)) or not isinstance(names, Sequence) \
+                    or len(names) != len(self.feeders) \
+                    or not all(isinstance(n, str) for n in names):
+                raise TypeError(f"sensor_names: expected one name (str) per feeder "
+                                f"({len(self.feeders)}), got {names!r}")
+            self.sensor_names = list(names)
 
     @BufferedGenerator.generator_method
     def data_gen(self):
         first = _FirstTime()
-        streams = [_scans(feeder, f"feeders[{i}]", _sensor_label(feeder), first)
+        names = self.sensor_names
+        labels = [f" (sensor {names[i]!r})" if names and names[i] else _sensor_label(feeder)
+                  for i, feeder in enumerate(self.feeders)]
+        streams = [_scans(feeder, f"feeders[{i}]", labels[i], first)
                    for i, feeder in enumerate(self.feeders)]
         # heapq.merge breaks equal keys by stream position: stable, and never compares sets.
         yield from heapq.merge(*streams, key=lambda scan: scan[0])
