@@ -61,7 +61,11 @@ class PoseCentredRegion(Base):
 
     def at(self, timestamp) -> CircularRegion:
         """The region of the scan at ``timestamp``: a disc around the platform there."""
-        pose = self.pose_source.pose_at(timestamp)
+        try:
+            pose = self.pose_source.pose_at(timestamp)
+        except (TypeError, ValueError) as err:  # e.g. a navigation log that ends too early
+            raise type(err)(f"pose_source: no platform pose for the scan at {timestamp} "
+                            f"(the surveillance region's centre): {err}") from err
         return CircularRegion(centre=(pose.x, pose.y), radius=self.radius)
 
 
