@@ -59,6 +59,7 @@ component survives; the metrics look at the states at radar timestamps.
 """
 from __future__ import annotations
 
+import datetime
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -250,9 +251,22 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
     spec = TRACKERS.get(name) if isinstance(name, str) else None
     if spec is None:
         raise ValueError(f"name: unknown tracker {name!r}; choose from {list(TRACKERS)}")
+    if not isinstance(streams, Mapping):
+        raise TypeError(f"streams: expected a mapping of sensor name -> (time, detections) "
+                        f"scans, got {type(streams).__name__}")
+    if not isinstance(sensor_models, Mapping):
+        raise TypeError(f"sensor_models: expected a mapping of sensor name -> SensorModel, got "
+                        f"{type(sensor_models).__name__}")
     streams, sensor_models = dict(streams), dict(sensor_models)
     if not streams:
         raise ValueError("streams: no sensor streams given")
+    for sensor, stream in streams.items():
+        if not isinstance(sensor, str):
+            raise TypeError(f"streams: sensor names must be strings, got {sensor!r}")
+        if stream is None or isinstance(stream, (str, bytes, Mapping)) \
+                or not isinstance(stream, Iterable):
+            raise TypeError(f"streams: sensor {sensor!r}: expected an iterable of (time, "
+                            f"detections) scans, got {type(stream).__name__}")
     missing = [sensor for sensor in streams if not isinstance(sensor_models.get(sensor), SensorModel)]
     if missing:
         raise ValueError(f"sensor_models: need a SensorModel for every stream; missing or not a "
@@ -260,8 +274,14 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
     if not callable(getattr(pose_source, "pose_at", None)):
         raise TypeError("pose_source: expected an object with pose_at(timestamp), got "
                         f"{type(pose_source).__name__}")
+    if primary is not None and not isinstance(primary, str):
+        raise TypeError(f"primary: expected a sensor name (str) or None, got "
+                        f"{type(primary).__name__} {primary!r}")
     if primary is not None and primary not in streams:
         raise ValueError(f"primary: {primary!r} is not a stream (one of {list(streams)})")
+    if not isinstance(fast, (bool, np.bool_)):
+        raise TypeError(f"fast: expected True or False, got {type(fast).__name__} {fast!r}")
+    fast = bool(fast)
     if spec.primary_only:
         if primary is None:
             raise ValueError(f"primary: {name} keeps one sensor; name it (one of "
@@ -286,6 +306,9 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
     if spec.pd == "learned":
         sensor_models = {**sensor_models, primary: _with(
             sensor_models[primary], detection=learned_detection(sensor_models[primary]))}
+    for sensor, stream in streams.items():
+        _check_stream(sensor, stream, sensor_models[sensor] if spec.uses_context else None,
+                      pose_source if spec.uses_context or spec.family == "gmphd" else None)
     region = None
     if spec.family == "gmphd":
         radius = (_region_radius([sensor_models[s] for s in streams]) if region_radius is None
@@ -435,10 +458,38 @@ def _detector(spec: TrackerSpec, streams, sensor_models, pose_source):
     for context-aware trackers, as plain sets for the uniform ones (stock behaviour)."""
     from ..stonesoup import ContextFeeder, MultiSensorFeeder
     if not spec.uses_context:
-        return MultiSensorFeeder(feeders=list(streams.values()))
+        return MultiSensorFeeder(feeders=list(streams.values()), sensor_names=list(streams))
     return MultiSensorFeeder(feeders=[
-        ContextFeeder(reader=reader, sensor_model=sensor_models[sensor], pose_source=pose_source)
-        for sensor, reader in streams.items()])
+        ContextFeeder(reader=reader, sensor_model=sensor_models[sensor], pose_source=pose_source,
+                      sensor_name=sensor)
+        for sensor, reader in streams.items()], sensor_names=list(streams))
+
+
+def _check_stream(sensor: str, stream, model: SensorModel | None, pose_source) -> None:
+    """A stream given as a list (or tuple), checked before anything runs: each scan a
+    (datetime, set of detections) pair in time order, each detection with the metadata the
+    sensor's clutter rules read (``model``, for the context-aware trackers), each time within
+    a :class:`~ctxmodels.NavigationTrack` pose source. Errors start ``streams:`` and name the
+    sensor and the scan time. Readers and generators are checked as they are read (by the
+    feeders, naming the sensor and scan the same way)."""
+    from ..stonesoup.feeder import _check_metadata, _required_metadata, _scans
+    if not isinstance(stream, (list, tuple)):
+        return
+    label = f" (sensor {sensor!r})"
+    keys = _required_metadata(model) if model is not None else ()
+    track = pose_source if isinstance(pose_source, NavigationTrack) else None
+    for k, (time, detections) in enumerate(_scans(stream, "streams", label)):
+        if not isinstance(time, datetime.datetime):
+            raise TypeError(f"streams: scan {k} of sensor {sensor!r} has the time {time!r}; "
+                            f"scan times must be datetimes")
+        if keys:
+            _check_metadata(time, detections, keys, "streams", label)
+        if track is not None:
+            try:
+                track.pose_at(time)  # (a lookup: the log is in memory)
+            except (TypeError, ValueError) as err:
+                raise type(err)(f"pose_source: no pose for the scan at {time}{label}: "
+                                f"{err}") from None
 
 
 def _with(model: SensorModel, **changes) -> SensorModel:
