@@ -156,9 +156,9 @@ def test_bad_land_sources_raise_naming_what_is_wrong(tmp_path):
     collection = {"type": "FeatureCollection", "features": [
         {"type": "Feature", "geometry": mapping(Polygon([(0, 0), (1, 0), (0, 1)]))},
         {"type": "Feature", "geometry": {"type": "Point", "coordinates": [0, 0]}}]}
-    with pytest.raises(ValueError, match="source feature 1: .*got 'Point'"):
+    with pytest.raises(ValueError, match=r"^source: features\[1\]\.geometry: .*got 'Point'"):
         LandMask.from_geojson(collection)
-    with pytest.raises(ValueError, match="polygon 0 ring 0 is not a list of"):
+    with pytest.raises(ValueError, match=r"^source: coordinates\[0\]\[0\]: expected a position"):
         LandMask.from_geojson({"type": "Polygon", "coordinates": [[[0], [1], [2]]]})
     with pytest.raises(TypeError, match="source: expected a GeoJSON path"):
         LandMask.from_geojson(42)
