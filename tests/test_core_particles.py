@@ -165,7 +165,7 @@ def test_non_finite_positions_are_rejected_like_the_row_path(row, value, order):
     columns = np.array(particles(50_000), order=order)
     columns[row, 41_234] = value
     columns[row, 45_000] = value
-    with pytest.raises(ValueError, match="states: row 41234 is not finite"):
+    with pytest.raises(ValueError, match="means: row 41234 is not finite"):
         ctx.prob_detection_array(columns.T)  # the path it replaces rejects it too
     with pytest.raises(ValueError, match=r"particles: particle 41234 \(column 41234\) has a NaN"):
         ctx.prob_detection_particles(columns, log=True)

@@ -115,7 +115,7 @@ def test_portable_build_gives_the_bits_of_the_dispatched_one():
     assert len(portable) == 11
     # every error names its argument and the first bad row
     assert [e.split(":")[0] for e in portable["errors"]] == [
-        "states", "means", "covars", "particles", "metadata"], portable["errors"]
+        "means", "means", "covars", "particles", "metadata"], portable["errors"]
     assert "33333" in portable["errors"][0] and "1234" in portable["errors"][2]
     assert dispatched == portable
 
