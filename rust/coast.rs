@@ -12,6 +12,7 @@
 
 use crate::error::{ModelError, Result};
 use crate::land::LandMask;
+use crate::memory;
 use crate::sight::LineOfSight;
 use parry2d_f64::bounding_volume::Aabb;
 use parry2d_f64::math::Vector;
@@ -92,6 +93,18 @@ impl CoastalBand {
         best.map(|(q, _)| q)
     }
 
+    /// The factor at each of the world `positions` (M, 2, row-major) for a sensor at
+    /// `sensor`; a position that is not finite is an error naming its row.
+    pub fn evaluate(&self, sensor: [f64; 2], positions: &[f64]) -> Result<Vec<f64>> {
+        if !positions.len().is_multiple_of(2) {
+            return Err(ModelError::shape("positions", "must be (M, 2)"));
+        }
+        if let Some(row) = positions.chunks_exact(2).position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+            return Err(ModelError::non_finite("positions", row, "position is NaN or infinite"));
+        }
+        memory::collected("positions", positions.chunks_exact(2).map(|p| self.value_at(sensor, p[0], p[1])))
+    }
+
     /// The factor at world (x, y) for a sensor at `sensor`: `inside` in the band, else 1
     /// (NaN for a position that is not finite).
     pub fn value_at(&self, sensor: [f64; 2], x: f64, y: f64) -> f64 {
@@ -135,6 +148,11 @@ mod tests {
         assert_eq!(band.value_at(origin, 990.0, 60.0), 7.0); // near the corner: √(10² + 10²) < 20
         assert_eq!(band.value_at(origin, 985.0, 65.0), 1.0); // √(15² + 15²) > 20
         assert!(band.value_at(origin, f64::NAN, 0.0).is_nan());
+        assert_eq!(band.evaluate(origin, &[980.0, 0.0, 979.9, 0.0]).unwrap(), [7.0, 1.0]);
+        for bad in [f64::NAN, f64::INFINITY] {
+            let err = band.evaluate(origin, &[980.0, 0.0, bad, 0.0]).unwrap_err();
+            assert_eq!(err, ModelError::non_finite("positions", 1, "position is NaN or infinite"));
+        }
     }
 
     #[test]

@@ -347,7 +347,7 @@ proptest! {
                 ClutterFactor::Metadata(r) => [r.below, r.at_or_above].into_iter().chain(r.missing).collect(),
                 ClutterFactor::Map(m) => {
                     let map = crate::clutter::read_map(m);
-                    map.intensities().into_iter().chain([map.prior_intensity()]).collect()
+                    map.intensities().unwrap().into_iter().chain([map.prior_intensity()]).collect()
                 }
                 ClutterFactor::Coast(band) => vec![band.inside(), 1.0],
             };

@@ -20,7 +20,7 @@ use numpy::ndarray::Dimension;
 use numpy::{
     BorrowError, PyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadwriteArray1, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
@@ -33,7 +33,10 @@ mod particles;
 mod scan;
 
 fn to_py(err: ModelError) -> PyErr {
-    PyValueError::new_err(err.to_string())
+    match err {
+        ModelError::Memory { .. } => PyMemoryError::new_err(err.to_string()),
+        _ => PyValueError::new_err(err.to_string()),
+    }
 }
 
 fn value_error(argument: &str, message: impl std::fmt::Display) -> PyErr {
@@ -84,6 +87,12 @@ fn borrow_contiguous<'py, D: Dimension>(array: &Bound<'py, PyArray<f64, D>>, arg
     copy.try_readonly().map_err(|_| value_error(argument, "could not borrow an aligned copy"))
 }
 
+/// A new array holding a copy of `values` (MemoryError naming `argument` when it cannot be
+/// allocated: numpy's own copy would panic).
+fn array_of<'py, T: numpy::Element + Clone>(py: Python<'py>, argument: &'static str, values: &[T]) -> PyResult<Bound<'py, PyArray1<T>>> {
+    Ok(PyArray1::from_vec(py, crate::memory::copied(argument, values).map_err(to_py)?))
+}
+
 fn slice<'a, D: Dimension>(a: &'a PyReadonlyArray<'_, f64, D>, argument: &str) -> PyResult<&'a [f64]> {
     a.as_slice().map_err(|_| value_error(argument, "must be C-contiguous and aligned"))
 }
@@ -106,7 +115,8 @@ fn mapping_of(mapping: (i64, i64)) -> PyResult<PositionMapping> {
 /// `inputs` are this call's input slices: Rust must never write memory it also reads.
 fn output<'py>(py: Python<'py>, out: Option<Bound<'py, PyArray1<f64>>>, n: usize, inputs: &[(&str, &[f64])]) -> PyResult<PyReadwriteArray1<'py, f64>> {
     let array = match out {
-        None => PyArray1::zeros(py, [n], false),
+        // (numpy's own allocation would panic on failure: a Vec that can fail, then handed over)
+        None => PyArray1::from_vec(py, crate::memory::filled("out", n, 0.0).map_err(to_py)?),
         Some(out) => {
             if out.len() != n {
                 return Err(value_error("out", format_args!("must have {n} entries, got {}", out.len())));
@@ -410,8 +420,7 @@ impl PyCoastalBand {
         let positions = borrow(&positions, "positions")?;
         let p = points_slice(&positions, "positions")?;
         let band = &self.0;
-        let values: Vec<f64> = p.chunks_exact(2).map(|q| band.value_at([pose.x, pose.y], q[0], q[1])).collect();
-        Ok(PyArray1::from_vec(py, values))
+        Ok(PyArray1::from_vec(py, guarded(|| band.evaluate([pose.x, pose.y], p))?))
     }
 }
 
