@@ -423,8 +423,9 @@ impl ClutterMap {
             // Σ (n − λ e)² − λ (S2/S) Σ e, expanded
             let excess = nn - 2.0 * l * ne + l * l * ee - l * per_scan * e;
             self.pool_level[g] = l;
-            // (NaN, where e² overflows in a grid of huge cells: no spread resolved, max gives 0)
-            self.pool_spread[g] = if ee > 0.0 { (excess / ee).max(0.0) } else { 0.0 };
+            // (NaN where e² overflows, in a grid of huge cells: no spread resolved, max gives
+            // 0; an infinite one, from a level near f64::MAX, is the largest double instead)
+            self.pool_spread[g] = if ee > 0.0 { (excess / ee).max(0.0).min(f64::MAX) } else { 0.0 };
         }
         (self.scratch, self.apart) = (scratch, apart);
     }
@@ -989,5 +990,156 @@ mod tests {
         assert_eq!(map.clone().with_state(vec![-1.0], vec![0.0], 0.0, 1.0).unwrap_err().argument(), "counts");
         assert_eq!(map.clone().with_state(vec![0.0], vec![2.0], 1.0, 1.0).unwrap_err().argument(), "deficit");
         assert_eq!(map.with_state(vec![0.0], vec![0.0], 0.0, 0.0).unwrap_err().argument(), "scale");
+    }
+
+    #[test]
+    fn the_scale_bounds_are_the_powers_of_two_they_claim() {
+        assert_eq!(MAX_VOLUME, 2f64.powi(702));
+        // the pools' sums: the largest grid times the largest scaled exposure stays finite
+        assert!((MAX_VOLUME * 2f64.powi(310)).is_finite());
+    }
+
+    #[test]
+    fn the_measured_cases_stay_finite() {
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        let grid = || [vec![0.0, 10.0, 20.0], vec![0.0, 10.0]];
+        // forgetting 1e-150: the running scale overflowed after four empty updates
+        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), 1e-3, 5.0, 1e-150).unwrap();
+        for _ in 0..6 {
+            map.update(&pose, &[], None, &[]).unwrap();
+        }
+        assert!(map.intensities().unwrap().iter().all(|l| l.is_finite() && *l >= f64::MIN_POSITIVE));
+        // λ₀ s₀ overflowing f64
+        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), 1e300, 1e10, 0.9).unwrap();
+        map.update(&pose, &[5.0, 5.0], None, &[]).unwrap();
+        assert!(map.intensities().unwrap().iter().all(|l| l.is_finite() && *l > 0.0), "{:?}", map.intensities());
+        // s₀ V_g overflowing f64
+        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), 1e-3, 1e308, 0.9).unwrap().with_pooling(Pooling::Grid, Some(10.0)).unwrap();
+        map.update(&pose, &[5.0, 5.0], None, &[]).unwrap();
+        assert!(map.intensities().unwrap().iter().all(|l| l.is_finite() && *l > 0.0), "{:?}", map.intensities());
+        // a tiny λ₀ against many scans: floored at the smallest normal double
+        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), f64::MIN_POSITIVE, 1e-300, 1.0).unwrap();
+        map.update(&pose, &[], None, &[]).unwrap();
+        assert_eq!(map.intensities().unwrap(), [f64::MIN_POSITIVE; 2]);
+        assert_eq!(ClutterMap::new(MapSpace::WorldXY, grid(), 1e-310, 1.0, 1.0).unwrap_err().argument(), "prior_intensity");
+        assert_eq!(ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 1e150], vec![0.0, 1e150]], 1.0, 1.0, 1.0).unwrap_err().argument(), "edges");
+    }
+
+    #[test]
+    fn intensity_at_refuses_positions_and_ranges_it_cannot_place() {
+        let map = radar();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        assert_eq!(map.intensity_at(&pose, &[100.0, 1.0, 5000.0, 0.0], None).unwrap(), [1e-3, 1e-3]);
+        for bad in [f64::NAN, f64::INFINITY] {
+            assert_eq!(map.intensity_at(&pose, &[100.0, 1.0, bad, 0.0], None).unwrap_err(), ModelError::non_finite("positions", 1, "position is NaN or infinite"));
+        }
+        assert_eq!(map.intensity_at(&pose, &[100.0, 1.0], Some(&[-1.0])).unwrap_err().argument(), "ranges");
+        assert_eq!(map.intensity_at(&pose, &[100.0, 1.0], Some(&[f64::NAN])).unwrap(), [1e-3]);
+    }
+
+    mod finite {
+        //! Properties over the whole accepted ranges of the configuration and of updates:
+        //! every λ finite and normal, every state value finite, on every SIMD backend.
+        use super::*;
+        use crate::simd::{on_backend, Backend};
+        use proptest::prelude::*;
+
+        /// A positive double from the whole range: the extremes, or 10^e.
+        fn anywhere(low: f64, high: f64) -> impl Strategy<Value = f64> {
+            let (a, b) = (low.log10().max(-323.0), high.log10().min(308.2));
+            prop_oneof![Just(low), Just(high), (a..b).prop_map(move |e| 10f64.powf(e).clamp(low, high))]
+        }
+
+        fn forgetting() -> impl Strategy<Value = f64> {
+            prop_oneof![Just(1.0), Just(RESCALE), Just(f64::from_bits(1)), anywhere(f64::from_bits(1), 1.0), (0.5..1.0f64)]
+        }
+
+        fn weight() -> impl Strategy<Value = f64> {
+            prop_oneof![Just(0.0), Just(1.0), Just(f64::from_bits(1)), (0.0..=1.0f64)]
+        }
+
+        #[derive(Debug, Clone)]
+        struct Scan {
+            /// Points as fractions of the grid's extent (some outside it).
+            points: Vec<(f64, f64, f64)>,
+            /// Gates: centre as fractions, radius as a fraction of the extent.
+            gates: Vec<(f64, f64, f64)>,
+            weighted: bool,
+        }
+
+        fn scan() -> impl Strategy<Value = Scan> {
+            let point = (-0.2..1.2f64, -0.2..1.2f64, weight());
+            let gate = (0.0..1.0f64, 0.0..1.0f64, prop_oneof![Just(0.0), (0.0..2.0f64)]);
+            (prop::collection::vec(point, 0..8), prop::collection::vec(gate, 0..3), any::<bool>())
+                .prop_map(|(points, gates, weighted)| Scan { points, gates, weighted })
+        }
+
+        fn pooling() -> impl Strategy<Value = (u8, Option<f64>)> {
+            (0u8..3, prop_oneof![Just(None), anywhere(f64::from_bits(1), f64::MAX).prop_map(Some)])
+        }
+
+        fn check(map: &ClutterMap, pose: &Pose) -> std::result::Result<(), TestCaseError> {
+            for l in map.intensities().unwrap() {
+                prop_assert!(l.is_finite() && l >= f64::MIN_POSITIVE, "λ {l:e}");
+            }
+            let (counts, deficit, exposure, scale) = map.state();
+            prop_assert!(counts.iter().chain(deficit).all(|v| v.is_finite() && *v >= 0.0), "{counts:?} {deficit:?}");
+            prop_assert!(exposure.is_finite() && scale.is_finite() && scale > 0.0 && scale <= LARGE, "{exposure:e} {scale:e}");
+            prop_assert!(map.pool_level.iter().chain(&map.pool_spread).all(|v| v.is_finite()));
+            let outside = map.value_at(pose, 1e300, 1e300, f64::NAN);
+            prop_assert!(outside.is_finite() && outside >= f64::MIN_POSITIVE);
+            Ok(())
+        }
+
+        proptest! {
+            #[test]
+            fn every_learned_value_stays_finite(
+                prior_intensity in anywhere(f64::MIN_POSITIVE, f64::MAX),
+                prior_scans in anywhere(f64::from_bits(1), f64::MAX),
+                forgetting in forgetting(),
+                (pool, pooled_scans) in pooling(),
+                magnitude in -300.0..300.0f64,
+                bearing_range in any::<bool>(),
+                scans in prop::collection::vec(scan(), 1..40),
+            ) {
+                let size = 10f64.powf(magnitude / 2.0);
+                let (space, edges) = if bearing_range || pool == 1 {
+                    (MapSpace::BearingRange, [vec![-PI, -1.0, 0.5, PI], (0..4).map(|i| i as f64 * size).collect::<Vec<_>>()])
+                } else {
+                    (MapSpace::WorldXY, [vec![-size, 0.0, size], vec![0.0, size, 3.0 * size]])
+                };
+                let extent = 3.0 * size;
+                let pooling = [Pooling::None, Pooling::Range, Pooling::Grid][pool as usize];
+                let built = ClutterMap::new(space, edges, prior_intensity, prior_scans, forgetting).and_then(|m| m.with_pooling(pooling, pooled_scans));
+                let fresh = match built {
+                    Ok(map) => map,
+                    // only a grid too large (or cells too small) for f64 is refused
+                    Err(err) => { prop_assert_eq!(err.argument(), "edges"); return Ok(()); }
+                };
+                let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+                let mut results = Vec::new();
+                for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
+                    let mut map = fresh.clone();
+                    on_backend(backend, || -> std::result::Result<(), TestCaseError> {
+                        check(&map, &pose)?;
+                        for s in &scans {
+                            let positions: Vec<f64> = s.points.iter().flat_map(|(u, v, _)| [u * extent - size, v * extent]).collect();
+                            let weights: Vec<f64> = s.points.iter().map(|p| p.2).collect();
+                            let gates: Vec<f64> = s.gates.iter().flat_map(|(u, v, r)| [u * extent - size, v * extent, r * extent]).collect();
+                            map.update_weighted(&pose, &positions, None, s.weighted.then_some(&weights[..]), &gates).unwrap();
+                            check(&map, &pose)?;
+                        }
+                        // the state restores to the same map, bit for bit
+                        let (counts, deficit, exposure, scale) = map.state();
+                        let restored = fresh.clone().with_state(counts.to_vec(), deficit.to_vec(), exposure, scale).unwrap();
+                        prop_assert_eq!(&restored, &map);
+                        Ok(())
+                    })?;
+                    results.push(map);
+                }
+                // every backend learns the same bits
+                prop_assert!(results.windows(2).all(|w| w[0] == w[1]));
+            }
+        }
     }
 }
