@@ -190,7 +190,7 @@ fn ring_of(ring: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 2]>> {
         return Err(value_error("polygons", format_args!("every ring must have shape (K, 2), got {:?}", array.shape())));
     }
     let array = borrow(array, "polygons")?;
-    Ok(slice(&array, "polygons")?.chunks_exact(2).map(|r| [r[0], r[1]]).collect())
+    Ok(crate::memory::collected("polygons", slice(&array, "polygons")?.chunks_exact(2).map(|r| [r[0], r[1]])).map_err(to_py)?)
 }
 
 #[pymethods]

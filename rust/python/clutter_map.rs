@@ -4,7 +4,7 @@
 use super::{array_of, borrow, guarded, points_slice, pose_of, slice, value_error};
 use crate::clutter::{read_map, SharedMap};
 use crate::clutter_map::{ClutterMap, MapSpace, Pooling};
-use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use std::sync::{Arc, RwLock};
 
