@@ -247,4 +247,80 @@ mod tests {
         assert!(err(DetectionEstimate::new(vec![0.0, 1.0], 0.5, 1.0, 0.0, 0.0)).starts_with("forgetting"));
         assert!(err(DetectionEstimate::new(vec![0.0, 1.0], 0.5, 1.0, 0.9, 1.5)).starts_with("outside"));
     }
+
+    #[test]
+    fn a_trial_of_weight_zero_is_no_evidence_hit_or_miss() {
+        let mut e = DetectionEstimate::new(vec![0.0, 10.0], 0.5, 5.0, 0.99, 0.0).unwrap();
+        for _ in 0..10 {
+            e.update(&origin(), &[5.0, 0.0], &[1.0], &[0.0]).unwrap();
+        }
+        assert_eq!(e.probabilities().unwrap(), [0.5]);
+        assert_eq!(e.state(), (&[0.0][..], &[0.0][..]));
+        e.update(&origin(), &[5.0, 0.0, 6.0, 0.0], &[1.0, 0.0], &[0.5, 0.0]).unwrap();
+        assert_eq!(e.state(), (&[1.0][..], &[0.5][..]));
+    }
+
+    mod finite {
+        //! P_D in [0, 1] and a finite state over the whole accepted configuration and any
+        //! updates, read through a detection model on every SIMD backend.
+        use super::*;
+        use crate::batch::PositionMapping;
+        use crate::detection::{DetectionFactor, DetectionModel};
+        use crate::simd::{on_backend, Backend};
+        use proptest::prelude::*;
+        use std::sync::{Arc, RwLock};
+
+        fn anywhere(low: f64, high: f64) -> impl Strategy<Value = f64> {
+            let (a, b) = (low.log10().max(-323.0), high.log10().min(308.2));
+            prop_oneof![Just(low), Just(high), (a..b).prop_map(move |e| 10f64.powf(e).clamp(low, high))]
+        }
+
+        fn weight() -> impl Strategy<Value = f64> {
+            prop_oneof![Just(0.0), Just(1.0), Just(f64::from_bits(1)), (0.0..=1.0f64)]
+        }
+
+        proptest! {
+            #[test]
+            fn every_probability_stays_a_probability(
+                prior_probability in prop_oneof![Just(f64::from_bits(1)), Just(1.0 - f64::EPSILON / 2.0), anywhere(f64::from_bits(1), 0.5), (0.0..1.0f64).prop_filter("open", |p| *p > 0.0)],
+                prior_trials in anywhere(f64::from_bits(1), f64::MAX),
+                forgetting in prop_oneof![Just(1.0), Just(f64::from_bits(1)), anywhere(f64::from_bits(1), 1.0), (0.5..1.0f64)],
+                magnitude in -300.0..300.0f64,
+                scans in prop::collection::vec(prop::collection::vec((0.0..1.5f64, any::<bool>(), weight()), 0..6), 1..40),
+            ) {
+                let size = 10f64.powf(magnitude);
+                let edges = vec![0.0, size, 2.0 * size];
+                let estimate = match DetectionEstimate::new(edges, prior_probability, prior_trials, forgetting, 0.0) {
+                    Ok(e) => e,
+                    Err(err) => { prop_assert_eq!(err.argument(), "edges"); return Ok(()); } // (edges overflowing f64)
+                };
+                let shared = Arc::new(RwLock::new(estimate));
+                let model = DetectionModel::new(vec![DetectionFactor::Estimate(shared.clone())]).unwrap();
+                let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+                let mapping = PositionMapping::new(0, 1).unwrap();
+                for trials in &scans {
+                    let positions: Vec<f64> = trials.iter().flat_map(|(r, _, _)| [r * 2.0 * size, 0.0]).collect();
+                    let detected: Vec<f64> = trials.iter().map(|t| if t.1 { 1.0 } else { 0.0 }).collect();
+                    let weights: Vec<f64> = trials.iter().map(|t| t.2).collect();
+                    shared.write().unwrap().update(&pose, &positions, &detected, &weights).unwrap();
+                    let estimate = shared.read().unwrap().clone();
+                    for p in estimate.probabilities().unwrap() {
+                        prop_assert!((0.0..=1.0).contains(&p), "P_D {p:e}");
+                    }
+                    let (h, t) = estimate.state();
+                    prop_assert!(h.iter().chain(t).all(|v| v.is_finite() && *v >= 0.0), "{h:?} {t:?}");
+                    // the model reads the same values on every backend
+                    let states = [0.5 * size, 0.0, 1.5 * size, 0.0, 0.0, 0.0, 1e300, 0.0, 0.25 * size, 0.0];
+                    let mut seen = Vec::new();
+                    for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
+                        let mut out = [0.0; 5];
+                        on_backend(backend, || model.at_pose(&pose).at_states(&states, 2, mapping, &mut out)).unwrap();
+                        prop_assert!(out.iter().all(|p| (0.0..=1.0).contains(p)), "{out:?}");
+                        seen.push(out.map(f64::to_bits));
+                    }
+                    prop_assert!(seen.windows(2).all(|w| w[0] == w[1]));
+                }
+            }
+        }
+    }
 }
