@@ -153,18 +153,11 @@ impl ClutterModel {
         if metadata.len() != k * m {
             return Err(ModelError::shape("metadata", format!("must be ({m}, {k}), got {} values", metadata.len())));
         }
-        // The first row that cannot be evaluated, with the argument and the problem.
-        let problems = std::sync::Mutex::new(Vec::<(usize, &'static str, String)>::new());
-        let bad = for_each_chunk(out, |first, chunk| {
-            let bad = dispatch(Densities { model: self, pose, positions, metadata, ranges, first, out: chunk })?;
-            let row = first + bad;
-            let (argument, message) = self.problem(positions, metadata, row, chunk[bad]);
-            problems.lock().unwrap().push((row, argument, message));
-            Some(bad)
-        });
+        // The first row that cannot be evaluated; what is wrong with it, from its inputs and
+        // the density the kernel left in `out`.
+        let bad = for_each_chunk(out, |first, chunk| dispatch(Densities { model: self, pose, positions, metadata, ranges, first, out: chunk }));
         if let Some(row) = bad {
-            let problems = problems.into_inner().unwrap();
-            let (_, argument, message) = problems.into_iter().find(|p| p.0 == row).unwrap();
+            let (argument, message) = self.problem(positions, metadata, row, out[row]);
             return Err(ModelError::non_finite(argument, row, message));
         }
         Ok(())

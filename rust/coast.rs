@@ -52,7 +52,8 @@ impl CoastalBand {
         if !(inside.is_finite() && inside > 0.0) {
             return Err(ModelError::invalid("inside", format!("must be finite and > 0, got {inside}")));
         }
-        let mut segments = Vec::new();
+        let count = land.polygons().iter().map(|p| p.shell.len() + p.holes.iter().map(Vec::len).sum::<usize>()).sum();
+        let mut segments = memory::with_room("land", count)?;
         for polygon in land.polygons() {
             for ring in std::iter::once(&polygon.shell).chain(&polygon.holes) {
                 for k in 0..ring.len() {
@@ -60,12 +61,13 @@ impl CoastalBand {
                 }
             }
         }
-        let boxes: Vec<Aabb> = segments
-            .iter()
-            .map(|[a, b]| Aabb::new(Vector::new(a[0].min(b[0]), a[1].min(b[1])), Vector::new(a[0].max(b[0]), a[1].max(b[1]))))
-            .collect();
+        let boxes: Vec<Aabb> = memory::collected(
+            "land",
+            segments.iter().map(|[a, b]| Aabb::new(Vector::new(a[0].min(b[0]), a[1].min(b[1])), Vector::new(a[0].max(b[0]), a[1].max(b[1])))),
+        )?;
+        // (parry's tree allocates infallibly: about as large as the boxes just allocated)
         let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &boxes);
-        let sight = seen_only.then(|| Arc::new(LineOfSight::new(land)));
+        let sight = if seen_only { Some(Arc::new(LineOfSight::new(land)?)) } else { None };
         Ok(CoastalBand { width, inside, segments, bvh, sight })
     }
 
@@ -86,7 +88,7 @@ impl CoastalBand {
             let q = nearest_on_segment(self.segments[k as usize], p);
             let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
             // ties: the first segment in ring order, so the answer never depends on the tree
-            if d2 <= w * w && best.is_none_or(|(_, b)| d2 < b || (d2 == b && q < best.unwrap().0)) {
+            if d2 <= w * w && best.is_none_or(|(nearest, b)| d2 < b || (d2 == b && q < nearest)) {
                 best = Some((q, d2));
             }
         }

@@ -164,7 +164,7 @@ impl PyRangeBands {
         if let Some(row) = r.iter().position(|x| x.is_nan()) {
             return Err(to_py(ModelError::non_finite("ranges", row, "NaN")));
         }
-        Ok(PyArray1::from_vec(py, r.iter().map(|&x| self.0.at(x)).collect()))
+        Ok(PyArray1::from_vec(py, crate::memory::collected("ranges", r.iter().map(|&x| self.0.at(x))).map_err(to_py)?))
     }
 }
 
@@ -198,6 +198,7 @@ impl PyLandMask {
     /// `polygons`: list of (shell, [holes]) with rings as (K, 2) float64 arrays.
     #[new]
     fn new(py: Python<'_>, polygons: Vec<(Bound<'_, PyAny>, Vec<Bound<'_, PyAny>>)>) -> PyResult<Self> {
+        // (one entry per polygon of the Python list, which exists)
         let mut converted = Vec::with_capacity(polygons.len());
         for (shell, holes) in &polygons {
             converted.push(Polygon { shell: ring_of(shell)?, holes: holes.iter().map(ring_of).collect::<PyResult<_>>()? });
@@ -210,7 +211,7 @@ impl PyLandMask {
         let points = borrow(&points, "points")?;
         let p = finite_points(&points, "points")?;
         let land = &self.0;
-        let inside = detached(py, || Ok(p.chunks_exact(2).map(|q| land.contains([q[0], q[1]])).collect::<Vec<_>>()))?;
+        let inside = detached(py, || crate::memory::collected("points", p.chunks_exact(2).map(|q| land.contains([q[0], q[1]]))))?;
         Ok(PyArray1::from_vec(py, inside))
     }
 
@@ -246,7 +247,7 @@ impl PyLineOfSight {
     #[new]
     fn new(py: Python<'_>, land: &PyLandMask) -> PyResult<Self> {
         let land = land.0.clone();
-        Ok(PyLineOfSight(Arc::new(detached(py, || Ok(LineOfSight::new(land)))?)))
+        Ok(PyLineOfSight(Arc::new(detached(py, || LineOfSight::new(land))?)))
     }
 
     /// Whether each target row of `targets` (M, 2) is visible from `sensor` (x, y).
@@ -258,7 +259,7 @@ impl PyLineOfSight {
         let t = finite_points(&targets, "targets")?;
         let sight = &self.0;
         let s = [sensor.0, sensor.1];
-        let visible = detached(py, || Ok(t.chunks_exact(2).map(|q| sight.visible(s, [q[0], q[1]])).collect::<Vec<_>>()))?;
+        let visible = detached(py, || crate::memory::collected("targets", t.chunks_exact(2).map(|q| sight.visible(s, [q[0], q[1]]))))?;
         Ok(PyArray1::from_vec(py, visible))
     }
 }
@@ -293,6 +294,7 @@ impl PyDetectionModel {
     /// their product.
     #[new]
     fn new(factors: Vec<Bound<'_, PyAny>>) -> PyResult<Self> {
+        // (one entry per factor of the Python list, which exists)
         let mut converted = Vec::with_capacity(factors.len());
         for (i, f) in factors.iter().enumerate() {
             converted.push(if let Ok(b) = f.cast::<PyRangeBands>() {
@@ -445,6 +447,7 @@ impl PyClutterModel {
     /// MetadataThreshold rules. λ is their product.
     #[new]
     fn new(factors: Vec<Bound<'_, PyAny>>) -> PyResult<Self> {
+        // (one entry per factor of the Python list, which exists)
         let mut converted = Vec::with_capacity(factors.len());
         for (i, f) in factors.iter().enumerate() {
             converted.push(if let Ok(b) = f.cast::<PyRangeBands>() {
@@ -527,6 +530,7 @@ fn simd_backend() -> &'static str {
 #[pyo3(signature = (rule, order = 3))]
 fn rule_points(rule: &str, order: i64) -> PyResult<(Vec<(f64, f64)>, Vec<f64>)> {
     let r = rule_of(rule, order)?;
+    // (a rule has at most MAX_ORDER² = 1024 points)
     Ok((r.points().iter().map(|p| (p[0], p[1])).collect(), r.weights().to_vec()))
 }
 
