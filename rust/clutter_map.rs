@@ -245,7 +245,7 @@ impl ClutterMap {
         if !(forgetting > 0.0 && forgetting <= 1.0) {
             return Err(ModelError::invalid("forgetting", format!("must be in (0, 1], got {forgetting}")));
         }
-        let cells = memory::product("edges", &[edges[0].len() - 1, edges[1].len() - 1, 3])? / 3; // (volumes, counts, deficit)
+        let cells = memory::product("edges", &[edges[0].len() - 1, edges[1].len() - 1])?;
         let mut volumes = memory::with_room("edges", cells)?;
         for a in edges[0].windows(2) {
             for b in edges[1].windows(2) {
