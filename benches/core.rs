@@ -212,7 +212,7 @@ fn line_of_sight(c: &mut Criterion) {
     group.throughput(Throughput::Elements(QUERIES as u64));
     for jagged in [false, true] {
         for exp in 2..=5u32 {
-            let sight = LineOfSight::new(land(10usize.pow(exp), jagged));
+            let sight = LineOfSight::new(land(10usize.pow(exp), jagged)).unwrap();
             let id = format!("{}/1e{exp}", if jagged { "jagged" } else { "smooth" });
             group.bench_function(format!("pairwise/{id}"), |b| {
                 b.iter(|| black_box(&targets).iter().filter(|&&t| sight.visible(SENSOR, t)).count())
@@ -233,7 +233,7 @@ fn sight_index_build(c: &mut Criterion) {
     let mut group = c.benchmark_group("sight_index_build");
     for jagged in [false, true] {
         for exp in [4u32, 5] {
-            let sight = LineOfSight::new(land(10usize.pow(exp), jagged));
+            let sight = LineOfSight::new(land(10usize.pow(exp), jagged)).unwrap();
             let id = format!("{}/1e{exp}", if jagged { "jagged" } else { "smooth" });
             group.bench_function(id, |b| b.iter(|| sight.from_point(black_box(SENSOR)).len()));
         }
@@ -252,7 +252,7 @@ fn pd_radar_with_land(c: &mut Criterion) {
         let mask = land(10_000, jagged);
         let mut factors = radar_factors();
         factors.push(DetectionFactor::Land(mask.clone()));
-        factors.push(DetectionFactor::Sight(Arc::new(LineOfSight::new(mask))));
+        factors.push(DetectionFactor::Sight(Arc::new(LineOfSight::new(mask).unwrap())));
         let model = DetectionModel::new(factors).unwrap();
         let pose = pose();
         let scan = model.at_pose(&pose);

@@ -66,11 +66,18 @@ pub struct ClutterModel {
     uses_position: bool,
 }
 
+/// Whether `v` can be a clutter density: finite and at least the smallest normal double
+/// (a product that underflowed to a subnormal would make 1/λ infinite).
+#[inline]
+fn is_density(v: f64) -> bool {
+    v.is_finite() && v >= f64::MIN_POSITIVE
+}
+
 fn check_density(i: usize, v: f64) -> Result<()> {
-    if !(v.is_finite() && v > 0.0) {
+    if !is_density(v) {
         return Err(ModelError::invalid(
             "factors",
-            format!("factor {i} holds {v}, but clutter densities must be finite and > 0 (trackers divide by them)"),
+            format!("factor {i} holds {v:e}, but clutter densities must be finite and > 0, at least {:e} (trackers divide by them)", f64::MIN_POSITIVE),
         ));
     }
     Ok(())
@@ -138,26 +145,19 @@ impl ClutterModel {
             if r.len() != m {
                 return Err(ModelError::shape("ranges", format!("must have {m} entries, got {}", r.len())));
             }
-            if let Some(row) = r.iter().position(|v| v.is_infinite()) {
-                return Err(ModelError::non_finite("ranges", row, "range is infinite (NaN = use the position)"));
+            if let Some(row) = r.iter().position(|v| v.is_infinite() || *v < 0.0) {
+                return Err(ModelError::non_finite("ranges", row, "range is infinite or negative (NaN = use the position)"));
             }
         }
         let k = self.metadata_columns;
         if metadata.len() != k * m {
             return Err(ModelError::shape("metadata", format!("must be ({m}, {k}), got {} values", metadata.len())));
         }
-        // The first row that cannot be evaluated, with the argument and the problem.
-        let problems = std::sync::Mutex::new(Vec::<(usize, &'static str, String)>::new());
-        let bad = for_each_chunk(out, |first, chunk| {
-            let bad = dispatch(Densities { model: self, pose, positions, metadata, ranges, first, out: chunk })?;
-            let row = first + bad;
-            let (argument, message) = self.problem(positions, metadata, row, chunk[bad]);
-            problems.lock().unwrap().push((row, argument, message));
-            Some(bad)
-        });
+        // The first row that cannot be evaluated; what is wrong with it, from its inputs and
+        // the density the kernel left in `out`.
+        let bad = for_each_chunk(out, |first, chunk| dispatch(Densities { model: self, pose, positions, metadata, ranges, first, out: chunk }));
         if let Some(row) = bad {
-            let problems = problems.into_inner().unwrap();
-            let (_, argument, message) = problems.into_iter().find(|p| p.0 == row).unwrap();
+            let (argument, message) = self.problem(positions, metadata, row, out[row]);
             return Err(ModelError::non_finite(argument, row, message));
         }
         Ok(())
@@ -216,7 +216,7 @@ impl ClutterModel {
         });
         match metadata_problem {
             Some(message) => ("metadata", message),
-            None => ("factors", format!("the product of the clutter factors is {density}, not a finite density > 0 (factors too small or too large)")),
+            None => ("factors", format!("the product of the clutter factors is {density:e}, not a finite density >= {:e} (factors too small or too large)", f64::MIN_POSITIVE)),
         }
     }
 }
@@ -243,7 +243,8 @@ impl LaneKernel for Densities<'_> {
         let Densities { model, pose, positions, metadata, ranges, first, out } = self;
         let k = model.metadata_columns;
         let full = out.len() / 4 * 4;
-        let (one, nan, zero) = (L::splat(1.0), L::splat(f64::NAN), L::splat(0.0));
+        // (a λ below the smallest normal double is refused: 1/λ would overflow)
+        let (one, nan, normal) = (L::splat(1.0), L::splat(f64::NAN), L::splat(f64::MIN_POSITIVE));
         let (ox, oy) = (L::splat(pose.x), L::splat(pose.y));
         // Exact-size chunks, so the loads need no bounds checks. (No closure returns lanes
         // here: it would be compiled outside the AVX2 function.)
@@ -274,7 +275,7 @@ impl LaneKernel for Densities<'_> {
                     for o in blocks {
                         let density = L::load(o) * v;
                         if checks {
-                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                            bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
                         }
                         density.store(o);
                     }
@@ -297,7 +298,7 @@ impl LaneKernel for Densities<'_> {
                         let before = if fresh { L::select(L::or(x.non_finite(), y.non_finite()), nan, one) } else { L::load(o) };
                         let density = before * value;
                         if checks {
-                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                            bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
                         }
                         density.store(o);
                     }
@@ -312,7 +313,7 @@ impl LaneKernel for Densities<'_> {
                         };
                         let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);
                         if checks {
-                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                            bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
                         }
                         density.store(o);
                     }
@@ -322,7 +323,7 @@ impl LaneKernel for Densities<'_> {
                         let at = |i: usize| band.value_at([pose.x, pose.y], p[2 * i], p[2 * i + 1]);
                         let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);
                         if checks {
-                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                            bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
                         }
                         density.store(o);
                     }
@@ -341,7 +342,7 @@ impl LaneKernel for Densities<'_> {
                         let finite = L::select(value.non_finite(), nan, known);
                         let density = L::load(o) * L::select(value.is_nan(), missing, finite);
                         if checks {
-                            bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                            bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
                         }
                         density.store(o);
                     }
@@ -351,7 +352,7 @@ impl LaneKernel for Densities<'_> {
         if model.factors.is_empty() {
             for o in out[..full].chunks_exact(4) {
                 let density = L::load(o);
-                bad = L::or(bad, L::or(density.non_finite(), density.le(zero)));
+                bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
             }
         }
         for (i, density) in out.iter_mut().enumerate().skip(full) {
@@ -359,10 +360,10 @@ impl LaneKernel for Densities<'_> {
             let measured = ranges.map_or(f64::NAN, |r| r[row]);
             *density = model.at_one(pose, [positions[2 * row], positions[2 * row + 1]], &metadata[row * k..(row + 1) * k], measured);
         }
-        if !L::any(bad) && out[full..].iter().all(|v| v.is_finite() && *v > 0.0) {
+        if !L::any(bad) && out[full..].iter().all(|v| is_density(*v)) {
             return None;
         }
-        out.iter().position(|v| !(v.is_finite() && *v > 0.0))
+        out.iter().position(|v| !is_density(*v))
     }
 }
 
@@ -388,7 +389,10 @@ mod tests {
         model.evaluate_with_ranges(&pose, &positions, &[], Some(&[1000.0, f64::NAN, 999.0]), &mut out).unwrap();
         assert_eq!(out, [1e-2, 1e-3, 1e-3]);
         let err = model.evaluate_with_ranges(&pose, &positions, &[], Some(&[f64::INFINITY, 0.0, 0.0]), &mut out).unwrap_err();
-        assert_eq!(err, ModelError::non_finite("ranges", 0, "range is infinite (NaN = use the position)"));
+        assert_eq!(err, ModelError::non_finite("ranges", 0, "range is infinite or negative (NaN = use the position)"));
+        // a negative measured range is no range: refused, naming its row
+        let err = model.evaluate_with_ranges(&pose, &positions, &[], Some(&[0.0, -1.0, f64::NAN]), &mut out).unwrap_err();
+        assert_eq!(err, ModelError::non_finite("ranges", 1, "range is infinite or negative (NaN = use the position)"));
         assert!(model.evaluate_with_ranges(&pose, &positions, &[], Some(&[1.0]), &mut out).is_err());
     }
 
@@ -512,7 +516,7 @@ mod tests {
                     let reference: Vec<u64> = (0..m)
                         .map(|i| model.at_one(&pose, [positions[2 * i], positions[2 * i + 1]], &metadata[k * i..k * (i + 1)], ranges.map_or(f64::NAN, |r| r[i])).to_bits())
                         .collect();
-                    let first_bad = reference.iter().position(|&v| !(f64::from_bits(v).is_finite() && f64::from_bits(v) > 0.0));
+                    let first_bad = reference.iter().position(|&v| !is_density(f64::from_bits(v)));
                     for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
                         let mut out = vec![0.0; m];
                         let bad = run_on(backend, Densities { model: &model, pose: &pose, positions: &positions, metadata: &metadata, ranges, first: 0, out: &mut out });

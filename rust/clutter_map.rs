@@ -71,8 +71,18 @@
 //! (O(cells), vectorised; an incremental sum would round differently from a restored one):
 //! they are a function of the state, which therefore stays (counts, deficit, exposure,
 //! scale) and restores exactly.
+//!
+//! Every value stays finite for every configuration the constructor accepts. The running
+//! scale stays at most 2^256 after an update (a forgetting factor below 2^−256 discounts the
+//! stored sums directly instead: its ×1/γ would leave f64), and a posterior mean whose
+//! products would overflow (λ₀ s₀ V near f64's limit) is formed as the weighted mean
+//! λ₀ · s/(s + S) + (N/V)/(s + S) instead. A λ is a density trackers divide by, so it is
+//! kept within the normal doubles: at least f64::MIN_POSITIVE (a cell or pool estimated
+//! below it, e.g. a tiny λ₀ after many empty scans) and at most f64::MAX (a detection in a
+//! cell of volume ~1e−308).
 
 use crate::error::{ModelError, Result};
+use crate::memory;
 use crate::pose::Pose;
 use std::f64::consts::PI;
 
@@ -108,6 +118,9 @@ const RESCALE: f64 = 8.636168555094445e-78; // 2^-256
 /// With an estimated pool weight: the chance, at most, that a cell of a homogeneous pool is
 /// set apart (see the module docs).
 pub const APART: f64 = 0.01;
+/// The largest total volume of a grid: with the scaled exposure (at most 2^310: 2^256 from
+/// the scale, 2^53 scans, a factor 2 in flight) the pools' sums V·S stay below f64::MAX.
+const MAX_VOLUME: f64 = 2.1040543606193494e211; // 2^702
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClutterMap {
@@ -140,6 +153,33 @@ pub struct ClutterMap {
     pool_spread: Vec<f64>,
     /// Per cell, whether it has left its pool, when s_p is estimated (else empty).
     apart: Vec<bool>,
+    /// Room for the pools' passes, allocated with the pools: an update allocates nothing.
+    scratch: Scratch,
+}
+
+/// Buffers an estimated pool weight's passes reuse (contents: a function of the state).
+#[derive(Debug, Clone, Default, PartialEq)]
+struct Scratch {
+    /// Per column: its moments.
+    sums: Vec<[f64; 5]>,
+    /// Per column: the level of every cell of its pool; whether a cell of it left.
+    levels: Vec<f64>,
+    changed: Vec<bool>,
+    /// Per row: whether a cell of it may leave its pool.
+    rows: Vec<bool>,
+    /// The moments' running sums, one column-long buffer per moment.
+    moments: [Vec<f64>; 5],
+}
+
+/// Per-column sums as the whole grid's: the columns together, in order.
+fn whole(sums: &[[f64; 5]]) -> [f64; 5] {
+    let mut whole = [0.0; 5];
+    for s in sums {
+        for (w, v) in whole.iter_mut().zip(s) {
+            *w += v;
+        }
+    }
+    whole
 }
 
 fn check_edges(argument: &'static str, edges: &[f64], lowest: f64, highest: f64) -> Result<()> {
@@ -165,6 +205,27 @@ fn positive(argument: &'static str, value: f64) -> Result<()> {
     Ok(())
 }
 
+/// The posterior mean (m w + x) / (w + s) of a prior mean m worth w against evidence x over
+/// exposure s: `direct`, as the caller formed it (the bits every restore and test relies
+/// on), unless it overflowed or left the normal doubles; then the weighted mean
+/// m · w/(w + s) + x/(w + s), in which no product can overflow, kept within
+/// [f64::MIN_POSITIVE, f64::MAX].
+#[inline]
+fn posterior_mean(direct: f64, mean: f64, weight: f64, evidence: f64, exposure: f64) -> f64 {
+    if direct.is_finite() && direct >= f64::MIN_POSITIVE {
+        return direct;
+    }
+    let exposure = exposure.max(0.0); // (rounding can leave S − D an ulp below 0)
+    let total = weight + exposure;
+    if weight.is_infinite() || total == 0.0 {
+        return mean.clamp(f64::MIN_POSITIVE, f64::MAX); // the prior alone, or nothing to weigh
+    }
+    let rate = if evidence.is_infinite() { f64::MAX } else { evidence / total };
+    let value = mean * (weight / total) + rate;
+    // (NaN only from a restored state whose sums are themselves at f64's limit)
+    if value.is_nan() { mean } else { value.clamp(f64::MIN_POSITIVE, f64::MAX) }
+}
+
 impl ClutterMap {
     /// A fresh map (the prior everywhere). `edges[0]` is bearing (rad, within [−π, π]) or x,
     /// `edges[1]` range (m, ≥ 0) or y.
@@ -176,11 +237,16 @@ impl ClutterMap {
         check_edges("edges", &edges[0], low[0], high[0])?;
         check_edges("edges", &edges[1], low[1], high[1])?;
         positive("prior_intensity", prior_intensity)?;
+        if prior_intensity < f64::MIN_POSITIVE {
+            // (a λ is a density trackers divide by: 1/λ must be finite)
+            return Err(ModelError::invalid("prior_intensity", format!("must be at least {:e} (a normal double), got {prior_intensity:e}", f64::MIN_POSITIVE)));
+        }
         positive("prior_scans", prior_scans)?;
         if !(forgetting > 0.0 && forgetting <= 1.0) {
             return Err(ModelError::invalid("forgetting", format!("must be in (0, 1], got {forgetting}")));
         }
-        let mut volumes = Vec::with_capacity((edges[0].len() - 1) * (edges[1].len() - 1));
+        let cells = memory::product("edges", &[edges[0].len() - 1, edges[1].len() - 1])?;
+        let mut volumes = memory::with_room("edges", cells)?;
         for a in edges[0].windows(2) {
             for b in edges[1].windows(2) {
                 volumes.push((a[1] - a[0]) * (b[1] - b[0]));
@@ -189,10 +255,15 @@ impl ClutterMap {
         if let Some(v) = volumes.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
             return Err(ModelError::invalid("edges", format!("every cell needs a finite volume > 0, got {v}")));
         }
-        let cells = volumes.len();
+        let total = (edges[0][edges[0].len() - 1] - edges[0][0]) * (edges[1][edges[1].len() - 1] - edges[1][0]);
+        if !(total <= MAX_VOLUME) {
+            return Err(ModelError::invalid("edges", format!("the grid's volume must be at most {MAX_VOLUME:e} (2^702), got {total:e}")));
+        }
+        let (counts, deficit) = (memory::filled("edges", cells, 0.0)?, memory::filled("edges", cells, 0.0)?);
         Ok(ClutterMap {
-            space, edges, prior_intensity, prior_scans, forgetting, volumes, counts: vec![0.0; cells], deficit: vec![0.0; cells], exposure: 0.0, scale: 1.0,
+            space, edges, prior_intensity, prior_scans, forgetting, volumes, counts, deficit, exposure: 0.0, scale: 1.0,
             pooling: Pooling::None, pooled_scans: Some(prior_scans), pool_volumes: Vec::new(), pool_counts: Vec::new(), pool_deficit: Vec::new(), pool_level: Vec::new(), pool_spread: Vec::new(), apart: Vec::new(),
+            scratch: Scratch::default(),
         })
     }
 
@@ -206,8 +277,8 @@ impl ClutterMap {
         if let Some(weight) = pooled_scans {
             positive("pooling_scans", weight)?;
         }
-        let columns = self.shape()[1];
-        let mut rings = vec![0.0; columns];
+        let [rows, columns] = self.shape();
+        let mut rings = memory::filled("edges", columns, 0.0)?;
         for row in self.volumes.chunks_exact(columns) {
             for (total, v) in rings.iter_mut().zip(row) {
                 *total += v;
@@ -218,6 +289,22 @@ impl ClutterMap {
             Pooling::Range => rings,
             Pooling::Grid => vec![rings.iter().sum()],
         };
+        let pools = self.pool_volumes.len();
+        (self.pool_counts, self.pool_deficit) = (memory::filled("edges", pools, 0.0)?, memory::filled("edges", pools, 0.0)?);
+        (self.pool_level, self.pool_spread, self.apart) = (Vec::new(), Vec::new(), Vec::new());
+        self.scratch = Scratch::default();
+        if pooling != Pooling::None && pooled_scans.is_none() {
+            (self.pool_level, self.pool_spread) = (memory::filled("edges", pools, 0.0)?, memory::filled("edges", pools, 0.0)?);
+            self.apart = memory::filled("edges", self.counts.len(), false)?;
+            let column = || memory::filled("edges", columns, 0.0);
+            self.scratch = Scratch {
+                sums: memory::filled("edges", columns, [0.0; 5])?,
+                levels: memory::filled("edges", columns, 0.0)?,
+                changed: memory::filled("edges", columns, false)?,
+                rows: memory::filled("edges", rows, false)?,
+                moments: [column()?, column()?, column()?, column()?, column()?],
+            };
+        }
         self.pooling = pooling;
         self.pooled_scans = pooled_scans;
         self.refresh_pools();
@@ -245,21 +332,31 @@ impl ClutterMap {
             self.estimate_pools();
             return;
         }
-        (self.pool_level, self.pool_spread, self.apart) = (Vec::new(), Vec::new(), Vec::new());
         let columns = self.edges[1].len() - 1;
-        let (mut counts, mut deficit) = (vec![0.0; columns], vec![0.0; columns]);
-        for ((n, d), v) in self.counts.chunks_exact(columns).zip(self.deficit.chunks_exact(columns)).zip(self.volumes.chunks_exact(columns)) {
-            for j in 0..columns {
-                counts[j] += n[j];
-                deficit[j] += v[j] * d[j];
+        let (counts, deficit) = (&mut self.pool_counts, &mut self.pool_deficit);
+        if self.pooling == Pooling::Range {
+            counts.fill(0.0);
+            deficit.fill(0.0);
+            for ((n, d), v) in self.counts.chunks_exact(columns).zip(self.deficit.chunks_exact(columns)).zip(self.volumes.chunks_exact(columns)) {
+                for j in 0..columns {
+                    counts[j] += n[j];
+                    deficit[j] += v[j] * d[j];
+                }
             }
+            return;
         }
-        if self.pooling == Pooling::Grid {
-            counts = vec![counts.iter().sum()];
-            deficit = vec![deficit.iter().sum()];
+        // the whole grid: per column over the rows in order, then the columns in order
+        let (mut total_counts, mut total_deficit) = (0.0, 0.0);
+        for j in 0..columns {
+            let (mut n, mut d) = (0.0, 0.0);
+            for c in (j..self.counts.len()).step_by(columns) {
+                n += self.counts[c];
+                d += self.volumes[c] * self.deficit[c];
+            }
+            total_counts += n;
+            total_deficit += d;
         }
-        self.pool_counts = counts;
-        self.pool_deficit = deficit;
+        (counts[0], deficit[0]) = (total_counts, total_deficit);
     }
 
     /// With an estimated pool weight (see the module docs): which cells leave their pools,
@@ -286,19 +383,26 @@ impl ClutterMap {
             _ => rows,
         };
         let threshold = (members as f64 / APART).ln();
+        let (mut scratch, mut apart) = (std::mem::take(&mut self.scratch), std::mem::take(&mut self.apart));
         let cells = Cells { counts: &self.counts, deficit: &self.deficit, volumes: &self.volumes, columns, exposure: self.exposure, inverse };
-        let mut sums = cells.moments();
+        let Scratch { sums, levels, changed, rows: to_test, moments } = &mut scratch;
+        cells.moments(moments, sums);
         // every cell's pool level (of all its cells), per column
-        let levels: Vec<f64> = match self.pooling {
-            Pooling::Grid => vec![self.level(&self.pooled(&sums)[0], self.pool_volumes[0]); columns],
-            _ => sums.iter().zip(&self.pool_volumes).map(|(s, v)| self.level(s, *v)).collect(),
-        };
+        match self.pooling {
+            Pooling::Grid => levels.fill(self.level(&whole(sums), self.pool_volumes[0])),
+            _ => {
+                for ((level, s), v) in levels.iter_mut().zip(sums.iter()).zip(&self.pool_volumes) {
+                    *level = self.level(s, *v);
+                }
+            }
+        }
         // cells apart: a bound on each cell's divergence first (vectorised, per row), the
         // logarithm only in rows where the bound cannot keep every cell
-        let tests = Tests { levels: &levels, effective, threshold };
-        let mut apart = vec![false; self.counts.len()];
-        let mut changed = vec![false; columns];
-        for (row, _) in cells.rows_to_test(tests).iter().enumerate().filter(|(_, test)| **test) {
+        let tests = Tests { levels, effective, threshold };
+        apart.fill(false);
+        changed.fill(false);
+        cells.rows_to_test(tests, to_test);
+        for row in (0..rows).filter(|row| to_test[*row]) {
             for j in 0..columns {
                 let c = row * columns + j;
                 if tests.may_leave(cells.at(c), j) && tests.leaves(cells.at(c), j) {
@@ -312,42 +416,39 @@ impl ClutterMap {
         for j in (0..columns).filter(|j| changed[*j]) {
             sums[j] = cells.column_moments(j, |c| !apart[c]);
         }
-        let sums = self.pooled(&sums);
-        let (mut level, mut spread) = (Vec::with_capacity(sums.len()), Vec::with_capacity(sums.len()));
-        for (s @ &[_, e, nn, ne, ee], volume) in sums.iter().zip(&self.pool_volumes) {
-            let l = self.level(s, *volume);
+        for g in 0..self.pool_volumes.len() {
+            let s = if self.pooling == Pooling::Grid { whole(sums) } else { sums[g] };
+            let [_, e, nn, ne, ee] = s;
+            let l = self.level(&s, self.pool_volumes[g]);
             // Σ (n − λ e)² − λ (S2/S) Σ e, expanded
             let excess = nn - 2.0 * l * ne + l * l * ee - l * per_scan * e;
-            level.push(l);
-            spread.push(if ee > 0.0 { (excess / ee).max(0.0) } else { 0.0 });
+            self.pool_level[g] = l;
+            // (NaN where e² overflows, in a grid of huge cells: no spread resolved, max gives
+            // 0; an infinite one, from a level near f64::MAX, is the largest double instead)
+            self.pool_spread[g] = if ee > 0.0 { (excess / ee).max(0.0).min(f64::MAX) } else { 0.0 };
         }
-        (self.pool_level, self.pool_spread, self.apart) = (level, spread, apart);
-    }
-
-    /// Per-column sums as per-pool sums: the columns together for the whole grid.
-    fn pooled(&self, sums: &[[f64; 5]]) -> Vec<[f64; 5]> {
-        if self.pooling != Pooling::Grid {
-            return sums.to_vec();
-        }
-        let mut whole = [0.0; 5];
-        for s in sums {
-            for (w, v) in whole.iter_mut().zip(s) {
-                *w += v;
-            }
-        }
-        vec![whole]
+        (self.scratch, self.apart) = (scratch, apart);
     }
 
     /// λ_g of a pool of `volume` from its cells' sums (Σ n, Σ e, …), with the λ₀ prior.
     fn level(&self, sums: &[f64; 5], volume: f64) -> f64 {
-        (self.prior_intensity * self.prior_scans * volume + sums[0]) / (self.prior_scans * volume + sums[1])
+        let direct = (self.prior_intensity * self.prior_scans * volume + sums[0]) / (self.prior_scans * volume + sums[1]);
+        posterior_mean(direct, self.prior_intensity, self.prior_scans * volume, sums[0], sums[1])
     }
 
     /// The map with a saved state (see [`state`](Self::state)).
-    pub fn with_state(mut self, counts: Vec<f64>, deficit: Vec<f64>, exposure: f64, scale: f64) -> Result<Self> {
+    pub fn with_state(self, counts: Vec<f64>, deficit: Vec<f64>, exposure: f64, scale: f64) -> Result<Self> {
+        self.with_saved(Some(counts), Some(deficit), exposure, scale)
+    }
+
+    /// [`with_state`](Self::with_state) where a missing `counts` or `deficit` is the fresh
+    /// map's (zeros; no second grid is allocated).
+    pub fn with_saved(mut self, counts: Option<Vec<f64>>, deficit: Option<Vec<f64>>, exposure: f64, scale: f64) -> Result<Self> {
+        let counts = counts.unwrap_or_else(|| std::mem::take(&mut self.counts));
+        let deficit = deficit.unwrap_or_else(|| std::mem::take(&mut self.deficit));
         for (argument, values) in [("counts", &counts), ("deficit", &deficit)] {
-            if values.len() != self.counts.len() {
-                return Err(ModelError::shape(argument, format!("must have one entry per cell ({}), got {}", self.counts.len(), values.len())));
+            if values.len() != self.volumes.len() {
+                return Err(ModelError::shape(argument, format!("must have one entry per cell ({}), got {}", self.volumes.len(), values.len())));
             }
             if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
                 return Err(ModelError::invalid(argument, format!("must be finite and >= 0, got {v}")));
@@ -439,16 +540,18 @@ impl ClutterMap {
             }
             (None, _) => (self.prior_intensity, self.prior_scans),
         };
-        (prior * weight + n / self.volumes[cell]) / (weight + s)
+        let evidence = n / self.volumes[cell];
+        posterior_mean((prior * weight + evidence) / (weight + s), prior, weight, evidence, s)
     }
 
     /// λ_g of a pool: its cells' evidence together, with the λ₀ prior.
     #[inline]
     fn pool_intensity(&self, pool: usize) -> f64 {
         let volume = self.pool_volumes[pool];
-        let exposed = (volume * self.exposure - self.pool_deficit[pool]) / self.scale;
-        (self.prior_intensity * self.prior_scans * volume + self.pool_counts[pool] / self.scale)
-            / (self.prior_scans * volume + exposed.max(0.0))
+        let exposed = ((volume * self.exposure - self.pool_deficit[pool]) / self.scale).max(0.0);
+        let (weight, evidence) = (self.prior_scans * volume, self.pool_counts[pool] / self.scale);
+        let direct = (self.prior_intensity * self.prior_scans * volume + evidence) / (weight + exposed);
+        posterior_mean(direct, self.prior_intensity, weight, evidence, exposed)
     }
 
     /// λ at a world position (NaN when the position is not finite).
@@ -463,24 +566,18 @@ impl ClutterMap {
         }
     }
 
-    /// The posterior mean λ of every cell, row-major.
-    pub fn intensities(&self) -> Vec<f64> {
-        (0..self.counts.len()).map(|c| self.intensity_of(c)).collect()
+    /// λ at each of the world `positions` (M, 2, row-major) with their measured `ranges`
+    /// (NaN: from the position); a position that is not finite, or a range that is
+    /// infinite or negative, is an error naming its row.
+    pub fn intensity_at(&self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>) -> Result<Vec<f64>> {
+        let m = self.check_detections(positions, ranges)?;
+        let mut values = memory::with_room("positions", m)?;
+        values.extend((0..m).map(|i| self.value_at(pose, positions[2 * i], positions[2 * i + 1], ranges.map_or(f64::NAN, |r| r[i]))));
+        Ok(values)
     }
 
-    /// One scan: the `positions` (M, 2, world x/y) of its detections, with their measured
-    /// ranges (NaN: none), and `gates` (G, 3: world x, y, radius ≥ 0) around the tracks'
-    /// positions — detections inside a gate are not clutter, and its area is not exposed.
-    /// Checks every input before changing anything.
-    pub fn update(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>, gates: &[f64]) -> Result<()> {
-        self.update_weighted(pose, positions, ranges, None, gates)
-    }
-
-    /// [`update`](Self::update) with each detection counting `weights[i]` ∈ [0, 1] of a
-    /// clutter point instead of 1: the probability that it is clutter, when a tracker
-    /// knows it (a PHD update's λ / (λ + Σ P_D w g), a JPDA's no-target association).
-    /// The expected clutter count then feeds the posterior: an EM-style estimate.
-    pub fn update_weighted(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>, weights: Option<&[f64]>, gates: &[f64]) -> Result<()> {
+    /// The number of detections in `positions`, after checking them and their `ranges`.
+    fn check_detections(&self, positions: &[f64], ranges: Option<&[f64]>) -> Result<usize> {
         if !positions.len().is_multiple_of(2) {
             return Err(ModelError::shape("positions", "must be (M, 2)"));
         }
@@ -496,6 +593,41 @@ impl ClutterMap {
                 return Err(ModelError::non_finite("ranges", row, "range is infinite or negative (NaN = use the position)"));
             }
         }
+        Ok(m)
+    }
+
+    /// The posterior mean λ of every cell, row-major.
+    pub fn intensities(&self) -> Result<Vec<f64>> {
+        let mut values = memory::with_room("edges", self.counts.len())?;
+        values.extend((0..self.counts.len()).map(|c| self.intensity_of(c)));
+        Ok(values)
+    }
+
+    /// Brings the scale back to at most [`LARGE`] by exact powers of two.
+    fn rescale(&mut self) {
+        while self.scale > LARGE {
+            for v in self.counts.iter_mut().chain(self.deficit.iter_mut()) {
+                *v *= RESCALE;
+            }
+            self.exposure *= RESCALE;
+            self.scale *= RESCALE;
+        }
+    }
+
+    /// One scan: the `positions` (M, 2, world x/y) of its detections, with their measured
+    /// ranges (NaN: none), and `gates` (G, 3: world x, y, radius ≥ 0) around the tracks'
+    /// positions — detections inside a gate are not clutter, and its area is not exposed.
+    /// Checks every input before changing anything.
+    pub fn update(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>, gates: &[f64]) -> Result<()> {
+        self.update_weighted(pose, positions, ranges, None, gates)
+    }
+
+    /// [`update`](Self::update) with each detection counting `weights[i]` ∈ [0, 1] of a
+    /// clutter point instead of 1: the probability that it is clutter, when a tracker
+    /// knows it (a PHD update's λ / (λ + Σ P_D w g), a JPDA's no-target association).
+    /// The expected clutter count then feeds the posterior: an EM-style estimate.
+    pub fn update_weighted(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>, weights: Option<&[f64]>, gates: &[f64]) -> Result<()> {
+        let m = self.check_detections(positions, ranges)?;
         if let Some(w) = weights {
             if w.len() != m {
                 return Err(ModelError::shape("weights", format!("must have {m} entries, got {}", w.len())));
@@ -510,7 +642,18 @@ impl ClutterMap {
         if let Some(g) = gates.chunks_exact(3).position(|g| !(g.iter().all(|v| v.is_finite()) && g[2] >= 0.0)) {
             return Err(ModelError::non_finite("gates", g, "a gate needs a finite centre and a finite radius >= 0"));
         }
-        self.scale /= self.forgetting;
+        // the gated fractions this scan, per cell (room for every gate, before anything changes)
+        let mut gated: Vec<(usize, f64)> = memory::with_room("gates", gates.len() / 3)?;
+        self.rescale(); // (a restored state may hold any finite scale; a map's own is ≤ 2^256)
+        if self.forgetting >= RESCALE {
+            self.scale /= self.forgetting; // (≤ 2^512: the scale is ≤ 2^256 between updates)
+        } else {
+            // 1/γ would leave the scale's range: the stored sums are discounted instead
+            for v in self.counts.iter_mut().chain(self.deficit.iter_mut()) {
+                *v *= self.forgetting;
+            }
+            self.exposure *= self.forgetting;
+        }
         let inside_a_gate = |x: f64, y: f64| gates.chunks_exact(3).any(|g| (x - g[0]).powi(2) + (y - g[1]).powi(2) <= g[2] * g[2]);
         for i in 0..m {
             let (x, y) = (positions[2 * i], positions[2 * i + 1]);
@@ -523,7 +666,6 @@ impl ClutterMap {
             }
         }
         // each gated cell's fraction this scan, summed in gate order, then capped at 1
-        let mut gated: Vec<(usize, f64)> = Vec::new();
         for g in gates.chunks_exact(3) {
             let centre = self.coordinates(pose, g[0], g[1], f64::NAN);
             let Some(c) = self.cell(centre) else { continue };
@@ -542,13 +684,7 @@ impl ClutterMap {
             }
         }
         self.exposure += self.scale;
-        if self.scale > LARGE {
-            for v in self.counts.iter_mut().chain(self.deficit.iter_mut()) {
-                *v *= RESCALE;
-            }
-            self.exposure *= RESCALE;
-            self.scale *= RESCALE;
-        }
+        self.rescale();
         self.refresh_pools();
         Ok(())
     }
@@ -573,7 +709,7 @@ mod tests {
     fn a_fresh_map_is_the_prior_and_outside_is_the_prior() {
         let map = radar();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
-        assert!(map.intensities().iter().all(|v| *v == 1e-3));
+        assert!(map.intensities().unwrap().iter().all(|v| *v == 1e-3));
         assert_eq!(map.value_at(&pose, 5000.0, 0.0, f64::NAN), 1e-3);
         assert!(map.value_at(&pose, f64::NAN, 0.0, f64::NAN).is_nan());
     }
@@ -623,13 +759,13 @@ mod tests {
         assert_eq!(deficit, [fraction, 0.0]);
         assert_eq!(exposure, 1.0);
         let expected = (0.01 * 2.0 + 1.0 / 100.0) / (2.0 + 1.0 - fraction);
-        assert_eq!(map.intensities()[0], expected);
+        assert_eq!(map.intensities().unwrap()[0], expected);
         // a cell gated whole every scan learns nothing: the prior
         let mut covered = ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 1.0], vec![0.0, 1.0]], 0.01, 2.0, 0.9).unwrap();
         for _ in 0..50 {
             covered.update(&pose, &[0.2, 0.2, 0.9, 0.9], None, &[0.5, 0.5, 3.0]).unwrap();
         }
-        assert_eq!(covered.intensities()[0], 0.01);
+        assert_eq!(covered.intensities().unwrap()[0], 0.01);
     }
 
     #[test]
@@ -641,7 +777,7 @@ mod tests {
         }
         assert!(map.scale <= LARGE);
         // N → 1/(1 − γ) = 2 = S: λ = (0.5 + 2) / (1 + 2)
-        assert!((map.intensities()[0] - 2.5 / 3.0).abs() < 1e-12);
+        assert!((map.intensities().unwrap()[0] - 2.5 / 3.0).abs() < 1e-12);
     }
 
     #[test]
@@ -657,7 +793,7 @@ mod tests {
         let exposure = g + 1.0;
         let ring = |n: f64| (1e-3 * s0 * big + n) / (s0 * big + big * exposure);
         let cell = |ring: f64, n: f64| (ring * sp + n / v) / (sp + exposure);
-        let grid = map.intensities(); // rows: 8 bearings, columns: 2 ranges
+        let grid = map.intensities().unwrap(); // rows: 8 bearings, columns: 2 ranges
         let near = ring(2.0 * g);
         assert!((grid[4 * 2] - cell(near, 2.0 * g)).abs() <= 1e-15 * grid[8]);
         assert!((grid[0] - cell(near, 0.0)).abs() <= 1e-15 * grid[0], "a quiet cell follows its ring");
@@ -669,7 +805,7 @@ mod tests {
         whole.update(&pose, &[100.0, 1.0, 100.0, 2.0, 0.0, 700.0], None, &[]).unwrap();
         whole.update(&pose, &[], None, &[]).unwrap();
         let level = (1e-3 * s0 * 2.0 * big + 3.0 * g) / (2.0 * s0 * big + 2.0 * big * exposure);
-        assert!((whole.intensities()[1] - cell(level, 0.0)).abs() <= 1e-15 * level);
+        assert!((whole.intensities().unwrap()[1] - cell(level, 0.0)).abs() <= 1e-15 * level);
     }
 
     #[test]
@@ -677,7 +813,7 @@ mod tests {
         let (g, s0) = (0.9f64, 5.0);
         let mut map = radar().with_pooling(Pooling::Range, None).unwrap();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
-        assert_eq!(map.intensities(), vec![1e-3; 16], "no evidence: the prior everywhere");
+        assert_eq!(map.intensities().unwrap(), vec![1e-3; 16], "no evidence: the prior everywhere");
         // the near ring: four points a scan in cell (4, 0), two in (5, 0); the far ring: one
         // point in cell (6, 1), then one in (2, 1), beside a gate of radius 0 (no area, so no
         // deficit)
@@ -705,7 +841,7 @@ mod tests {
         let tau = excess / (7.0 * e * e);
         assert!(tau > 0.0);
         let weight = near / (tau * v);
-        let grid = map.intensities();
+        let grid = map.intensities().unwrap();
         let cell = |n: f64| (near * weight + n / v) / (weight + total);
         assert!((grid[8] - (1e-3 * s0 + n4 / v) / (s0 + total)).abs() <= 1e-12 * grid[8], "alone");
         assert!((grid[10] - cell(n5)).abs() <= 1e-12 * grid[10]);
@@ -754,7 +890,7 @@ mod tests {
             alone.update(&pose, &points, None, &[]).unwrap();
         }
         let v = PI / 18.0 * 500.0;
-        let ring = |m: &ClutterMap, r: usize| -> Vec<f64> { m.intensities().chunks_exact(2).map(|c| c[r] * v).collect() }; // points a scan
+        let ring = |m: &ClutterMap, r: usize| -> Vec<f64> { m.intensities().unwrap().chunks_exact(2).map(|c| c[r] * v).collect() }; // points a scan
         let spread = |values: &[f64]| {
             let mean = values.iter().sum::<f64>() / values.len() as f64;
             (values.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / values.len() as f64).sqrt()
@@ -801,7 +937,7 @@ mod tests {
             }
             let (counts, deficit, exposure, scale) = map.state();
             let restored = fresh().with_state(counts.to_vec(), deficit.to_vec(), exposure, scale).unwrap();
-            assert_eq!(restored.intensities(), map.intensities());
+            assert_eq!(restored.intensities().unwrap(), map.intensities().unwrap());
             assert_eq!(restored, map);
         }
     }
@@ -854,5 +990,156 @@ mod tests {
         assert_eq!(map.clone().with_state(vec![-1.0], vec![0.0], 0.0, 1.0).unwrap_err().argument(), "counts");
         assert_eq!(map.clone().with_state(vec![0.0], vec![2.0], 1.0, 1.0).unwrap_err().argument(), "deficit");
         assert_eq!(map.with_state(vec![0.0], vec![0.0], 0.0, 0.0).unwrap_err().argument(), "scale");
+    }
+
+    #[test]
+    fn the_scale_bounds_are_the_powers_of_two_they_claim() {
+        assert_eq!(MAX_VOLUME, 2f64.powi(702));
+        // the pools' sums: the largest grid times the largest scaled exposure stays finite
+        assert!((MAX_VOLUME * 2f64.powi(310)).is_finite());
+    }
+
+    #[test]
+    fn the_measured_cases_stay_finite() {
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        let grid = || [vec![0.0, 10.0, 20.0], vec![0.0, 10.0]];
+        // forgetting 1e-150: the running scale overflowed after four empty updates
+        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), 1e-3, 5.0, 1e-150).unwrap();
+        for _ in 0..6 {
+            map.update(&pose, &[], None, &[]).unwrap();
+        }
+        assert!(map.intensities().unwrap().iter().all(|l| l.is_finite() && *l >= f64::MIN_POSITIVE));
+        // λ₀ s₀ overflowing f64
+        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), 1e300, 1e10, 0.9).unwrap();
+        map.update(&pose, &[5.0, 5.0], None, &[]).unwrap();
+        assert!(map.intensities().unwrap().iter().all(|l| l.is_finite() && *l > 0.0), "{:?}", map.intensities());
+        // s₀ V_g overflowing f64
+        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), 1e-3, 1e308, 0.9).unwrap().with_pooling(Pooling::Grid, Some(10.0)).unwrap();
+        map.update(&pose, &[5.0, 5.0], None, &[]).unwrap();
+        assert!(map.intensities().unwrap().iter().all(|l| l.is_finite() && *l > 0.0), "{:?}", map.intensities());
+        // a tiny λ₀ against many scans: floored at the smallest normal double
+        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), f64::MIN_POSITIVE, 1e-300, 1.0).unwrap();
+        map.update(&pose, &[], None, &[]).unwrap();
+        assert_eq!(map.intensities().unwrap(), [f64::MIN_POSITIVE; 2]);
+        assert_eq!(ClutterMap::new(MapSpace::WorldXY, grid(), 1e-310, 1.0, 1.0).unwrap_err().argument(), "prior_intensity");
+        assert_eq!(ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 1e150], vec![0.0, 1e150]], 1.0, 1.0, 1.0).unwrap_err().argument(), "edges");
+    }
+
+    #[test]
+    fn intensity_at_refuses_positions_and_ranges_it_cannot_place() {
+        let map = radar();
+        let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+        assert_eq!(map.intensity_at(&pose, &[100.0, 1.0, 5000.0, 0.0], None).unwrap(), [1e-3, 1e-3]);
+        for bad in [f64::NAN, f64::INFINITY] {
+            assert_eq!(map.intensity_at(&pose, &[100.0, 1.0, bad, 0.0], None).unwrap_err(), ModelError::non_finite("positions", 1, "position is NaN or infinite"));
+        }
+        assert_eq!(map.intensity_at(&pose, &[100.0, 1.0], Some(&[-1.0])).unwrap_err().argument(), "ranges");
+        assert_eq!(map.intensity_at(&pose, &[100.0, 1.0], Some(&[f64::NAN])).unwrap(), [1e-3]);
+    }
+
+    mod finite {
+        //! Properties over the whole accepted ranges of the configuration and of updates:
+        //! every λ finite and normal, every state value finite, on every SIMD backend.
+        use super::*;
+        use crate::simd::{on_backend, Backend};
+        use proptest::prelude::*;
+
+        /// A positive double from the whole range: the extremes, or 10^e.
+        fn anywhere(low: f64, high: f64) -> impl Strategy<Value = f64> {
+            let (a, b) = (low.log10().max(-323.0), high.log10().min(308.2));
+            prop_oneof![Just(low), Just(high), (a..b).prop_map(move |e| 10f64.powf(e).clamp(low, high))]
+        }
+
+        fn forgetting() -> impl Strategy<Value = f64> {
+            prop_oneof![Just(1.0), Just(RESCALE), Just(f64::from_bits(1)), anywhere(f64::from_bits(1), 1.0), (0.5..1.0f64)]
+        }
+
+        fn weight() -> impl Strategy<Value = f64> {
+            prop_oneof![Just(0.0), Just(1.0), Just(f64::from_bits(1)), (0.0..=1.0f64)]
+        }
+
+        #[derive(Debug, Clone)]
+        struct Scan {
+            /// Points as fractions of the grid's extent (some outside it).
+            points: Vec<(f64, f64, f64)>,
+            /// Gates: centre as fractions, radius as a fraction of the extent.
+            gates: Vec<(f64, f64, f64)>,
+            weighted: bool,
+        }
+
+        fn scan() -> impl Strategy<Value = Scan> {
+            let point = (-0.2..1.2f64, -0.2..1.2f64, weight());
+            let gate = (0.0..1.0f64, 0.0..1.0f64, prop_oneof![Just(0.0), (0.0..2.0f64)]);
+            (prop::collection::vec(point, 0..8), prop::collection::vec(gate, 0..3), any::<bool>())
+                .prop_map(|(points, gates, weighted)| Scan { points, gates, weighted })
+        }
+
+        fn pooling() -> impl Strategy<Value = (u8, Option<f64>)> {
+            (0u8..3, prop_oneof![Just(None), anywhere(f64::from_bits(1), f64::MAX).prop_map(Some)])
+        }
+
+        fn check(map: &ClutterMap, pose: &Pose) -> std::result::Result<(), TestCaseError> {
+            for l in map.intensities().unwrap() {
+                prop_assert!(l.is_finite() && l >= f64::MIN_POSITIVE, "λ {l:e}");
+            }
+            let (counts, deficit, exposure, scale) = map.state();
+            prop_assert!(counts.iter().chain(deficit).all(|v| v.is_finite() && *v >= 0.0), "{counts:?} {deficit:?}");
+            prop_assert!(exposure.is_finite() && scale.is_finite() && scale > 0.0 && scale <= LARGE, "{exposure:e} {scale:e}");
+            prop_assert!(map.pool_level.iter().chain(&map.pool_spread).all(|v| v.is_finite()));
+            let outside = map.value_at(pose, 1e300, 1e300, f64::NAN);
+            prop_assert!(outside.is_finite() && outside >= f64::MIN_POSITIVE);
+            Ok(())
+        }
+
+        proptest! {
+            #[test]
+            fn every_learned_value_stays_finite(
+                prior_intensity in anywhere(f64::MIN_POSITIVE, f64::MAX),
+                prior_scans in anywhere(f64::from_bits(1), f64::MAX),
+                forgetting in forgetting(),
+                (pool, pooled_scans) in pooling(),
+                magnitude in -300.0..300.0f64,
+                bearing_range in any::<bool>(),
+                scans in prop::collection::vec(scan(), 1..40),
+            ) {
+                let size = 10f64.powf(magnitude / 2.0);
+                let (space, edges) = if bearing_range || pool == 1 {
+                    (MapSpace::BearingRange, [vec![-PI, -1.0, 0.5, PI], (0..4).map(|i| i as f64 * size).collect::<Vec<_>>()])
+                } else {
+                    (MapSpace::WorldXY, [vec![-size, 0.0, size], vec![0.0, size, 3.0 * size]])
+                };
+                let extent = 3.0 * size;
+                let pooling = [Pooling::None, Pooling::Range, Pooling::Grid][pool as usize];
+                let built = ClutterMap::new(space, edges, prior_intensity, prior_scans, forgetting).and_then(|m| m.with_pooling(pooling, pooled_scans));
+                let fresh = match built {
+                    Ok(map) => map,
+                    // only a grid too large (or cells too small) for f64 is refused
+                    Err(err) => { prop_assert_eq!(err.argument(), "edges"); return Ok(()); }
+                };
+                let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
+                let mut results = Vec::new();
+                for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
+                    let mut map = fresh.clone();
+                    on_backend(backend, || -> std::result::Result<(), TestCaseError> {
+                        check(&map, &pose)?;
+                        for s in &scans {
+                            let positions: Vec<f64> = s.points.iter().flat_map(|(u, v, _)| [u * extent - size, v * extent]).collect();
+                            let weights: Vec<f64> = s.points.iter().map(|p| p.2).collect();
+                            let gates: Vec<f64> = s.gates.iter().flat_map(|(u, v, r)| [u * extent - size, v * extent, r * extent]).collect();
+                            map.update_weighted(&pose, &positions, None, s.weighted.then_some(&weights[..]), &gates).unwrap();
+                            check(&map, &pose)?;
+                        }
+                        // the state restores to the same map, bit for bit
+                        let (counts, deficit, exposure, scale) = map.state();
+                        let restored = fresh.clone().with_state(counts.to_vec(), deficit.to_vec(), exposure, scale).unwrap();
+                        prop_assert_eq!(&restored, &map);
+                        Ok(())
+                    })?;
+                    results.push(map);
+                }
+                // every backend learns the same bits
+                prop_assert!(results.windows(2).all(|w| w[0] == w[1]));
+            }
+        }
     }
 }

@@ -12,6 +12,7 @@
 
 use crate::error::{ModelError, Result};
 use crate::land::LandMask;
+use crate::memory;
 use crate::sight::LineOfSight;
 use parry2d_f64::bounding_volume::Aabb;
 use parry2d_f64::math::Vector;
@@ -51,7 +52,8 @@ impl CoastalBand {
         if !(inside.is_finite() && inside > 0.0) {
             return Err(ModelError::invalid("inside", format!("must be finite and > 0, got {inside}")));
         }
-        let mut segments = Vec::new();
+        let count = land.polygons().iter().map(|p| p.shell.len() + p.holes.iter().map(Vec::len).sum::<usize>()).sum();
+        let mut segments = memory::with_room("land", count)?;
         for polygon in land.polygons() {
             for ring in std::iter::once(&polygon.shell).chain(&polygon.holes) {
                 for k in 0..ring.len() {
@@ -59,12 +61,13 @@ impl CoastalBand {
                 }
             }
         }
-        let boxes: Vec<Aabb> = segments
-            .iter()
-            .map(|[a, b]| Aabb::new(Vector::new(a[0].min(b[0]), a[1].min(b[1])), Vector::new(a[0].max(b[0]), a[1].max(b[1]))))
-            .collect();
+        let boxes: Vec<Aabb> = memory::collected(
+            "land",
+            segments.iter().map(|[a, b]| Aabb::new(Vector::new(a[0].min(b[0]), a[1].min(b[1])), Vector::new(a[0].max(b[0]), a[1].max(b[1])))),
+        )?;
+        // (parry's tree allocates infallibly: about as large as the boxes just allocated)
         let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &boxes);
-        let sight = seen_only.then(|| Arc::new(LineOfSight::new(land)));
+        let sight = if seen_only { Some(Arc::new(LineOfSight::new(land)?)) } else { None };
         Ok(CoastalBand { width, inside, segments, bvh, sight })
     }
 
@@ -85,11 +88,23 @@ impl CoastalBand {
             let q = nearest_on_segment(self.segments[k as usize], p);
             let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
             // ties: the first segment in ring order, so the answer never depends on the tree
-            if d2 <= w * w && best.is_none_or(|(_, b)| d2 < b || (d2 == b && q < best.unwrap().0)) {
+            if d2 <= w * w && best.is_none_or(|(nearest, b)| d2 < b || (d2 == b && q < nearest)) {
                 best = Some((q, d2));
             }
         }
         best.map(|(q, _)| q)
+    }
+
+    /// The factor at each of the world `positions` (M, 2, row-major) for a sensor at
+    /// `sensor`; a position that is not finite is an error naming its row.
+    pub fn evaluate(&self, sensor: [f64; 2], positions: &[f64]) -> Result<Vec<f64>> {
+        if !positions.len().is_multiple_of(2) {
+            return Err(ModelError::shape("positions", "must be (M, 2)"));
+        }
+        if let Some(row) = positions.chunks_exact(2).position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+            return Err(ModelError::non_finite("positions", row, "position is NaN or infinite"));
+        }
+        memory::collected("positions", positions.chunks_exact(2).map(|p| self.value_at(sensor, p[0], p[1])))
     }
 
     /// The factor at world (x, y) for a sensor at `sensor`: `inside` in the band, else 1
@@ -135,6 +150,11 @@ mod tests {
         assert_eq!(band.value_at(origin, 990.0, 60.0), 7.0); // near the corner: √(10² + 10²) < 20
         assert_eq!(band.value_at(origin, 985.0, 65.0), 1.0); // √(15² + 15²) > 20
         assert!(band.value_at(origin, f64::NAN, 0.0).is_nan());
+        assert_eq!(band.evaluate(origin, &[980.0, 0.0, 979.9, 0.0]).unwrap(), [7.0, 1.0]);
+        for bad in [f64::NAN, f64::INFINITY] {
+            let err = band.evaluate(origin, &[980.0, 0.0, bad, 0.0]).unwrap_err();
+            assert_eq!(err, ModelError::non_finite("positions", 1, "position is NaN or infinite"));
+        }
     }
 
     #[test]

@@ -24,6 +24,7 @@ impl Rule {
 
     pub fn cubature() -> Rule {
         let s = 2f64.sqrt();
+        // (fixed sizes, as every rule's: at most 32² points, `order` being checked below)
         Rule { points: vec![[s, 0.0], [-s, 0.0], [0.0, s], [0.0, -s]], weights: vec![0.25; 4] }
     }
 
@@ -51,10 +52,11 @@ impl Rule {
             jacobi[(k, k - 1)] = off;
         }
         let eig = SymmetricEigen::new(jacobi);
+        // (order ≤ 32, checked above: these hold at most 1024 values)
         let nodes: Vec<f64> = eig.eigenvalues.iter().copied().collect();
         let weights: Vec<f64> = (0..order).map(|k| eig.eigenvectors[(0, k)].powi(2)).collect();
         let mut points = Vec::with_capacity(order * order);
-        let mut w2 = Vec::with_capacity(order * order);
+        let mut w2 = Vec::with_capacity(order * order); // (≤ 1024, as points)
         for (i, &xi) in nodes.iter().enumerate() {
             for (j, &xj) in nodes.iter().enumerate() {
                 points.push([xi, xj]);
@@ -62,7 +64,7 @@ impl Rule {
             }
         }
         let total: f64 = w2.iter().sum();
-        Ok(Rule { points, weights: w2.into_iter().map(|w| w / total).collect() })
+        Ok(Rule { points, weights: w2.into_iter().map(|w| w / total).collect() }) // (≤ 1024)
     }
 
     pub fn points(&self) -> &[[f64; 2]] {

@@ -41,13 +41,17 @@ pub struct DetectionModel {
 impl DetectionModel {
     pub fn new(factors: Vec<DetectionFactor>) -> Result<Self> {
         for (i, f) in factors.iter().enumerate() {
-            let values: Vec<f64> = match f {
-                DetectionFactor::Constant(v) => vec![*v],
-                DetectionFactor::Range(b) => b.values().to_vec(),
-                DetectionFactor::Sector(s) => s.values().to_vec(),
-                DetectionFactor::Land(_) | DetectionFactor::Sight(_) | DetectionFactor::Estimate(_) => vec![], // (probabilities by construction)
+            let sector;
+            let values: &[f64] = match f {
+                DetectionFactor::Constant(v) => std::slice::from_ref(v),
+                DetectionFactor::Range(b) => b.values(),
+                DetectionFactor::Sector(s) => {
+                    sector = s.values();
+                    &sector
+                }
+                DetectionFactor::Land(_) | DetectionFactor::Sight(_) | DetectionFactor::Estimate(_) => &[], // (probabilities by construction)
             };
-            for v in values {
+            for &v in values {
                 check_probability("factors", v).map_err(|_| {
                     ModelError::invalid("factors", format!("factor {i} holds {v}, but detection probabilities must lie in [0, 1]"))
                 })?;
@@ -206,11 +210,13 @@ impl ScanDetection {
         let problems = std::sync::Mutex::new(Vec::<(usize, lanes::BadGaussian)>::new());
         let bad = for_each_chunk(out, |first, chunk| {
             let (i, kind) = dispatch(lanes::Expected { scan: self, gaussians, rule, first, out: chunk })?;
-            problems.lock().unwrap().push((first + i, kind));
+            // (one entry per chunk at most, so not user-sized beyond the output; a poisoned
+            // lock still holds whole entries: the push is its only use)
+            problems.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push((first + i, kind));
             Some(i)
         });
         let Some(row) = bad else { return Ok(()) };
-        let problems = problems.into_inner().unwrap();
+        let problems = problems.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
         Err(match problems.iter().find(|(r, _)| *r == row).map(|(_, k)| *k) {
             Some(lanes::BadGaussian::Covar) => ModelError::invalid(
                 "covars",

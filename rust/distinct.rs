@@ -140,6 +140,7 @@ impl Distinct {
 pub fn ln_in_place(values: &mut [f64]) {
     let table = Distinct::of(values, MAX_DISTINCT);
     if let Some(table) = table {
+        // (a table holds at most MAX_DISTINCT values)
         let image: Vec<f64> = table.values().iter().map(|v| v.ln()).collect();
         if table.apply(values, &image).is_ok() {
             return;

@@ -14,6 +14,9 @@ pub enum ModelError {
     /// Array shapes do not fit together.
     #[error("{argument}: {message}")]
     Shape { argument: &'static str, message: String },
+    /// A buffer whose size the argument sets cannot be allocated (or its size overflows).
+    #[error("{argument}: needs {bytes} bytes of memory, which cannot be allocated")]
+    Memory { argument: &'static str, bytes: u128 },
 }
 
 impl ModelError {
@@ -29,12 +32,17 @@ impl ModelError {
         ModelError::NonFinite { argument, row, message: message.into() }
     }
 
+    pub fn memory(argument: &'static str, bytes: u128) -> Self {
+        ModelError::Memory { argument, bytes }
+    }
+
     /// The argument the error is about.
     pub fn argument(&self) -> &'static str {
         match self {
             ModelError::InvalidArgument { argument, .. }
             | ModelError::NonFinite { argument, .. }
-            | ModelError::Shape { argument, .. } => argument,
+            | ModelError::Shape { argument, .. }
+            | ModelError::Memory { argument, .. } => argument,
         }
     }
 }

@@ -147,7 +147,7 @@ pub(crate) fn detection_factor() -> impl Strategy<Value = Option<DetectionFactor
         3 => (angle(), prop_oneof![3 => 0.0..=TAU, 1 => wild()], probability(), probability())
             .prop_map(|(c, w, i, o)| AngularSector::new(c, w, i, o).ok().map(DetectionFactor::Sector)),
         1 => land().prop_map(|l| Some(DetectionFactor::Land(l))),
-        1 => land().prop_map(|l| Some(DetectionFactor::Sight(Arc::new(LineOfSight::new(l))))),
+        1 => land().prop_map(|l| Some(DetectionFactor::Sight(Arc::new(LineOfSight::new(l).unwrap())))),
     ]
 }
 
@@ -210,7 +210,7 @@ proptest! {
 
     #[test]
     fn line_of_sight_never_panics(land in land(), sensor in [coord(), coord()], pts in points()) {
-        let sight = LineOfSight::new(land.clone());
+        let sight = LineOfSight::new(land.clone()).unwrap();
         for t in &pts {
             let _ = sight.visible(sensor, *t);
         }
@@ -347,7 +347,7 @@ proptest! {
                 ClutterFactor::Metadata(r) => [r.below, r.at_or_above].into_iter().chain(r.missing).collect(),
                 ClutterFactor::Map(m) => {
                     let map = crate::clutter::read_map(m);
-                    map.intensities().into_iter().chain([map.prior_intensity()]).collect()
+                    map.intensities().unwrap().into_iter().chain([map.prior_intensity()]).collect()
                 }
                 ClutterFactor::Coast(band) => vec![band.inside(), 1.0],
             };
@@ -387,7 +387,7 @@ fn lambda_that_underflows_is_an_error() {
 #[should_panic(expected = "index and ray cast disagree")]
 fn known_issue_sight_of_overflowing_segment() {
     let square = Polygon { shell: vec![[-100.0, -100.0], [100.0, -100.0], [100.0, 100.0], [-100.0, 100.0]], holes: vec![] };
-    let sight = LineOfSight::new(Arc::new(LandMask::new(vec![square]).unwrap()));
+    let sight = LineOfSight::new(Arc::new(LandMask::new(vec![square]).unwrap())).unwrap();
     let (sensor, target) = ([-1e300, 0.0], [f64::MAX, 0.0]);
     assert_eq!(sight.from_point(sensor).visible(target), sight.visible(sensor, target), "index and ray cast disagree");
 }

@@ -20,6 +20,7 @@
 //! over the edges of the point's row of cells.
 
 use crate::error::{ModelError, Result};
+use crate::memory;
 use parry2d_f64::bounding_volume::Aabb;
 use parry2d_f64::math::Vector;
 use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
@@ -99,8 +100,17 @@ fn scale_for(size: f64) -> f64 {
     f64::from_bits(((exponent + 1023) as u64) << 52)
 }
 
-fn scale_ring(ring: &[Point], scale: f64) -> Vec<Point> {
-    ring.iter().map(|p| [p[0] * scale, p[1] * scale]).collect()
+fn scale_ring(ring: &[Point], scale: f64) -> Result<Vec<Point>> {
+    memory::collected("polygons", ring.iter().map(|p| [p[0] * scale, p[1] * scale]))
+}
+
+/// Every ring of `polygon` scaled by `scale`.
+fn scale_polygon(polygon: &Polygon, scale: f64) -> Result<Polygon> {
+    let mut holes = memory::with_room("polygons", polygon.holes.len())?;
+    for h in &polygon.holes {
+        holes.push(scale_ring(h, scale)?);
+    }
+    Ok(Polygon { shell: scale_ring(&polygon.shell, scale)?, holes })
 }
 
 impl LandMask {
@@ -119,18 +129,20 @@ impl LandMask {
         let polygons: Vec<Polygon> = if scale == 1.0 {
             polygons
         } else {
-            polygons
-                .iter()
-                .map(|p| Polygon { shell: scale_ring(&p.shell, scale), holes: p.holes.iter().map(|h| scale_ring(h, scale)).collect() })
-                .collect()
+            let mut scaled = memory::with_room("polygons", polygons.len())?;
+            for p in &polygons {
+                scaled.push(scale_polygon(p, scale)?);
+            }
+            scaled
         };
-        let mut cleaned = Vec::with_capacity(polygons.len());
-        let mut edges = Vec::new();
+        let vertices = polygons.iter().map(|p| p.shell.len() + p.holes.iter().map(Vec::len).sum::<usize>()).sum();
+        let mut cleaned = memory::with_room("polygons", polygons.len())?;
+        let mut edges = memory::with_room("polygons", vertices)?; // (at most one edge per vertex)
         // (polygon index, ring index within polygon, first edge, edge count) per ring.
-        let mut rings = Vec::new();
+        let mut rings = memory::with_room("polygons", polygons.iter().map(|p| 1 + p.holes.len()).sum())?;
         for (pi, polygon) in polygons.iter().enumerate() {
             let shell = clean_ring(&polygon.shell, pi, None)?;
-            let mut holes = Vec::with_capacity(polygon.holes.len());
+            let mut holes = memory::with_room("polygons", polygon.holes.len())?;
             for (hi, hole) in polygon.holes.iter().enumerate() {
                 holes.push(clean_ring(hole, pi, Some(hi))?);
             }
@@ -145,12 +157,14 @@ impl LandMask {
         }
         check_no_crossings(&edges, &rings)?;
         check_nesting(&cleaned)?;
-        let grid = Grid::build(&edges);
+        let grid = Grid::build(&edges)?;
         if scale != 1.0 {
-            // Back to world coordinates: dividing by a power of two undoes the scaling exactly.
-            for p in &mut cleaned {
-                p.shell = scale_ring(&p.shell, 1.0 / scale);
-                p.holes = p.holes.iter().map(|h| scale_ring(h, 1.0 / scale)).collect();
+            // Back to world coordinates: dividing by a power of two undoes the scaling
+            // exactly (in place: nothing to allocate).
+            for ring in cleaned.iter_mut().flat_map(|p| std::iter::once(&mut p.shell).chain(p.holes.iter_mut())) {
+                for v in ring.iter_mut() {
+                    *v = [v[0] / scale, v[1] / scale];
+                }
             }
         }
         Ok(LandMask { polygons: cleaned, edges, grid, scale })
@@ -216,7 +230,7 @@ fn ring_name(polygon: usize, hole: Option<usize>) -> String {
 
 fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) -> Result<Vec<Point>> {
     let name = ring_name(polygon, hole);
-    let mut out: Vec<Point> = Vec::with_capacity(ring.len());
+    let mut out: Vec<Point> = memory::with_room("polygons", ring.len())?;
     for (k, p) in ring.iter().enumerate() {
         if !p[0].is_finite() || !p[1].is_finite() {
             return Err(ModelError::invalid("polygons", format!("{name}: vertex {k} is not finite ({}, {})", p[0], p[1])));
@@ -236,7 +250,7 @@ fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) -> Result<Vec
     if area == 0.0 {
         // Exactly 0 is collinear, or a ring so much smaller than the rest of the mask that
         // its area underflows: tell which, from the area at the ring's own scale.
-        let own = signed_area(&scale_ring(&out, scale_for(ring_size(&out))));
+        let own = signed_area(&scale_ring(&out, scale_for(ring_size(&out)))?);
         if own == 0.0 {
             return Err(ModelError::invalid("polygons", format!("{name}: has zero area (all vertices on a line)")));
         }
@@ -290,10 +304,12 @@ pub(crate) fn segments_meet(a: Point, b: Point, c: Point, d: Point) -> bool {
 /// No two edges may meet, except consecutive edges of one ring at their shared vertex.
 /// Candidate pairs come from a parry BVH over the edges' bounding boxes.
 fn check_no_crossings(edges: &[Edge], rings: &[(usize, usize, usize, usize)]) -> Result<()> {
-    let aabbs: Vec<Aabb> = edges.iter().map(Edge::aabb).collect();
+    let aabbs: Vec<Aabb> = memory::collected("polygons", edges.iter().map(Edge::aabb))?;
+    // (parry's tree allocates infallibly, a few nodes per edge: as large as the boxes just
+    // allocated, so a mask whose size fails fails above, before it)
     let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &aabbs);
     // Which ring each edge belongs to, and its position in the ring.
-    let mut owner = vec![(0usize, 0usize, 0usize); edges.len()];
+    let mut owner = memory::filled("polygons", edges.len(), (0usize, 0usize, 0usize))?;
     for (ring_id, &(_, _, first, count)) in rings.iter().enumerate() {
         for k in 0..count {
             owner[first + k] = (ring_id, k, count);
@@ -334,32 +350,31 @@ fn check_no_crossings(edges: &[Edge], rings: &[(usize, usize, usize, usize)]) ->
     Ok(())
 }
 
-fn ring_edges(ring: &[Point]) -> Vec<Edge> {
-    (0..ring.len()).map(|k| Edge { a: ring[k], b: ring[(k + 1) % ring.len()] }).collect()
+fn ring_edges(ring: &[Point]) -> Result<Vec<Edge>> {
+    memory::collected("polygons", (0..ring.len()).map(|k| Edge { a: ring[k], b: ring[(k + 1) % ring.len()] }))
 }
 
 /// Holes inside their shell and not inside each other; no polygon on another's land.
 /// Rings do not meet (checked before), so one vertex decides where a whole ring lies.
 fn check_nesting(polygons: &[Polygon]) -> Result<()> {
-    let land_edges: Vec<Vec<Edge>> = polygons
-        .iter()
-        .map(|p| {
-            let mut e = ring_edges(&p.shell);
-            for h in &p.holes {
-                e.extend(ring_edges(h));
-            }
-            e
-        })
-        .collect();
-    let bounds: Vec<[f64; 4]> = polygons.iter().map(|p| ring_bounds(&p.shell)).collect();
+    let mut land_edges: Vec<Vec<Edge>> = memory::with_room("polygons", polygons.len())?;
+    for p in polygons {
+        let mut e = ring_edges(&p.shell)?;
+        for h in &p.holes {
+            e.try_reserve_exact(h.len()).map_err(|_| ModelError::memory("polygons", (e.len() + h.len()) as u128 * 32))?;
+            e.extend(ring_edges(h)?);
+        }
+        land_edges.push(e);
+    }
+    let bounds: Vec<[f64; 4]> = memory::collected("polygons", polygons.iter().map(|p| ring_bounds(&p.shell)))?;
     for (pi, polygon) in polygons.iter().enumerate() {
-        let shell_edges = ring_edges(&polygon.shell);
+        let shell_edges = ring_edges(&polygon.shell)?;
         for (hi, hole) in polygon.holes.iter().enumerate() {
             if !contains_exact(&shell_edges, hole[0]) {
                 return Err(ModelError::invalid("polygons", format!("polygon {pi} hole {hi} lies outside its shell")));
             }
             for (hj, other) in polygon.holes.iter().enumerate() {
-                if hj != hi && contains_exact(&ring_edges(other), hole[0]) {
+                if hj != hi && contains_exact(&ring_edges(other)?, hole[0]) {
                     return Err(ModelError::invalid("polygons", format!("polygon {pi} hole {hi} lies inside hole {hj}")));
                 }
             }
@@ -465,13 +480,15 @@ fn edge_bounds(edges: &[Edge]) -> (Point, Point) {
 /// `origin`, cell size `cell`) that its segment touches. Boxes are grown by `margin`, so
 /// rounding in the query's cell lookup never loses an edge from the cell a point lands in.
 /// Returns (cell id, edge) pairs sorted by cell.
-fn register(edges: &[Edge], candidates: &[u32], origin: Point, cell: [f64; 2], n: [usize; 2], margin: [f64; 2]) -> Vec<(u32, u32)> {
+fn register(edges: &[Edge], candidates: &[u32], origin: Point, cell: [f64; 2], n: [usize; 2], margin: [f64; 2]) -> Result<Vec<(u32, u32)>> {
     let index = |v: f64, axis: usize| (((v - origin[axis]) / cell[axis]).floor().max(0.0) as usize).min(n[axis] - 1);
-    let mut pairs = Vec::with_capacity(candidates.len() * 3);
+    let mut pairs = memory::with_room("polygons", memory::product("polygons", &[candidates.len(), 3])?)?;
     for &k in candidates {
         let e = &edges[k as usize];
         let (i0, i1) = (index(e.a[0].min(e.b[0]) - margin[0], 0), index(e.a[0].max(e.b[0]) + margin[0], 0));
         let (j0, j1) = (index(e.a[1].min(e.b[1]) - margin[1], 1), index(e.a[1].max(e.b[1]) + margin[1], 1));
+        let most = (i1 - i0 + 1) * (j1 - j0 + 1); // (cells within 2^14 × 2^14: no overflow)
+        pairs.try_reserve(most).map_err(|_| ModelError::memory("polygons", (pairs.len() + most) as u128 * 8))?;
         for j in j0..=j1 {
             for i in i0..=i1 {
                 let x0 = origin[0] + i as f64 * cell[0];
@@ -484,7 +501,7 @@ fn register(edges: &[Edge], candidates: &[u32], origin: Point, cell: [f64; 2], n
         }
     }
     pairs.sort_unstable();
-    pairs
+    Ok(pairs)
 }
 
 /// Even–odd parity of the horizontal ray from (x, y) to +∞ for each x of `xs` (ascending),
@@ -505,7 +522,7 @@ fn row_parities(edges: &[Edge], candidates: &[u32], y: f64, xs: &[f64], crossing
 }
 
 impl Grid {
-    fn build(edges: &[Edge]) -> Grid {
+    fn build(edges: &[Edge]) -> Result<Grid> {
         let (min, max) = edge_bounds(edges);
         // About one level-0 cell per edge keeps that table small (it is touched by every
         // query); dense cells are split below.
@@ -518,16 +535,16 @@ impl Grid {
         let scale = min[0].abs().max(min[1].abs()).max(max[0].abs()).max(max[1].abs());
         let margin_for = |c: [f64; 2]| [c[0] * 1e-7 + scale * 1e-13, c[1] * 1e-7 + scale * 1e-13];
 
-        let all: Vec<u32> = (0..edges.len() as u32).collect();
-        let pairs = register(edges, &all, min, cell, [nx, ny], margin_for(cell));
-        let mut cell_start = vec![0usize; nx * ny + 1];
+        let all: Vec<u32> = memory::collected("polygons", 0..edges.len() as u32)?;
+        let pairs = register(edges, &all, min, cell, [nx, ny], margin_for(cell))?;
+        let mut cell_start = memory::filled("polygons", nx * ny + 1, 0usize)?; // (nx, ny ≤ 2^14)
         for &(c, _) in &pairs {
             cell_start[c as usize + 1] += 1;
         }
         for c in 0..nx * ny {
             cell_start[c + 1] += cell_start[c];
         }
-        let level0_edges: Vec<u32> = pairs.into_iter().map(|(_, k)| k).collect();
+        let level0_edges: Vec<u32> = memory::collected("polygons", pairs.into_iter().map(|(_, k)| k))?;
         let cell_list = |c: usize| &level0_edges[cell_start[c]..cell_start[c + 1]];
 
         // Split dense cells, all into the same s × s, within a memory budget of a few
@@ -548,18 +565,22 @@ impl Grid {
             nx,
             ny,
             last: [(nx - 1) as f64, (ny - 1) as f64],
-            slots: vec![Slot::default(); nx * ny],
-            kinds: vec![0; (nx * ny).div_ceil(32)],
+            slots: memory::filled("polygons", nx * ny, Slot::default())?,
+            kinds: memory::filled("polygons", (nx * ny).div_ceil(32), 0)?,
             split,
             sub_cell,
             inv_sub_cell: [1.0 / sub_cell[0], 1.0 / sub_cell[1]],
-            sub_slots: Vec::with_capacity(dense * split * split),
-            cell_edges: Vec::with_capacity(level0_edges.len() * 2),
-            row_start: vec![0],
+            sub_slots: memory::with_room("polygons", memory::product("polygons", &[dense, split, split])?)?,
+            cell_edges: memory::with_room("polygons", memory::product("polygons", &[level0_edges.len(), 2])?)?,
+            row_start: Vec::new(),
             row_edges: Vec::new(),
         };
 
-        let mut seen_in_row = vec![usize::MAX; edges.len()];
+        let mut seen_in_row = memory::filled("polygons", edges.len(), usize::MAX)?;
+        // (row_edges holds each edge once per row it touches: at most the level-0 pairs)
+        grid.row_edges = memory::with_room("polygons", level0_edges.len())?;
+        grid.row_start = memory::with_room("polygons", ny + 1)?;
+        grid.row_start.push(0);
         let (mut crossings, mut parities) = (Vec::new(), Vec::new());
         let mut xs = Vec::new();
         for j in 0..ny {
@@ -575,16 +596,16 @@ impl Grid {
                 }
             }
             grid.row_start.push(grid.row_edges.len() as u32);
-            let row = grid.row_edges[row_first..].to_vec();
+            let row = memory::copied("polygons", &grid.row_edges[row_first..])?;
 
             xs.clear();
             xs.extend((0..nx).map(|i| grid.centre(i, j)[0]));
             row_parities(edges, &row, grid.centre(0, j)[1], &xs, &mut crossings, &mut parities);
             let level0_land = parities.clone();
 
-            let dense_in_row: Vec<usize> = (0..nx).filter(|&i| cell_list(j * nx + i).len() > DENSE).collect();
+            let dense_in_row: Vec<usize> = memory::collected("polygons", (0..nx).filter(|&i| cell_list(j * nx + i).len() > DENSE))?;
             // Sub-cell centre parities of this row's split cells, one sweep per sub-row.
-            let mut sub_land = vec![false; dense_in_row.len() * split * split];
+            let mut sub_land = memory::filled("polygons", memory::product("polygons", &[dense_in_row.len(), split, split])?, false)?;
             if !dense_in_row.is_empty() {
                 for sj in 0..split {
                     xs.clear();
@@ -605,7 +626,9 @@ impl Grid {
                 let list = cell_list(c);
                 if list.len() > DENSE {
                     let origin = [min[0] + i as f64 * cell[0], min[1] + j as f64 * cell[1]];
-                    let sub_pairs = register(edges, list, origin, sub_cell, [split, split], margin_for(sub_cell));
+                    let sub_pairs = register(edges, list, origin, sub_cell, [split, split], margin_for(sub_cell))?;
+                    let room = sub_pairs.len();
+                    grid.cell_edges.try_reserve(room).map_err(|_| ModelError::memory("polygons", (grid.cell_edges.len() + room) as u128 * 4))?;
                     let first_slot = grid.sub_slots.len();
                     let mut p = 0;
                     for s in 0..split * split {
@@ -622,6 +645,7 @@ impl Grid {
                     d += 1;
                 } else {
                     let start = grid.cell_edges.len();
+                    grid.cell_edges.try_reserve(list.len()).map_err(|_| ModelError::memory("polygons", (start + list.len()) as u128 * 4))?;
                     grid.cell_edges.extend_from_slice(list);
                     grid.slots[c] = Slot::leaf(start, list.len(), centre_land);
                 }
@@ -632,8 +656,10 @@ impl Grid {
             let kind = if slot.meta == 0 { WATER } else if slot.meta == CENTRE_ON_LAND { LAND } else { EDGES };
             grid.kinds[c / 32] |= kind << (2 * (c % 32));
         }
-        assert!(grid.cell_edges.len() < u32::MAX as usize && grid.sub_slots.len() < u32::MAX as usize, "land index too large");
-        grid
+        if !(grid.cell_edges.len() < u32::MAX as usize && grid.sub_slots.len() < u32::MAX as usize) {
+            return Err(ModelError::invalid("polygons", "the land index would need more than 2^32 entries (too many edges)"));
+        }
+        Ok(grid)
     }
 
     #[inline(always)]

@@ -17,6 +17,7 @@ pub mod error;
 pub mod gmphd;
 pub mod jpda;
 pub mod land;
+mod memory;
 pub mod pose;
 pub mod range_bands;
 pub mod sector;

@@ -20,7 +20,7 @@ use numpy::ndarray::Dimension;
 use numpy::{
     BorrowError, PyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadwriteArray1, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
@@ -33,7 +33,10 @@ mod particles;
 mod scan;
 
 fn to_py(err: ModelError) -> PyErr {
-    PyValueError::new_err(err.to_string())
+    match err {
+        ModelError::Memory { .. } => PyMemoryError::new_err(err.to_string()),
+        _ => PyValueError::new_err(err.to_string()),
+    }
 }
 
 fn value_error(argument: &str, message: impl std::fmt::Display) -> PyErr {
@@ -84,6 +87,12 @@ fn borrow_contiguous<'py, D: Dimension>(array: &Bound<'py, PyArray<f64, D>>, arg
     copy.try_readonly().map_err(|_| value_error(argument, "could not borrow an aligned copy"))
 }
 
+/// A new array holding a copy of `values` (MemoryError naming `argument` when it cannot be
+/// allocated: numpy's own copy would panic).
+fn array_of<'py, T: numpy::Element + Clone>(py: Python<'py>, argument: &'static str, values: &[T]) -> PyResult<Bound<'py, PyArray1<T>>> {
+    Ok(PyArray1::from_vec(py, crate::memory::copied(argument, values).map_err(to_py)?))
+}
+
 fn slice<'a, D: Dimension>(a: &'a PyReadonlyArray<'_, f64, D>, argument: &str) -> PyResult<&'a [f64]> {
     a.as_slice().map_err(|_| value_error(argument, "must be C-contiguous and aligned"))
 }
@@ -106,7 +115,8 @@ fn mapping_of(mapping: (i64, i64)) -> PyResult<PositionMapping> {
 /// `inputs` are this call's input slices: Rust must never write memory it also reads.
 fn output<'py>(py: Python<'py>, out: Option<Bound<'py, PyArray1<f64>>>, n: usize, inputs: &[(&str, &[f64])]) -> PyResult<PyReadwriteArray1<'py, f64>> {
     let array = match out {
-        None => PyArray1::zeros(py, [n], false),
+        // (numpy's own allocation would panic on failure: a Vec that can fail, then handed over)
+        None => PyArray1::from_vec(py, crate::memory::filled("out", n, 0.0).map_err(to_py)?),
         Some(out) => {
             if out.len() != n {
                 return Err(value_error("out", format_args!("must have {n} entries, got {}", out.len())));
@@ -154,7 +164,7 @@ impl PyRangeBands {
         if let Some(row) = r.iter().position(|x| x.is_nan()) {
             return Err(to_py(ModelError::non_finite("ranges", row, "NaN")));
         }
-        Ok(PyArray1::from_vec(py, r.iter().map(|&x| self.0.at(x)).collect()))
+        Ok(PyArray1::from_vec(py, crate::memory::collected("ranges", r.iter().map(|&x| self.0.at(x))).map_err(to_py)?))
     }
 }
 
@@ -180,7 +190,7 @@ fn ring_of(ring: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 2]>> {
         return Err(value_error("polygons", format_args!("every ring must have shape (K, 2), got {:?}", array.shape())));
     }
     let array = borrow(array, "polygons")?;
-    Ok(slice(&array, "polygons")?.chunks_exact(2).map(|r| [r[0], r[1]]).collect())
+    Ok(crate::memory::collected("polygons", slice(&array, "polygons")?.chunks_exact(2).map(|r| [r[0], r[1]])).map_err(to_py)?)
 }
 
 #[pymethods]
@@ -188,6 +198,7 @@ impl PyLandMask {
     /// `polygons`: list of (shell, [holes]) with rings as (K, 2) float64 arrays.
     #[new]
     fn new(py: Python<'_>, polygons: Vec<(Bound<'_, PyAny>, Vec<Bound<'_, PyAny>>)>) -> PyResult<Self> {
+        // (one entry per polygon of the Python list, which exists)
         let mut converted = Vec::with_capacity(polygons.len());
         for (shell, holes) in &polygons {
             converted.push(Polygon { shell: ring_of(shell)?, holes: holes.iter().map(ring_of).collect::<PyResult<_>>()? });
@@ -200,7 +211,7 @@ impl PyLandMask {
         let points = borrow(&points, "points")?;
         let p = finite_points(&points, "points")?;
         let land = &self.0;
-        let inside = detached(py, || Ok(p.chunks_exact(2).map(|q| land.contains([q[0], q[1]])).collect::<Vec<_>>()))?;
+        let inside = detached(py, || crate::memory::collected("points", p.chunks_exact(2).map(|q| land.contains([q[0], q[1]]))))?;
         Ok(PyArray1::from_vec(py, inside))
     }
 
@@ -236,7 +247,7 @@ impl PyLineOfSight {
     #[new]
     fn new(py: Python<'_>, land: &PyLandMask) -> PyResult<Self> {
         let land = land.0.clone();
-        Ok(PyLineOfSight(Arc::new(detached(py, || Ok(LineOfSight::new(land)))?)))
+        Ok(PyLineOfSight(Arc::new(detached(py, || LineOfSight::new(land))?)))
     }
 
     /// Whether each target row of `targets` (M, 2) is visible from `sensor` (x, y).
@@ -248,7 +259,7 @@ impl PyLineOfSight {
         let t = finite_points(&targets, "targets")?;
         let sight = &self.0;
         let s = [sensor.0, sensor.1];
-        let visible = detached(py, || Ok(t.chunks_exact(2).map(|q| sight.visible(s, [q[0], q[1]])).collect::<Vec<_>>()))?;
+        let visible = detached(py, || crate::memory::collected("targets", t.chunks_exact(2).map(|q| sight.visible(s, [q[0], q[1]]))))?;
         Ok(PyArray1::from_vec(py, visible))
     }
 }
@@ -283,6 +294,7 @@ impl PyDetectionModel {
     /// their product.
     #[new]
     fn new(factors: Vec<Bound<'_, PyAny>>) -> PyResult<Self> {
+        // (one entry per factor of the Python list, which exists)
         let mut converted = Vec::with_capacity(factors.len());
         for (i, f) in factors.iter().enumerate() {
             converted.push(if let Ok(b) = f.cast::<PyRangeBands>() {
@@ -410,8 +422,7 @@ impl PyCoastalBand {
         let positions = borrow(&positions, "positions")?;
         let p = points_slice(&positions, "positions")?;
         let band = &self.0;
-        let values: Vec<f64> = p.chunks_exact(2).map(|q| band.value_at([pose.x, pose.y], q[0], q[1])).collect();
-        Ok(PyArray1::from_vec(py, values))
+        Ok(PyArray1::from_vec(py, guarded(|| band.evaluate([pose.x, pose.y], p))?))
     }
 }
 
@@ -436,6 +447,7 @@ impl PyClutterModel {
     /// MetadataThreshold rules. λ is their product.
     #[new]
     fn new(factors: Vec<Bound<'_, PyAny>>) -> PyResult<Self> {
+        // (one entry per factor of the Python list, which exists)
         let mut converted = Vec::with_capacity(factors.len());
         for (i, f) in factors.iter().enumerate() {
             converted.push(if let Ok(b) = f.cast::<PyRangeBands>() {
@@ -518,6 +530,7 @@ fn simd_backend() -> &'static str {
 #[pyo3(signature = (rule, order = 3))]
 fn rule_points(rule: &str, order: i64) -> PyResult<(Vec<(f64, f64)>, Vec<f64>)> {
     let r = rule_of(rule, order)?;
+    // (a rule has at most MAX_ORDER² = 1024 points)
     Ok((r.points().iter().map(|p| (p[0], p[1])).collect(), r.weights().to_vec()))
 }
 

@@ -7,6 +7,7 @@
 //! says that r == e_i falls into the band above e_i.
 
 use crate::error::{ModelError, Result};
+use crate::memory;
 use crate::simd::Lanes;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -46,7 +47,7 @@ impl RangeBands {
                 return Err(ModelError::invalid("values", format!("value {i} must be finite, got {v}")));
             }
         }
-        let root_thresholds = edges.iter().zip(&upper_owns).map(|(&e, &owns)| root_threshold(e, owns)).collect();
+        let root_thresholds = memory::collected("edges", edges.iter().zip(&upper_owns).map(|(&e, &owns)| root_threshold(e, owns)))?;
         Ok(RangeBands { edges, values, upper_owns, root_thresholds })
     }
 
@@ -193,6 +194,7 @@ impl RangeBands {
             count: self.edges.len(),
             edges2: [f64::INFINITY; SQUARED_EDGES],
             upper_owns: [false; SQUARED_EDGES],
+            // (values has edges + 1 ≥ 1 entries: checked in new)
             values: [*self.values.last().unwrap(); SQUARED_EDGES + 1],
             at_least: [f64::NAN; SQUARED_EDGES],
         };

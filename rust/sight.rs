@@ -18,7 +18,9 @@
 //! The sensor is assumed to be at sea: from a sensor on land every ray meets its own
 //! coastline (or ends on land) and every target is shadowed.
 
+use crate::error::Result;
 use crate::land::{segments_meet, LandMask};
+use crate::memory;
 use parry2d_f64::bounding_volume::Aabb;
 use parry2d_f64::math::Vector;
 use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
@@ -37,22 +39,23 @@ pub struct LineOfSight {
 }
 
 impl LineOfSight {
-    pub fn new(land: Arc<LandMask>) -> Self {
-        let edges: Vec<[[f64; 2]; 2]> = land.edges().iter().map(|e| [e.a, e.b]).collect();
+    pub fn new(land: Arc<LandMask>) -> Result<Self> {
+        let edges: Vec<[[f64; 2]; 2]> = memory::collected("land", land.edges().iter().map(|e| [e.a, e.b]))?;
         let scale = edges.iter().flatten().fold(0.0f64, |m, p| m.max(p[0].abs()).max(p[1].abs()));
-        let boxes: Vec<Aabb> = edges
-            .iter()
-            .map(|[a, b]| {
+        let boxes: Vec<Aabb> = memory::collected(
+            "land",
+            edges.iter().map(|[a, b]| {
                 let margin = 1e-9 * ((a[0] - b[0]).abs() + (a[1] - b[1]).abs()) + 1e-12 * scale + f64::MIN_POSITIVE;
                 Aabb::new(
                     Vector::new(a[0].min(b[0]) - margin, a[1].min(b[1]) - margin),
                     Vector::new(a[0].max(b[0]) + margin, a[1].max(b[1]) + margin),
                 )
-            })
-            .collect();
+            }),
+        )?;
+        // (parry's tree allocates infallibly: about as large as the boxes just allocated)
         let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &boxes);
         let scale = land.scale();
-        LineOfSight { land, edges, scale, bvh }
+        Ok(LineOfSight { land, edges, scale, bvh })
     }
 
     pub fn land(&self) -> &Arc<LandMask> {
@@ -183,6 +186,9 @@ impl<'a> VisibilityIndex<'a> {
             lo: f64,
             hi: f64,
         }
+        // (the index's buffers: one span per edge, entries within `budget` below, a few times
+        // the sight's own edges, which were allocated fallibly when it was built; a query
+        // answers a bool, so this per-sensor index is not made fallible)
         let mut spans = Vec::with_capacity(edges.len());
         let mut coverage = 0.0; // Σ (hi − lo): how many edges a direction meets, × 4
         for (k, &[a, b]) in edges.iter().enumerate() {
@@ -269,6 +275,7 @@ impl<'a> VisibilityIndex<'a> {
         for i in 0..bins {
             index.bin_start[i + 1] += index.bin_start[i];
         }
+        // (bins ≤ 2^16; the entries as bounded above)
         let mut fill: Vec<u32> = index.bin_start[..bins].to_vec();
         index.entries = vec![BinEdge { a: [0.0; 2], b: [0.0; 2], near2: 0.0 }; index.bin_start[bins] as usize];
         for span in &spans {
@@ -350,7 +357,7 @@ mod tests {
 
     fn island() -> LineOfSight {
         let shell = vec![[100.0, -10.0], [120.0, -10.0], [120.0, 10.0], [100.0, 10.0]];
-        LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap()))
+        LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap())).unwrap()
     }
 
     #[test]
@@ -358,7 +365,7 @@ mod tests {
         // The island above shrunk by 1e-202: validated and cast in a scaled frame.
         let k = 1e-202;
         let shell = vec![[100.0 * k, -10.0 * k], [120.0 * k, -10.0 * k], [120.0 * k, 10.0 * k], [100.0 * k, 10.0 * k]];
-        let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap()));
+        let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap())).unwrap();
         let sensor = [0.0, 0.0];
         let index = sight.from_point(sensor);
         assert_eq!(index.sensor(), sensor);
@@ -431,7 +438,7 @@ mod tests {
             Polygon { shell: ring(120.0, 900.0, 100.0, 64), holes: vec![ring(80.0, 900.0, 100.0, 48)] },
         ])
         .unwrap();
-        let sight = LineOfSight::new(Arc::new(land));
+        let sight = LineOfSight::new(Arc::new(land)).unwrap();
         let mut state = 0x2545_F491_4F6C_DD1Du64;
         let mut uniform = move |lo: f64, hi: f64| {
             state ^= state << 13;
@@ -482,7 +489,7 @@ mod tests {
                 [r * t.cos(), r * t.sin()]
             })
             .collect();
-        let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap()));
+        let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap())).unwrap();
         let vertices: Vec<Vector> = sight.edges.iter().flat_map(|[a, b]| [Vector::new(a[0], a[1]), Vector::new(b[0], b[1])]).collect();
         let indices: Vec<[u32; 2]> = (0..sight.edges.len() as u32).map(|k| [2 * k, 2 * k + 1]).collect();
         let coast = Polyline::new(vertices, Some(indices));
@@ -517,7 +524,7 @@ mod tests {
                 [r * t.cos(), r * t.sin()]
             })
             .collect();
-        let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap()));
+        let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap())).unwrap();
         let sensor = [-1500.0, 100.0];
         let index = sight.from_point(sensor);
         assert!(index.is_dense());

@@ -103,7 +103,26 @@ pub fn backend() -> Backend {
 /// Runs `kernel` with the lanes of [`backend`].
 #[inline]
 pub fn dispatch<K: LaneKernel>(kernel: K) -> K::Output {
+    #[cfg(test)]
+    if let Some(forced) = FORCED.with(|f| f.get()) {
+        return run_on(forced, kernel);
+    }
     run_on(backend(), kernel)
+}
+
+#[cfg(test)]
+thread_local! {
+    static FORCED: std::cell::Cell<Option<Backend>> = const { std::cell::Cell::new(None) };
+}
+
+/// Runs `f` with [`dispatch`] on `backend` on this thread: a whole model (its kernels
+/// called from this thread) tested on each build.
+#[cfg(test)]
+pub fn on_backend<T>(backend: Backend, f: impl FnOnce() -> T) -> T {
+    FORCED.with(|forced| forced.set(Some(backend)));
+    let out = f();
+    FORCED.with(|forced| forced.set(None));
+    out
 }
 
 /// Runs `kernel` on `backend`, which must be [`Backend::available`] (else the portable

@@ -9,12 +9,13 @@ scan: hit :math:`d_j \in \{0, 1\}`, weight :math:`w_j \in [0, 1]`), each discoun
 
 .. math::
     \hat p_b = \frac{p_0 s_0 + H_b}{s_0 + T_b}, \qquad
-    H_b = \sum_j \gamma^{k-j} d_j, \qquad T_b = \sum_j \gamma^{k-j} w_j,
+    H_b = \sum_{j:\, w_j > 0} \gamma^{k-j} d_j, \qquad T_b = \sum_j \gamma^{k-j} w_j,
 
 clamped to [0, 1]: the factor's value at a range in band :math:`b` (``outside`` below the
 first edge and from the last on). The weight of a trial is the product of the sensor's
 *other* P_D factors at the track: a track in a blind sector or behind land (weight 0) is no
-evidence about :math:`p_b`. With weights 0 or 1 — sectors, land and line of sight — the
+evidence about :math:`p_b`, hit or miss — it changes neither :math:`H_b` nor :math:`T_b`.
+With weights 0 or 1 — sectors, land and line of sight — the
 estimate is the Beta posterior mean exactly; with fractional weights it is the ratio
 estimator :math:`\sum d / \sum w`, shrunk to the prior. Where there is no evidence, it
 stays at :math:`p_0`.

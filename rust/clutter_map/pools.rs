@@ -26,9 +26,10 @@ impl Cells<'_> {
         (self.counts[c] * self.inverse, (self.exposure - self.deficit[c]) * self.inverse * self.volumes[c])
     }
 
-    /// Per column, the sums Σ n, Σ e, Σ n², Σ n e, Σ e² over its cells in row order.
-    pub fn moments(self) -> Vec<[f64; 5]> {
-        dispatch(Moments { cells: self })
+    /// Per column, the sums Σ n, Σ e, Σ n², Σ n e, Σ e² over its cells in row order, into
+    /// `out` (one entry per column), with `running` (five buffers of a column each) as room.
+    pub fn moments(self, running: &mut [Vec<f64>; 5], out: &mut [[f64; 5]]) {
+        dispatch(Moments { cells: self, running, out })
     }
 
     /// The same sums for column `j` over the cells `keep` holds, in row order.
@@ -43,9 +44,10 @@ impl Cells<'_> {
         sums
     }
 
-    /// Per row, whether a cell of it may leave its pool ([`may_leave`]).
-    pub fn rows_to_test(self, tests: Tests) -> Vec<bool> {
-        dispatch(RowsToTest { cells: self, tests })
+    /// Per row, whether a cell of it may leave its pool ([`may_leave`]), into `out` (one
+    /// entry per row).
+    pub fn rows_to_test(self, tests: Tests, out: &mut [bool]) {
+        dispatch(RowsToTest { cells: self, tests, out })
     }
 }
 
@@ -82,23 +84,28 @@ impl Tests<'_> {
 
 struct Moments<'a> {
     cells: Cells<'a>,
+    running: &'a mut [Vec<f64>; 5],
+    out: &'a mut [[f64; 5]],
 }
 
 impl LaneKernel for Moments<'_> {
-    type Output = Vec<[f64; 5]>;
+    type Output = ();
 
     #[inline(always)]
-    fn run<L: Lanes>(self) -> Vec<[f64; 5]> {
+    fn run<L: Lanes>(self) {
         let Cells { counts, deficit, volumes, columns, exposure, inverse } = self.cells;
         let full = columns / 4 * 4;
-        let mut sums: [Vec<f64>; 5] = std::array::from_fn(|_| vec![0.0; columns]);
+        let sums = self.running;
+        for s in sums.iter_mut() {
+            s.fill(0.0);
+        }
         let (s, i) = (L::splat(exposure), L::splat(inverse));
         for ((n, d), v) in counts.chunks_exact(columns).zip(deficit.chunks_exact(columns)).zip(volumes.chunks_exact(columns)) {
             for j in (0..full).step_by(4) {
                 let (n, e) = (L::load(&n[j..]) * i, (s - L::load(&d[j..])) * i * L::load(&v[j..]));
                 // (written out: a closure or iterator here could be compiled outside the
                 // AVX2 function)
-                let [s0, s1, s2, s3, s4] = &mut sums;
+                let [s0, s1, s2, s3, s4] = &mut *sums;
                 (L::load(&s0[j..]) + n).store(&mut s0[j..]);
                 (L::load(&s1[j..]) + e).store(&mut s1[j..]);
                 (L::load(&s2[j..]) + n * n).store(&mut s2[j..]);
@@ -112,27 +119,30 @@ impl LaneKernel for Moments<'_> {
                 }
             }
         }
-        (0..columns).map(|j| sums.each_ref().map(|s| s[j])).collect()
+        for (j, out) in self.out.iter_mut().enumerate() {
+            *out = sums.each_ref().map(|s| s[j]);
+        }
     }
 }
 
 struct RowsToTest<'a> {
     cells: Cells<'a>,
     tests: Tests<'a>,
+    out: &'a mut [bool],
 }
 
 impl LaneKernel for RowsToTest<'_> {
-    type Output = Vec<bool>;
+    type Output = ();
 
     #[inline(always)]
-    fn run<L: Lanes>(self) -> Vec<bool> {
+    fn run<L: Lanes>(self) {
         let Cells { counts, deficit, volumes, columns, exposure, inverse } = self.cells;
         let Tests { levels, effective, threshold } = self.tests;
         let full = columns / 4 * 4;
         let (s, i, k, t, zero) = (L::splat(exposure), L::splat(inverse), L::splat(effective), L::splat(threshold), L::splat(0.0));
         let twice = L::splat(2.0 * threshold);
-        let mut rows = Vec::with_capacity(counts.len() / columns);
-        for (row, ((n, d), v)) in counts.chunks_exact(columns).zip(deficit.chunks_exact(columns)).zip(volumes.chunks_exact(columns)).enumerate() {
+        let rows = counts.chunks_exact(columns).zip(deficit.chunks_exact(columns)).zip(volumes.chunks_exact(columns));
+        for ((row, ((n, d), v)), test) in rows.enumerate().zip(self.out.iter_mut()) {
             let mut flagged = L::none();
             for j in (0..full).step_by(4) {
                 let e = (s - L::load(&d[j..])) * i * L::load(&v[j..]);
@@ -143,9 +153,8 @@ impl LaneKernel for RowsToTest<'_> {
                 flagged = L::or(flagged, L::and(mu.gt(zero), L::or(above, below)));
             }
             let first = row * columns;
-            rows.push(L::any(flagged) || (full..columns).any(|j| self.tests.may_leave(self.cells.at(first + j), j)));
+            *test = L::any(flagged) || (full..columns).any(|j| self.tests.may_leave(self.cells.at(first + j), j));
         }
-        rows
     }
 }
 
@@ -175,8 +184,12 @@ mod tests {
         let scalar_rows: Vec<bool> = (0..9).map(|r| (0..7).any(|j| tests.may_leave(cells.at(r * 7 + j), j))).collect();
         assert!(scalar_rows.iter().any(|r| *r) && !scalar_rows.iter().all(|r| *r), "{scalar_rows:?}");
         for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
-            assert_eq!(run_on(backend, Moments { cells }), scalar_sums, "{backend:?}");
-            assert_eq!(run_on(backend, RowsToTest { cells, tests }), scalar_rows, "{backend:?}");
+            // (the buffers start dirty: a pass must not depend on what they held)
+            let (mut running, mut sums, mut rows) = (std::array::from_fn(|_| vec![9.0; 7]), vec![[9.0; 5]; 7], vec![true; 9]);
+            run_on(backend, Moments { cells, running: &mut running, out: &mut sums });
+            run_on(backend, RowsToTest { cells, tests, out: &mut rows });
+            assert_eq!(sums, scalar_sums, "{backend:?}");
+            assert_eq!(rows, scalar_rows, "{backend:?}");
         }
     }
 

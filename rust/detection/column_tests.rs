@@ -25,7 +25,7 @@ fn models() -> Vec<DetectionModel> {
         DetectionModel::new(vec![
             DetectionFactor::Constant(0.9),
             DetectionFactor::Land(island.clone()),
-            DetectionFactor::Sight(Arc::new(LineOfSight::new(island))),
+            DetectionFactor::Sight(Arc::new(LineOfSight::new(island).unwrap())),
         ])
         .unwrap(),
         DetectionModel::new(vec![bands(&[100.0, 200.0, 300.0, 400.0, 500.0, 600.0], &[0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.0])]).unwrap(),

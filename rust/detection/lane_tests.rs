@@ -38,7 +38,7 @@ fn models() -> Vec<DetectionModel> {
             DetectionFactor::Constant(0.9),
             DetectionFactor::Land(island.clone()),
             bands(&[700.0], &[0.93, 0.11], &[true]),
-            DetectionFactor::Sight(Arc::new(LineOfSight::new(island))),
+            DetectionFactor::Sight(Arc::new(LineOfSight::new(island).unwrap())),
         ],
         vec![DetectionFactor::Constant(0.3), sector(0.4, 2.5, 0.7, 0.9), bands(&[10.0, 1e3], &[0.7, 0.9, 0.1], &[false, false])],
         // Every specialised step sequence of the kernels (lanes::with_fixed_steps) is here:

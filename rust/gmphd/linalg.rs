@@ -71,6 +71,7 @@ pub fn quadratic_form(a: &[f64], x: &[f64], n: usize) -> f64 {
 /// Inverse and log-determinant of a symmetric positive-definite (n×n) matrix by Cholesky;
 /// `None` if it is not positive definite (or not finite).
 pub fn spd_inverse(a: &[f64], n: usize) -> Option<(Vec<f64>, f64)> {
+    // (n² values: as large as `a`, which exists; the scan paths use spd_inverse_into)
     let mut inverse = vec![0.0; n * n];
     let mut scratch = vec![0.0; 2 * n * n];
     let log_det = spd_inverse_into(a, n, &mut inverse, &mut scratch)?;
@@ -179,12 +180,14 @@ pub fn general_inverse_into(a: &[f64], n: usize, inverse: &mut [f64], scratch: &
 /// Moore–Penrose pseudo-inverse (singular values below `1e-15 · σ_max` taken as zero, as
 /// NumPy's `pinv` does), for covariances that are not positive definite.
 pub fn pseudo_inverse(a: &[f64], n: usize) -> Vec<f64> {
+    // (n² values, as large as `a`, which exists; nalgebra's SVD allocates several such
+    // matrices infallibly itself)
     let matrix = nalgebra::DMatrix::from_row_slice(n, n, a);
     let svd = matrix.svd(true, true);
     let largest = svd.singular_values.iter().cloned().fold(0.0, f64::max);
     match svd.pseudo_inverse(1e-15 * largest) {
         Ok(inverse) => {
-            let mut out = vec![0.0; n * n];
+            let mut out = vec![0.0; n * n]; // (n², as `a`)
             for i in 0..n {
                 for j in 0..n {
                     out[i * n + j] = inverse[(i, j)];
@@ -192,7 +195,7 @@ pub fn pseudo_inverse(a: &[f64], n: usize) -> Vec<f64> {
             }
             out
         }
-        Err(_) => vec![f64::NAN; n * n],
+        Err(_) => vec![f64::NAN; n * n], // (as above: n² values, as many as `a` holds)
     }
 }
 

@@ -119,7 +119,7 @@ impl MeasurementModel {
     /// the perturbed state: every element gets `x + 0·δ` or `x + 1·δ`).
     fn bearing_range(&self, x: &[f64], index: usize, step: f64) -> (f64, f64) {
         let MeasurementModel::BearingRange { mapping, offset, rotation, .. } = self else {
-            unreachable!("bearing_range on a linear model")
+            return (f64::NAN, f64::NAN); // (only called for a bearing–range model)
         };
         let at = |i: usize| if i == index { x[i] + step } else { x[i] + 0.0 };
         let dx = at(mapping[0]) - offset[0];

@@ -28,6 +28,7 @@ pub use reduce::ReduceParams;
 pub use update::UpdateParams;
 
 use crate::error::{ModelError, Result};
+use crate::memory;
 
 /// The tag of a birth component: never a track; a detected birth gets a fresh tag.
 pub const BIRTH: u64 = 0;
@@ -94,12 +95,26 @@ impl Mixture {
         if let Some(row) = tags.iter().position(|&t| t >= self.next_tag) {
             return Err(ModelError::invalid("tags", format!("tag {} of row {row} was not reserved", tags[row])));
         }
+        self.reserve(n)?;
         self.means.extend_from_slice(means);
         self.covars.extend_from_slice(covars);
         self.weights.extend_from_slice(weights);
         self.tags.extend_from_slice(tags);
         self.times.extend_from_slice(times);
         Ok(())
+    }
+
+    /// Room for `n` more components, fallibly, before anything changes.
+    pub(crate) fn reserve(&mut self, n: usize) -> Result<()> {
+        let d = self.ndim;
+        let bytes = (self.len() as u128 + n as u128) * (d as u128 * d as u128 + d as u128 + 3) * 8;
+        let fail = |_| ModelError::memory("means", bytes);
+        let (more_means, more_covars) = (memory::product("means", &[n, d])?, memory::product("means", &[n, d, d])?);
+        self.means.try_reserve(more_means).map_err(fail)?;
+        self.covars.try_reserve(more_covars).map_err(fail)?;
+        self.weights.try_reserve(n).map_err(fail)?;
+        self.tags.try_reserve(n).map_err(fail)?;
+        self.times.try_reserve(n).map_err(fail)
     }
 
     /// `count` fresh tags, for components that come with their own (string) tags.
@@ -150,13 +165,14 @@ impl Mixture {
             return Err(ModelError::invalid("position_mapping", format!("indices {position:?} out of range for dimension {d}")));
         }
         let limit = radius * radius;
-        let keep: Vec<bool> = (0..self.len())
-            .map(|i| {
+        let keep: Vec<bool> = memory::collected(
+            "means",
+            (0..self.len()).map(|i| {
                 let x = self.mean(i);
                 let (dx, dy) = (x[position[0]] - centre[0], x[position[1]] - centre[1]);
                 dx * dx + dy * dy <= limit
-            })
-            .collect();
+            }),
+        )?;
         self.retain(&keep)
     }
 
@@ -172,6 +188,8 @@ impl Mixture {
         if let Some(row) = (0..other.len()).find(|&i| take[i] && other.tags[i] >= self.next_tag) {
             return Err(ModelError::invalid("other", format!("row {row}'s tag {} was not reserved here", other.tags[row])));
         }
+        let keep: Vec<bool> = memory::collected("take", take.iter().map(|t| !t))?;
+        self.reserve(take.iter().filter(|t| **t).count())?;
         for i in (0..other.len()).filter(|&i| take[i]) {
             self.means.extend_from_slice(other.mean(i));
             self.covars.extend_from_slice(other.covar(i));
@@ -179,7 +197,6 @@ impl Mixture {
             self.tags.push(other.tags[i]);
             self.times.push(other.times[i]);
         }
-        let keep: Vec<bool> = take.iter().map(|t| !t).collect();
         other.retain(&keep)
     }
 
@@ -191,23 +208,24 @@ impl Mixture {
             return Err(ModelError::invalid("position_mapping", format!("indices {position:?} out of range for dimension {d}")));
         }
         let limit = 2.0 * max_std * max_std;
-        let keep: Vec<bool> = (0..self.len())
-            .map(|i| {
+        let keep: Vec<bool> = memory::collected(
+            "means",
+            (0..self.len()).map(|i| {
                 let c = self.covar(i);
                 c[position[0] * d + position[0]] + c[position[1] * d + position[1]] <= limit
-            })
-            .collect();
+            }),
+        )?;
         self.retain(&keep)
     }
 
     /// Stone Soup's track extraction: the rows (ascending) whose tag has a track (`tracked`)
     /// or whose weight exceeds `threshold`, birth components excepted; and the `tracked`
     /// tags no component carries any more (their tracks end), in the order given.
-    pub fn track_rows(&self, tracked: &[u64], threshold: f64) -> (Vec<usize>, Vec<u64>) {
-        let mut sorted = tracked.to_vec();
+    pub fn track_rows(&self, tracked: &[u64], threshold: f64) -> Result<(Vec<usize>, Vec<u64>)> {
+        let mut sorted = memory::copied("tracked", tracked)?;
         sorted.sort_unstable();
-        let mut present = vec![false; sorted.len()];
-        let mut rows = Vec::new();
+        let mut present = memory::filled("tracked", sorted.len(), false)?;
+        let mut rows = memory::with_room("means", self.len())?;
         for (i, (&tag, &weight)) in self.tags.iter().zip(&self.weights).enumerate() {
             let found = sorted.binary_search(&tag).ok();
             if let Some(at) = found {
@@ -217,25 +235,23 @@ impl Mixture {
                 rows.push(i);
             }
         }
-        let gone = tracked.iter().copied()
-            .filter(|tag| sorted.binary_search(tag).is_ok_and(|at| !present[at]))
-            .collect();
-        (rows, gone)
+        let gone = memory::collected("tracked", tracked.iter().copied().filter(|tag| sorted.binary_search(tag).is_ok_and(|at| !present[at])))?;
+        Ok((rows, gone))
     }
 
     /// The distinct component times, ascending (a scan predicts once per time step).
-    pub fn distinct_times(&self) -> Vec<i64> {
-        let mut times = self.times.clone();
+    pub fn distinct_times(&self) -> Result<Vec<i64>> {
+        let mut times = memory::copied("times", &self.times)?;
         times.sort_unstable();
         times.dedup();
-        times
+        Ok(times)
     }
 
     /// Kalman prediction to `now` of components stamped `from[g]`, with `F`, `Q` of group
     /// `g` (`transitions`, `noises`: the groups' D×D matrices one after another); every
     /// component's time must be one of `from`. The components take the time `now`.
     pub fn predict_from(&mut self, from: &[i64], now: i64, transitions: &[f64], noises: &[f64]) -> Result<()> {
-        let mut group = Vec::with_capacity(self.len());
+        let mut group = memory::with_room("times", self.len())?;
         for (row, time) in self.times.iter().enumerate() {
             match from.iter().position(|t| t == time) {
                 Some(g) => group.push(g),
@@ -265,9 +281,9 @@ impl Mixture {
         if !transitions.iter().chain(noises).all(|v| v.is_finite()) {
             return Err(ModelError::invalid("transitions", "transition matrices and noise covariances must be finite"));
         }
-        let mut mean = vec![0.0; d];
-        let mut fp = vec![0.0; d2];
-        let mut fpf = vec![0.0; d2];
+        let mut mean = memory::filled("means", d, 0.0)?;
+        let mut fp = memory::filled("means", d2, 0.0)?;
+        let mut fpf = memory::filled("means", d2, 0.0)?;
         for (i, &g) in group.iter().enumerate() {
             let f = &transitions[g * d2..(g + 1) * d2];
             let q = &noises[g * d2..(g + 1) * d2];

@@ -5,6 +5,7 @@
 use super::linalg::{cholesky_into, general_inverse_into, inverse_from_cholesky, pseudo_inverse, quadratic_form, spd_inverse_into};
 use super::Mixture;
 use crate::error::{ModelError, Result};
+use crate::memory;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -60,11 +61,13 @@ struct Candidates {
 }
 
 impl Candidates {
-    fn new(covars: impl Iterator<Item = (usize, impl AsRef<[f64]>)>, n: usize, d: usize, threshold: f64) -> Self {
-        let mut this = Candidates { d, matrices: vec![0.0; n * d * d], inverted: vec![false; n], limits: vec![f64::INFINITY; n * d] };
-        let mut scratch = vec![0.0; 2 * d * d];
-        let mut part = vec![0.0; d * d];
-        let mut part_inverse = vec![0.0; d * d];
+    fn new(covars: impl Iterator<Item = (usize, impl AsRef<[f64]>)>, n: usize, d: usize, threshold: f64) -> Result<Self> {
+        // (as large as the mixture's own covariances and means, whose sizes did not overflow)
+        let zeros = |len: usize| memory::filled("means", len, 0.0);
+        let mut this = Candidates { d, matrices: zeros(n * d * d)?, inverted: memory::filled("means", n, false)?, limits: memory::filled("means", n * d, f64::INFINITY)? };
+        let mut scratch = zeros(2 * d * d)?;
+        let mut part = zeros(d * d)?;
+        let mut part_inverse = zeros(d * d)?;
         for (rank, covar) in covars {
             let covar = covar.as_ref();
             let matrix = &mut this.matrices[rank * d * d..(rank + 1) * d * d];
@@ -92,7 +95,7 @@ impl Candidates {
                 }
             }
         }
-        this
+        Ok(this)
     }
 
     /// The inverse (the stock measure's pinv) of rank `rank`'s covariance.
@@ -120,11 +123,11 @@ struct CandidateIndex {
 }
 
 impl CandidateIndex {
-    fn new(first: &[f64], radius: &[f64]) -> Self {
-        let mut finite: Vec<f64> = radius.iter().copied().filter(|r| r.is_finite()).collect();
+    fn new(first: &[f64], radius: &[f64]) -> Result<Self> {
+        let mut finite: Vec<f64> = memory::collected("means", radius.iter().copied().filter(|r| r.is_finite()))?;
         finite.sort_by(f64::total_cmp);
         let width = finite.get(finite.len() * 9 / 10).copied().unwrap_or(0.0);
-        let (mut by_first, mut wide) = (Vec::new(), Vec::new());
+        let (mut by_first, mut wide) = (memory::with_room("means", first.len())?, memory::with_room("means", first.len())?);
         for (rank, (&x, &r)) in first.iter().zip(radius).enumerate() {
             if r <= width && x.is_finite() {
                 by_first.push((x, rank));
@@ -133,7 +136,7 @@ impl CandidateIndex {
             }
         }
         by_first.sort_by(|a, b| a.0.total_cmp(&b.0));
-        CandidateIndex { by_first, width, wide }
+        Ok(CandidateIndex { by_first, width, wide })
     }
 
     /// Into `hits`: the ranks in `ranks` with `|first − centre| ≤ radius` (a rank whose
@@ -160,14 +163,15 @@ impl CandidateIndex {
 /// first merge test, found in one sweep over the ranks sorted by their first coordinate
 /// (each `k` looks at the means within its radius) instead of one query per `T`. For
 /// finite means only; a rank whose radius is NaN is nobody's candidate, as in the index.
-fn first_candidates(ranked_means: &[f64], limits: &[f64], radius: &[f64], d: usize) -> Vec<Vec<usize>> {
+fn first_candidates(ranked_means: &[f64], limits: &[f64], radius: &[f64], d: usize) -> Result<Vec<Vec<usize>>> {
     let n = radius.len();
-    let mut order: Vec<usize> = (0..n).collect();
+    let mut order: Vec<usize> = memory::collected("means", 0..n)?;
     order.sort_by(|&a, &b| ranked_means[a * d].total_cmp(&ranked_means[b * d]));
     // the means in that order, contiguous: the inner loop walks them linearly
-    let firsts: Vec<f64> = order.iter().map(|&rank| ranked_means[rank * d]).collect();
-    let sorted: Vec<f64> = order.iter().flat_map(|&rank| ranked_means[rank * d..(rank + 1) * d].iter().copied()).collect();
-    let mut lists = vec![Vec::new(); n];
+    let firsts: Vec<f64> = memory::collected("means", order.iter().map(|&rank| ranked_means[rank * d]))?;
+    let mut sorted: Vec<f64> = memory::with_room("means", ranked_means.len())?;
+    sorted.extend(order.iter().flat_map(|&rank| ranked_means[rank * d..(rank + 1) * d].iter().copied()));
+    let mut lists = memory::filled("means", n, Vec::new())?;
     for k in 0..n {
         let (x, reach) = (ranked_means[k * d], radius[k]);
         if reach.is_nan() {
@@ -185,11 +189,12 @@ fn first_candidates(ranked_means: &[f64], limits: &[f64], radius: &[f64], d: usi
             }
             let top = order[low + j];
             if inside && top > k {
+                lists[top].try_reserve(1).map_err(|_| ModelError::memory("means", (lists[top].len() as u128 + 1) * 8))?;
                 lists[top].push(k);
             }
         }
     }
-    lists
+    Ok(lists)
 }
 
 impl Mixture {
@@ -204,8 +209,8 @@ impl Mixture {
             self.prune(params.prune_threshold)?;
         }
         if self.len() > 1 && params.merging {
-            self.merge(params.merge_threshold, params.max_distance, true);
-            self.unique_tags();
+            self.merge(params.merge_threshold, params.max_distance, true)?;
+            self.unique_tags()?;
         }
         if self.len() > params.max_components && params.truncating {
             self.truncate(params.max_components)?;
@@ -220,7 +225,7 @@ impl Mixture {
                 pruned += w;
             }
         }
-        let keep: Vec<bool> = self.weights.iter().map(|&w| w >= threshold).collect();
+        let keep: Vec<bool> = memory::collected("means", self.weights.iter().map(|&w| w >= threshold))?;
         self.retain(&keep)?;
         let share_count = self.len() as f64;
         for w in &mut self.weights {
@@ -230,37 +235,39 @@ impl Mixture {
     }
 
     /// Ascending weight, ties in input order (Python's stable `sorted`).
-    fn ascending(&self) -> Vec<usize> {
-        let mut order: Vec<usize> = (0..self.len()).collect();
+    fn ascending(&self) -> Result<Vec<usize>> {
+        let mut order: Vec<usize> = memory::collected("means", 0..self.len())?;
         order.sort_by(|&a, &b| self.weights[a].total_cmp(&self.weights[b]));
-        order
+        Ok(order)
     }
 
     /// `listed`: take each heaviest's first candidates from [`first_candidates`] (false:
     /// from the index alone; the same merges, which the tests check).
-    pub(super) fn merge(&mut self, threshold: f64, max_distance: Option<f64>, listed: bool) {
+    pub(super) fn merge(&mut self, threshold: f64, max_distance: Option<f64>, listed: bool) -> Result<()> {
         let (n, d) = (self.len(), self.ndim);
-        let order = self.ascending();
+        let order = self.ascending()?;
         // By rank (ascending weight): means, candidates, and the |δ|² above which a rank
         // cannot merge (`bound`); `radius` = √bound on the first coordinate alone, −1 once
         // a rank has left the remaining set (so the first test also drops it).
-        let mut ranked_means = Vec::with_capacity(n * d);
-        let mut scratch = vec![0.0; 2 * d * d];
-        let mut candidates = Candidates::new(order.iter().enumerate().map(|(rank, &i)| (rank, self.covar(i))), n, d, threshold);
-        let mut first = vec![0.0; n];
-        let mut radius = vec![f64::INFINITY; n];
+        let mut ranked_means = memory::with_room("means", self.means.len())?;
+        let mut scratch = memory::filled("means", 2 * d * d, 0.0)?;
+        let mut candidates = Candidates::new(order.iter().enumerate().map(|(rank, &i)| (rank, self.covar(i))), n, d, threshold)?;
+        let mut first = memory::filled("means", n, 0.0)?;
+        let mut radius = memory::filled("means", n, f64::INFINITY)?;
         for (rank, &i) in order.iter().enumerate() {
             ranked_means.extend_from_slice(self.mean(i));
             first[rank] = self.mean(i)[0];
             radius[rank] = candidates.limits[rank * d].sqrt() * BOUND_SLACK;
         }
-        let index = CandidateIndex::new(&first, &radius);
-        let lists = (listed && ranked_means.iter().all(|x| x.is_finite())).then(|| first_candidates(&ranked_means, &candidates.limits, &radius, d));
-        let mut hits = Vec::with_capacity(n);
+        let index = CandidateIndex::new(&first, &radius)?;
+        let lists = (listed && ranked_means.iter().all(|x| x.is_finite())).then(|| first_candidates(&ranked_means, &candidates.limits, &radius, d)).transpose()?;
+        // (hits: at most n ranks)
+        let mut hits = memory::with_room("means", n)?;
         let mut out = Mixture { ndim: d, next_tag: self.next_tag, ..Default::default() };
-        let mut mean = vec![0.0; d];
-        let mut covar = vec![0.0; d * d];
-        let mut delta = vec![0.0; d];
+        out.reserve(n)?;
+        let mut mean = memory::filled("means", d, 0.0)?;
+        let mut covar = memory::filled("means", d * d, 0.0)?;
+        let mut delta = memory::filled("means", d, 0.0)?;
         for top in (0..n).rev() {
             if radius[top] < 0.0 {
                 continue; // merged into a heavier one
@@ -342,17 +349,19 @@ impl Mixture {
             out.times.push(self.times[best]);
         }
         *self = out;
+        Ok(())
     }
 
     /// Components sharing a tag: the heaviest keeps it, the others get fresh tags; tags in
     /// first-appearance order, each tag's components by decreasing weight (stable).
-    fn unique_tags(&mut self) {
+    fn unique_tags(&mut self) -> Result<()> {
         let n = self.len();
-        let mut sorted = self.tags.clone();
+        let mut sorted = memory::copied("tags", &self.tags)?;
         sorted.sort_unstable();
         if sorted.windows(2).all(|pair| pair[0] != pair[1]) {
-            return; // no shared tags (the usual case)
+            return Ok(()); // no shared tags (the usual case)
         }
+        // (the rare case, as large as the tags: the map and lists grow as they are filled)
         let mut first_seen: Vec<u64> = Vec::new();
         let mut groups: HashMap<u64, Vec<usize>, BuildHasherDefault<TagHasher>> = HashMap::default();
         for i in 0..n {
@@ -362,8 +371,8 @@ impl Mixture {
             }
             members.push(i);
         }
-        let mut order = Vec::with_capacity(n);
-        let mut renamed = Vec::new();
+        let mut order = memory::with_room("tags", n)?;
+        let mut renamed = memory::with_room("tags", n)?;
         for tag in &first_seen {
             let mut members = groups.remove(tag).unwrap_or_default();
             members.sort_by(|&a, &b| self.weights[b].total_cmp(&self.weights[a]));
@@ -376,12 +385,13 @@ impl Mixture {
         for i in renamed {
             self.tags[i] = self.fresh_tag();
         }
-        self.reorder(&order);
+        self.reorder(&order)
     }
 
-    fn reorder(&mut self, order: &[usize]) {
+    fn reorder(&mut self, order: &[usize]) -> Result<()> {
         let d = self.ndim;
         let mut out = Mixture { ndim: d, next_tag: self.next_tag, ..Default::default() };
+        out.reserve(order.len())?;
         for &i in order {
             out.means.extend_from_slice(self.mean(i));
             out.covars.extend_from_slice(self.covar(i));
@@ -390,19 +400,20 @@ impl Mixture {
             out.times.push(self.times[i]);
         }
         *self = out;
+        Ok(())
     }
 
     fn truncate(&mut self, limit: usize) -> Result<()> {
         if limit == 0 {
             return Err(ModelError::invalid("max_number_components", "must be at least 1"));
         }
-        let mut order: Vec<usize> = (0..self.len()).collect();
+        let mut order: Vec<usize> = memory::collected("means", 0..self.len())?;
         order.sort_by(|&a, &b| self.weights[b].total_cmp(&self.weights[a]));
         let mut dropped = 0.0;
         for &i in &order[limit..] {
             dropped += self.weights[i];
         }
-        self.reorder(&order[..limit]);
+        self.reorder(&order[..limit])?;
         let share = dropped / limit as f64;
         for w in &mut self.weights {
             *w += share;

@@ -172,8 +172,8 @@ fn listed_first_candidates_merge_as_the_index_does() {
         for max_distance in [None, Some(150.0)] {
             let mixture = clustered_mixture(seed, 300);
             let (mut listed, mut indexed) = (mixture.clone(), mixture.clone());
-            listed.merge(16.0, max_distance, true);
-            indexed.merge(16.0, max_distance, false);
+            listed.merge(16.0, max_distance, true).unwrap();
+            indexed.merge(16.0, max_distance, false).unwrap();
             assert_eq!(listed.means, indexed.means, "seed {seed}");
             assert_eq!(listed.covars, indexed.covars, "seed {seed}");
             assert_eq!(listed.weights, indexed.weights, "seed {seed}");

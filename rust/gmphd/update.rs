@@ -4,6 +4,7 @@ use super::linalg::{general_inverse_into, matmul, matmul_bt, matvec, quadratic_f
 use super::measurement::MeasurementModel;
 use super::{Mixture, BIRTH};
 use crate::error::{ModelError, Result};
+use crate::memory;
 
 /// The settings of the stock components that take part in the update.
 #[derive(Debug, Clone, Copy)]
@@ -43,19 +44,20 @@ struct Linearised {
 }
 
 /// The measurement prediction of every component: what the gate and the likelihoods need.
-fn linearise(mixture: &Mixture, model: &MeasurementModel) -> Linearised {
+fn linearise(mixture: &Mixture, model: &MeasurementModel) -> Result<Linearised> {
     let (n, d, m) = (mixture.len(), mixture.ndim, model.ndim_meas());
+    let zeros = |sizes: &[usize]| memory::filled("means", memory::product("means", sizes)?, 0.0);
     let mut out = Linearised {
-        predicted: vec![0.0; n * m],
-        cross: vec![0.0; n * d * m],
-        innovation: vec![0.0; n * m * m],
-        inverse: vec![0.0; n * m * m],
-        symmetric_inverse: vec![0.0; n * m * m],
-        log_det: vec![0.0; n],
+        predicted: zeros(&[n, m])?,
+        cross: zeros(&[n, d, m])?,
+        innovation: zeros(&[n, m, m])?,
+        inverse: zeros(&[n, m, m])?,
+        symmetric_inverse: zeros(&[n, m, m])?,
+        log_det: zeros(&[n])?,
     };
     let noise = model.noise();
-    let mut h = vec![0.0; m * d];
-    let mut scratch = vec![0.0; 2 * m * m.max(1)];
+    let mut h = zeros(&[m, d])?;
+    let mut scratch = zeros(&[2, m, m.max(1)])?;
     for i in 0..n {
         let x = mixture.mean(i);
         let p = mixture.covar(i);
@@ -77,18 +79,19 @@ fn linearise(mixture: &Mixture, model: &MeasurementModel) -> Linearised {
             general_inverse_into(innovation, m, inverse, &mut scratch);
         }
     }
-    out
+    Ok(out)
 }
 
 /// Kalman gains `K = P Hᵀ S⁻¹` (N×D×m) and posterior covariances `P − K S Kᵀ` (N×D×D,
 /// symmetrised on request), computed only for the components in `needed` (those some
 /// detection updates): most components of a scan are gated by none.
-fn gains(mixture: &Mixture, lin: &Linearised, m: usize, needed: &[bool], force_symmetric: bool) -> (Vec<f64>, Vec<f64>) {
+fn gains(mixture: &Mixture, lin: &Linearised, m: usize, needed: &[bool], force_symmetric: bool) -> Result<(Vec<f64>, Vec<f64>)> {
     let (n, d) = (needed.len(), mixture.ndim);
-    let mut gain = vec![0.0; n * d * m];
-    let mut posterior = vec![0.0; n * d * d];
-    let mut gain_s = vec![0.0; d * m];
-    let mut correction = vec![0.0; d * d];
+    let zeros = |sizes: &[usize]| memory::filled("means", memory::product("means", sizes)?, 0.0);
+    let mut gain = zeros(&[n, d, m])?;
+    let mut posterior = zeros(&[n, d, d])?;
+    let mut gain_s = zeros(&[d, m])?;
+    let mut correction = zeros(&[d, d])?;
     for i in (0..n).filter(|&i| needed[i]) {
         // (`needed` is empty when the scan has no detections)
         let p = mixture.covar(i);
@@ -110,7 +113,7 @@ fn gains(mixture: &Mixture, lin: &Linearised, m: usize, needed: &[bool], force_s
             }
         }
     }
-    (gain, posterior)
+    Ok((gain, posterior))
 }
 
 fn check_inputs(mixture: &Mixture, model: &MeasurementModel, detections: &[f64], prob_detection: &[f64], clutter: &[f64], params: &UpdateParams) -> Result<usize> {
@@ -155,11 +158,11 @@ impl Mixture {
         let count = check_inputs(self, model, detections, prob_detection, clutter, params)?;
         let (n, d, m) = (self.len(), self.ndim, model.ndim_meas());
         // (no detections: only the missed-detection terms, nothing to linearise)
-        let lin = if count > 0 { linearise(self, model) } else { linearise(&Mixture::new(d), model) };
+        let lin = if count > 0 { linearise(self, model)? } else { linearise(&Mixture::new(d), model)? };
 
         // The gate, pair by pair: d(ẑ, z) with ẑ − z wrapped, as the stock measure takes it.
-        let mut gated: Vec<Vec<usize>> = vec![Vec::new(); count];
-        let mut delta = vec![0.0; m];
+        let mut gated: Vec<Vec<usize>> = memory::filled("detections", count, Vec::new())?;
+        let mut delta = memory::filled("detections", m, 0.0)?;
         for i in 0..if count > 0 { n } else { 0 } {
             let predicted = &lin.predicted[i * m..(i + 1) * m];
             let inverse = &lin.inverse[i * m * m..(i + 1) * m * m];
@@ -172,22 +175,35 @@ impl Mixture {
                         continue;
                     }
                 }
+                // (room for one more, fallibly: n × detections pairs can gate)
+                members.try_reserve(1).map_err(|_| ModelError::memory("detections", (members.len() as u128 + 1) * 8))?;
                 members.push(i);
             }
         }
 
-        let mut needed = vec![false; if count > 0 { n } else { 0 }];
+        let mut needed = memory::filled("means", if count > 0 { n } else { 0 }, false)?;
         for &i in gated.iter().flatten() {
             needed[i] |= !(params.skip_undetectable && prob_detection[i] == 0.0);
         }
-        let (gain, posterior) = gains(self, &lin, m, &needed, params.force_symmetric);
+        let (gain, posterior) = gains(self, &lin, m, &needed, params.force_symmetric)?;
 
-        let mut out = Mixture { ndim: d, next_tag: self.next_tag, ..Default::default() };
+        // the posterior's components: at most one per gated pair and one per component
+        let most = gated.iter().map(Vec::len).sum::<usize>() + n;
+        let mut out = Mixture {
+            ndim: d,
+            next_tag: self.next_tag,
+            means: memory::with_room("detections", memory::product("detections", &[most, d])?)?,
+            covars: memory::with_room("detections", memory::product("detections", &[most, d, d])?)?,
+            weights: memory::with_room("detections", most)?,
+            tags: memory::with_room("detections", most)?,
+            times: memory::with_room("detections", most)?,
+            ..Default::default()
+        };
         let log_norm = m as f64 * (2.0 * std::f64::consts::PI).ln();
-        let mut raw = vec![0.0; m];
-        let mut innovation = vec![0.0; m];
-        let mut correction = vec![0.0; d];
-        let mut clutter_probability = vec![1.0; count];
+        let mut raw = memory::filled("detections", m, 0.0)?;
+        let mut innovation = memory::filled("detections", m, 0.0)?;
+        let mut correction = memory::filled("means", d, 0.0)?;
+        let mut clutter_probability = memory::filled("detections", count, 1.0)?;
         for (j, members) in gated.iter().enumerate() {
             let z = &detections[j * m..(j + 1) * m];
             let first = out.len();

@@ -2,6 +2,7 @@
 //! force enumeration of the joint events to check them.
 
 use super::{too_large, try_filled};
+use crate::memory;
 use crate::error::{ModelError, Result};
 use std::collections::BTreeMap;
 
@@ -10,6 +11,7 @@ use std::collections::BTreeMap;
 struct Bits(Vec<u64>);
 
 impl Bits {
+    // (a cluster's detections / 64 words: bounded by the tree's budget, TREE_LIMITS)
     fn empty(words: usize) -> Self {
         Bits(vec![0; words])
     }
@@ -23,6 +25,7 @@ impl Bits {
         self.0.iter().zip(&other.0).any(|(a, b)| a & b != 0)
     }
     fn union(&self, other: &Bits) -> Bits {
+        // (as long as `self`: a few words)
         Bits(self.0.iter().zip(&other.0).map(|(a, b)| a | b).collect())
     }
     /// `(self ∪ {k}) ∩ mask` (`k = None`: no detection).
@@ -209,7 +212,7 @@ pub(super) fn joint_marginals_within(limits: TreeLimits, weights: &[f64], valid:
     check_weights(weights, valid, tracks, dets)?;
     let mut out = try_filled(tracks.checked_mul(dets + 1), 0.0).ok_or_else(|| too_large(tracks, dets))?;
     // Clusters: tracks connected through shared detections (union–find, smallest index as root).
-    let mut parent: Vec<usize> = (0..tracks).collect();
+    let mut parent: Vec<usize> = memory::collected("means", 0..tracks)?;
     fn find(parent: &mut [usize], mut a: usize) -> usize {
         while parent[a] != a {
             parent[a] = parent[parent[a]];
@@ -246,11 +249,12 @@ pub(super) fn joint_marginals_within(limits: TreeLimits, weights: &[f64], valid:
 
 fn solve_cluster(limits: TreeLimits, members: &[usize], weights: &[f64], valid: &[bool], dets: usize, out: &mut [f64]) -> Result<()> {
     // The cluster's detections, in index order.
-    let local: Vec<usize> = (0..dets).filter(|&j| members.iter().any(|&t| valid[t * dets + j])).collect();
+    let local: Vec<usize> = memory::collected("detections", (0..dets).filter(|&j| members.iter().any(|&t| valid[t * dets + j])))?;
     let words = local.len().div_ceil(64).max(1);
-    let mut levels: Vec<Level> = members
-        .iter()
-        .map(|&t| {
+    // (per level: its track's gated hypotheses, at most the cluster's detections)
+    let mut levels: Vec<Level> = memory::collected(
+        "detections",
+        members.iter().map(|&t| {
             let row = &weights[t * (dets + 1)..(t + 1) * (dets + 1)];
             let mut hyps = vec![(None, row[0])];
             let mut meas = Bits::empty(words);
@@ -261,8 +265,8 @@ fn solve_cluster(limits: TreeLimits, members: &[usize], weights: &[f64], valid: 
                 }
             }
             Level { hyps, acc: meas, children: Vec::new(), nodes: Vec::new(), index: BTreeMap::new(), next: Vec::new(), backward: Vec::new(), forward: Vec::new() }
-        })
-        .collect();
+        }),
+    )?;
     let n = levels.len();
 
     // The tree, built from the last track up: a track's children are the current roots whose
@@ -356,6 +360,7 @@ fn solve_cluster(limits: TreeLimits, members: &[usize], weights: &[f64], valid: 
                     continue;
                 }
                 let base = levels[l].forward[ni] * levels[l].hyps[h].1;
+                // (one per child of the level: bounded by the tree's budget)
                 let child_nodes: Vec<usize> = (0..nc).map(|ci| levels[l].next[(ni * nh + h) * nc + ci]).collect();
                 for ci in 0..nc {
                     let mut term = base;
@@ -374,7 +379,7 @@ fn solve_cluster(limits: TreeLimits, members: &[usize], weights: &[f64], valid: 
     for (l, &t) in members.iter().enumerate() {
         let level = &levels[l];
         let (nh, nc) = (level.hyps.len(), level.children.len());
-        let mut post = vec![0.0; nh];
+        let mut post = vec![0.0; nh]; // (one per hypothesis of the level, which exist)
         for (h, p) in post.iter_mut().enumerate() {
             let mut sum = 0.0;
             for ni in 0..level.nodes.len() {
@@ -406,12 +411,15 @@ fn solve_cluster(limits: TreeLimits, members: &[usize], weights: &[f64], valid: 
 /// hypotheses, no detection twice). Exponential: for tests and small inputs only.
 pub fn brute_force_marginals(weights: &[f64], valid: &[bool], tracks: usize, dets: usize) -> Result<Vec<f64>> {
     check_weights(weights, valid, tracks, dets)?;
+    // (its buffers below are as large as `weights`, which exists; the enumeration's time,
+    // not memory, limits its inputs: a reference for tests)
+    // (for tests: every buffer here is as large as `weights`, which exists)
     let options: Vec<Vec<usize>> = (0..tracks).map(|t| std::iter::once(0).chain((0..dets).filter(|&j| valid[t * dets + j]).map(|j| j + 1)).collect()).collect();
     let mut sums = vec![0.0; tracks * (dets + 1)];
     let mut choice = vec![0usize; tracks];
     let mut total = 0.0;
     'events: loop {
-        let mut used = vec![false; dets + 1];
+        let mut used = vec![false; dets + 1]; // (for tests, as above)
         let mut ok = true;
         let mut product = 1.0;
         for t in 0..tracks {
@@ -441,7 +449,7 @@ pub fn brute_force_marginals(weights: &[f64], valid: &[bool], tracks: usize, det
         break;
     }
     if total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return Err(no_event(&(0..tracks).collect::<Vec<_>>()));
+        return Err(no_event(&(0..tracks).collect::<Vec<_>>())); // (for tests, as above)
     }
-    Ok(sums.iter().map(|s| s / total).collect())
+    Ok(sums.iter().map(|s| s / total).collect()) // (for tests, as above)
 }

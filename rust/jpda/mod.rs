@@ -41,6 +41,7 @@ pub use measurement::{mod_bearing, Jacobian, MeasurementModel};
 pub use screen::{screen_pairs, screen_states, ScreenInput};
 
 use crate::error::{ModelError, Result};
+use crate::memory;
 use nalgebra::{DMatrix, DVector};
 
 const LOG_TWO_PI: f64 = 1.837_877_066_409_345_5; // ln(2π)
@@ -56,16 +57,13 @@ fn check_finite(argument: &'static str, values: &[f64]) -> Result<()> {
 /// fails: sizes that come from the inputs (tracks × detections, a cluster's tree) are
 /// allocated fallibly, so that an input too large for memory is an error, not an abort.
 fn try_filled<T: Clone>(len: Option<usize>, value: T) -> Option<Vec<T>> {
-    let len = len?;
-    let mut out = Vec::new();
-    out.try_reserve_exact(len).ok()?;
-    out.resize(len, value);
-    Some(out)
+    memory::filled("detections", len?, value).ok()
 }
 
-/// The error of a scan whose `tracks × detections` arrays cannot be allocated.
+/// The error of a scan whose `tracks × detections` arrays cannot be allocated (a
+/// MemoryError in Python, naming `detections`).
 fn too_large(tracks: usize, dets: usize) -> ModelError {
-    ModelError::invalid("detections", format!("{tracks} tracks × {dets} detections: the scan's association arrays could not be allocated"))
+    ModelError::memory("detections", tracks as u128 * (dets as u128 + 1) * 8)
 }
 
 /// Kalman prediction `x' = F x`, `P' = F P Fᵀ + Q` of `T` states (`means` T×D, `covars`
@@ -84,10 +82,11 @@ pub fn predict(dim: usize, means: &[f64], covars: &[f64], index: &[usize], matri
     }
     check_finite("transition_matrices", matrices)?;
     check_finite("transition_covars", noises)?;
-    let f: Vec<DMatrix<f64>> = (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &matrices[k * dd..(k + 1) * dd])).collect();
-    let q: Vec<DMatrix<f64>> = (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &noises[k * dd..(k + 1) * dd])).collect();
-    let mut out_means = Vec::with_capacity(tracks * dim);
-    let mut out_covars = Vec::with_capacity(tracks * dd);
+    // (nalgebra's matrices allocate infallibly: as large as the given matrices, which exist)
+    let f: Vec<DMatrix<f64>> = memory::collected("transition_matrices", (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &matrices[k * dd..(k + 1) * dd])))?;
+    let q: Vec<DMatrix<f64>> = memory::collected("transition_covars", (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &noises[k * dd..(k + 1) * dd])))?;
+    let mut out_means = memory::with_room("means", means.len())?;
+    let mut out_covars = memory::with_room("covars", covars.len())?;
     for (t, &k) in index.iter().enumerate() {
         let x = DVector::from_row_slice(&means[t * dim..(t + 1) * dim]);
         let p = DMatrix::from_row_slice(dim, dim, &covars[t * dd..(t + 1) * dd]);
@@ -212,8 +211,8 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
     let dd = dim * dim;
     let angle = model.angle_row();
     let noise = model.noise();
-    let z: Vec<DVector<f64>> = input.detections.chunks_exact(m).map(DVector::from_row_slice).collect();
-    let log_clutter: Vec<f64> = input.clutter.iter().map(|l| l.ln()).collect();
+    let z: Vec<DVector<f64>> = memory::collected("detections", input.detections.chunks_exact(m).map(DVector::from_row_slice))?;
+    let log_clutter: Vec<f64> = memory::collected("clutter", input.clutter.iter().map(|l| l.ln()))?;
 
     let pairs = tracks.checked_mul(dets);
     let columns = tracks.checked_mul(dets + 1);
@@ -224,8 +223,8 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
         meas_dim: m,
         gated: try_filled(pairs, false).ok_or_else(|| too_large(tracks, dets))?,
         weights: try_filled(columns, 0.0).ok_or_else(|| too_large(tracks, dets))?,
-        is_update: vec![false; tracks],
-        taken: vec![false; dets],
+        is_update: memory::filled("means", tracks, false)?,
+        taken: memory::filled("detections", dets, false)?,
         ..Default::default()
     };
     // Per track: prediction, gain-updated covariance, innovations of its gated detections.
@@ -236,7 +235,7 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
         p_updated: DMatrix<f64>,
         innovations: Vec<(usize, DVector<f64>)>,
     }
-    let mut updates = Vec::with_capacity(tracks);
+    let mut updates = memory::with_room("means", tracks)?;
     for t in 0..tracks {
         let x = DVector::from_row_slice(&input.means[t * dim..(t + 1) * dim]);
         let p = DMatrix::from_row_slice(dim, dim, &input.covars[t * dd..(t + 1) * dd]);
@@ -304,11 +303,12 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
     out.marginals = joint_marginals(&out.weights, &out.gated, tracks, dets)?;
 
     // Gaussian mixture reduction of each track's hypotheses, weighted by the marginals.
-    out.means.reserve(tracks * dim);
-    out.covars.reserve(tracks * dd);
+    out.means = memory::with_room("means", input.means.len())?;
+    out.covars = memory::with_room("covars", input.covars.len())?;
     for (t, u) in updates.iter().enumerate() {
         let beta = &out.marginals[t * (dets + 1)..(t + 1) * (dets + 1)];
         let missed = beta[0];
+        // (one per gated detection of the track, whose innovations exist already)
         let mut components: Vec<(f64, DVector<f64>, &DMatrix<f64>)> = Vec::with_capacity(1 + u.innovations.len());
         components.push((missed, u.x.clone(), &u.p));
         for (j, nu) in &u.innovations {

@@ -21,6 +21,7 @@
 
 use super::measurement::{mod_bearing, MeasurementModel};
 use super::{too_large, try_filled};
+use crate::memory;
 use crate::error::{ModelError, Result};
 use nalgebra::DVector;
 use std::cmp::Ordering;
@@ -67,9 +68,9 @@ pub fn screen_pairs(input: &ScreenInput) -> Result<Vec<bool>> {
         return Err(ModelError::shape("wrap", format!("must be ({k}, {m}), got {} values", input.wrap.len())));
     }
     let mut out = try_filled(n.checked_mul(k), true).ok_or_else(|| too_large(n, k))?;
-    let mut delta = vec![0.0; m];
-    let mut work = vec![0.0; 2 * m * m];
-    let mut inverse = vec![0.0; m * m];
+    let mut delta = memory::filled("means", m, 0.0)?;
+    let mut work = memory::filled("means", memory::product("means", &[2, m, m])?, 0.0)?;
+    let mut inverse = memory::filled("means", m * m, 0.0)?; // (≤ work's size)
     for row in 0..n {
         if !invert(&input.covars[row * m * m..(row + 1) * m * m], m, &mut work, &mut inverse) {
             continue; // singular or not finite: every pair of the row stays a candidate

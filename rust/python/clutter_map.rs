@@ -1,10 +1,10 @@
 //! The learned clutter map at the boundary: one estimator shared (not copied) with every
 //! clutter model built from it.
 
-use super::{borrow, guarded, points_slice, pose_of, slice, value_error};
+use super::{array_of, borrow, guarded, points_slice, pose_of, slice, value_error};
 use crate::clutter::{read_map, SharedMap};
 use crate::clutter_map::{ClutterMap, MapSpace, Pooling};
-use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use std::sync::{Arc, RwLock};
 
@@ -38,9 +38,7 @@ impl PyClutterMap {
         };
         let map = guarded(|| {
             let map = ClutterMap::new(space, [edges0, edges1], prior_intensity, prior_scans, forgetting)?.with_pooling(pooling, pooling_scans)?;
-            let [a, b] = map.shape();
-            let zeros = || vec![0.0; a * b];
-            map.with_state(counts.unwrap_or_else(zeros), deficit.unwrap_or_else(zeros), exposure, scale)
+            map.with_saved(counts, deficit, exposure, scale)
         })?;
         Ok(PyClutterMap(Arc::new(RwLock::new(map))))
     }
@@ -78,31 +76,25 @@ impl PyClutterMap {
         &self, py: Python<'py>, pose: (f64, f64, f64), positions: Bound<'py, PyArray2<f64>>, ranges: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
-        let n = positions.shape()[0];
         let positions = borrow(&positions, "positions")?;
         let p = points_slice(&positions, "positions")?;
         let ranges = ranges.map(|r| borrow(&r, "ranges")).transpose()?;
         let r = ranges.as_ref().map(|r| slice(r, "ranges")).transpose()?;
-        if let Some(r) = r {
-            if r.len() != n {
-                return Err(value_error("ranges", format!("must have {n} entries, got {}", r.len())));
-            }
-        }
         let map = read_map(&self.0);
-        let values: Vec<f64> = (0..n).map(|i| map.value_at(&pose, p[2 * i], p[2 * i + 1], r.map_or(f64::NAN, |r| r[i]))).collect();
-        Ok(PyArray1::from_vec(py, values))
+        Ok(PyArray1::from_vec(py, guarded(|| map.intensity_at(&pose, p, r))?))
     }
 
     /// The posterior mean λ of every cell, (n0 · n1,) row-major.
-    fn intensities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_vec(py, read_map(&self.0).intensities())
+    fn intensities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(PyArray1::from_vec(py, guarded(|| read_map(&self.0).intensities())?))
     }
 
     /// (counts, deficit, exposure, scale): the state an update changes, as stored (see the
     /// core).
-    fn state<'py>(&self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64, f64) {
+    #[allow(clippy::type_complexity)]
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64, f64)> {
         let map = read_map(&self.0);
         let (counts, deficit, exposure, scale) = map.state();
-        (PyArray1::from_slice(py, counts), PyArray1::from_slice(py, deficit), exposure, scale)
+        Ok((array_of(py, "counts", counts)?, array_of(py, "deficit", deficit)?, exposure, scale))
     }
 }

@@ -1,7 +1,7 @@
 //! The learned detection probability at the boundary: one estimate shared (not copied)
 //! with every detection model built from it.
 
-use super::{borrow, guarded, points_slice, pose_of, slice};
+use super::{array_of, borrow, guarded, points_slice, pose_of, slice};
 use crate::detection_estimate::{read_estimate, DetectionEstimate, SharedEstimate};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -22,8 +22,14 @@ impl PyDetectionEstimate {
     ) -> PyResult<Self> {
         let estimate = guarded(|| {
             let estimate = DetectionEstimate::new(edges, prior_probability, prior_trials, forgetting, outside)?;
-            let bands = estimate.state().0.len();
-            estimate.with_state(hits.unwrap_or_else(|| vec![0.0; bands]), trials.unwrap_or_else(|| vec![0.0; bands]))
+            match (hits, trials) {
+                (None, None) => Ok(estimate),
+                (hits, trials) => {
+                    let fresh = |saved: Option<Vec<f64>>, argument| saved.map_or_else(|| crate::memory::copied(argument, estimate.state().0), Ok);
+                    let (hits, trials) = (fresh(hits, "hits")?, fresh(trials, "trials")?);
+                    estimate.with_state(hits, trials)
+                }
+            }
         })?;
         Ok(PyDetectionEstimate(Arc::new(RwLock::new(estimate))))
     }
@@ -44,14 +50,14 @@ impl PyDetectionEstimate {
     }
 
     /// The posterior mean P_D of every band.
-    fn probabilities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_vec(py, read_estimate(&self.0).probabilities())
+    fn probabilities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(PyArray1::from_vec(py, guarded(|| read_estimate(&self.0).probabilities())?))
     }
 
     /// (hits, trials): the state an update changes.
-    fn state<'py>(&self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>) {
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
         let estimate = read_estimate(&self.0);
         let (hits, trials) = estimate.state();
-        (PyArray1::from_slice(py, hits), PyArray1::from_slice(py, trials))
+        Ok((array_of(py, "hits", hits)?, array_of(py, "trials", trials)?))
     }
 }

@@ -15,6 +15,7 @@ pub struct PyJPDAMeasurementModel(MeasurementModel);
 fn matrix_of(array: &Bound<'_, PyArray2<f64>>, argument: &str) -> PyResult<(Vec<f64>, usize, usize)> {
     let (rows, cols) = (array.shape()[0], array.shape()[1]);
     let view = borrow(array, argument)?;
+    // (a measurement model's matrix: as large as the array given)
     Ok((slice(&view, argument)?.to_vec(), rows, cols))
 }
 
@@ -110,11 +111,10 @@ fn jpda_predict<'py>(
             return Err(value_error(name, format_args!("must have shape (K, {dim}, {dim}), got {shape:?}")));
         }
     }
-    let index = transition_index
-        .iter()
-        .enumerate()
-        .map(|(t, &k)| usize::try_from(k).map_err(|_| value_error("transition_index", format_args!("row {t}: must be >= 0, got {k}"))))
-        .collect::<PyResult<Vec<usize>>>()?;
+    let mut index = crate::memory::with_room("transition_index", transition_index.len()).map_err(to_py)?;
+    for (t, &k) in transition_index.iter().enumerate() {
+        index.push(usize::try_from(k).map_err(|_| value_error("transition_index", format_args!("row {t}: must be >= 0, got {k}")))?);
+    }
     let means = borrow(&means, "means")?;
     let m = slice(&means, "means")?;
     let covars = borrow(&covars, "covars")?;
@@ -201,7 +201,7 @@ fn jpda_marginals<'py>(py: Python<'py>, weights: Bound<'py, PyArray2<f64>>, gate
         return Err(value_error("gated", "must be C-contiguous"));
     }
     let valid = gated.try_readonly().map_err(|_| value_error("gated", "is being written by another call"))?;
-    let valid = valid.as_slice().map_err(|_| value_error("gated", "must be C-contiguous and aligned"))?.to_vec();
+    let valid = crate::memory::copied("gated", valid.as_slice().map_err(|_| value_error("gated", "must be C-contiguous and aligned"))?).map_err(to_py)?;
     let weights = borrow(&weights, "weights")?;
     let w = slice(&weights, "weights")?;
     let out = detached(py, || jpda::joint_marginals(w, &valid, t, k))?;

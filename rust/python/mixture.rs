@@ -22,6 +22,7 @@ impl PyScanMeasurementModel {
         }
         let h = borrow(&matrix, "matrix")?;
         let r = borrow(&noise, "noise")?;
+        // (copies of a model's matrices, as large as the arrays given)
         Ok(Self(MeasurementModel::Linear { matrix: slice(&h, "matrix")?.to_vec(), noise: slice(&r, "noise")?.to_vec(), ndim_meas: m }))
     }
 
@@ -104,8 +105,8 @@ impl PyGaussianMixtureArrays {
     }
 
     /// The distinct component times, ascending.
-    fn distinct_times(&self) -> Vec<i64> {
-        self.0.distinct_times()
+    fn distinct_times(&self) -> PyResult<Vec<i64>> {
+        self.0.distinct_times().map_err(super::to_py)
     }
 
     /// Kalman prediction to `now`: components stamped `from_times[g]` use
@@ -197,44 +198,47 @@ impl PyGaussianMixtureArrays {
     fn track_states<'py>(&self, py: Python<'py>, tracked: Vec<u64>, threshold: f64) -> PyResult<(Vec<u64>, Vec<f64>, Bound<'py, PyArray3<f64>>, Bound<'py, PyArray3<f64>>, Vec<u64>)> {
         let mixture = &self.0;
         let d = mixture.ndim;
-        let (rows, gone) = mixture.track_rows(&tracked, threshold);
-        let mut means = Vec::with_capacity(rows.len() * d);
-        let mut covars = Vec::with_capacity(rows.len() * d * d);
+        let (rows, gone) = mixture.track_rows(&tracked, threshold).map_err(super::to_py)?;
+        // (the mixture holds these rows already: sizes cannot overflow)
+        let room = |n: usize| crate::memory::with_room::<f64>("means", n).map_err(super::to_py);
+        let (mut means, mut covars) = (room(rows.len() * d)?, room(rows.len() * d * d)?);
         for &i in &rows {
             means.extend_from_slice(mixture.mean(i));
             covars.extend_from_slice(mixture.covar(i));
         }
         let k = rows.len();
-        Ok((rows.iter().map(|&i| mixture.tags[i]).collect(), rows.iter().map(|&i| mixture.weights[i]).collect(),
-            PyArray1::from_vec(py, means).reshape([k, d, 1])?, PyArray1::from_vec(py, covars).reshape([k, d, d])?, gone))
+        let tags = crate::memory::collected("means", rows.iter().map(|&i| mixture.tags[i])).map_err(super::to_py)?;
+        let weights = crate::memory::collected("means", rows.iter().map(|&i| mixture.weights[i])).map_err(super::to_py)?;
+        Ok((tags, weights, PyArray1::from_vec(py, means).reshape([k, d, 1])?, PyArray1::from_vec(py, covars).reshape([k, d, d])?, gone))
     }
 
     fn means<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let (n, d) = (self.0.len(), self.0.ndim);
-        Ok(PyArray1::from_slice(py, &self.0.means).reshape([n, d])?)
+        Ok(super::array_of(py, "means", &self.0.means)?.reshape([n, d])?)
     }
 
     fn covars<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let (n, d) = (self.0.len(), self.0.ndim);
-        Ok(PyArray1::from_slice(py, &self.0.covars).reshape([n, d, d])?)
+        Ok(super::array_of(py, "covars", &self.0.covars)?.reshape([n, d, d])?)
     }
 
-    fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.0.weights)
+    fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        super::array_of(py, "weights", &self.0.weights)
     }
 
-    fn tags<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
-        PyArray1::from_slice(py, &self.0.tags)
+    fn tags<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<u64>>> {
+        super::array_of(py, "tags", &self.0.tags)
     }
 
-    fn times<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        PyArray1::from_slice(py, &self.0.times)
+    fn times<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        super::array_of(py, "times", &self.0.times)
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
         let py = slf.py();
         let this = slf.borrow();
-        let state = (this.means(py)?, this.covars(py)?, this.weights(py), this.tags(py).to_vec()?, this.times(py).to_vec()?, this.0.next_tag);
+        // (tags and times as lists for pickling: Python's own objects, MemoryError on failure)
+        let state = (this.means(py)?, this.covars(py)?, this.weights(py)?, this.tags(py)?.to_vec()?, this.times(py)?.to_vec()?, this.0.next_tag);
         (slf.get_type(), (this.0.ndim,), state).into_pyobject(py)
     }
 

@@ -34,7 +34,7 @@ pub(super) fn evaluate<'py>(
     let data = slice(&particles, "particles")?;
     let want_table = log && n > 0;
     let (pd, table) = detached(py, || {
-        let mut pd = vec![0.0; n];
+        let mut pd = crate::memory::filled("particles", n, 0.0)?;
         model.at_pose(&pose).at_particles(data, ndim, order, mapping, &mut pd)?;
         let table = if want_table { Distinct::of(&pd, MAX_DISTINCT) } else { None };
         Ok((pd, table))
@@ -42,13 +42,14 @@ pub(super) fn evaluate<'py>(
 
     let (detected, not_detected) = match (log, table) {
         (false, _) => {
-            let complement = missed.then(|| pd.iter().map(|p| 1.0 - p).collect::<Vec<_>>());
+            let complement = missed.then(|| crate::memory::collected("particles", pd.iter().map(|p| 1.0 - p))).transpose().map_err(super::to_py)?;
             (pd, complement)
         }
         (true, Some(table)) => {
             // Logs of the few distinct values from NumPy; the per-particle lookup in the core.
             let log_pd = numpy_log(py, table.values())?;
             let log_missed = if missed {
+                // (a table holds at most MAX_DISTINCT values)
                 Some(numpy_log(py, &table.values().iter().map(|p| 1.0 - p).collect::<Vec<_>>())?)
             } else {
                 None
@@ -58,7 +59,7 @@ pub(super) fn evaluate<'py>(
                 // The complement first, from P_D; then P_D's own buffer becomes its log.
                 let missed_out = match &log_missed {
                     Some(image) => {
-                        let mut out = pd.clone();
+                        let mut out = crate::memory::copied("particles", &pd)?;
                         table.apply(&mut out, image)?;
                         Some(out)
                     }
@@ -70,7 +71,8 @@ pub(super) fn evaluate<'py>(
         }
         // More distinct values than a table is worth (or none at all): NumPy on every value.
         (true, None) => {
-            let log_missed = if missed { Some(numpy_log(py, &pd.iter().map(|p| 1.0 - p).collect::<Vec<_>>())?) } else { None };
+            let complement = |pd: &[f64]| crate::memory::collected("particles", pd.iter().map(|p| 1.0 - p)).map_err(super::to_py);
+            let log_missed = if missed { Some(numpy_log(py, &complement(&pd)?)?) } else { None };
             (numpy_log(py, &pd)?, log_missed)
         }
     };
@@ -85,10 +87,10 @@ pub(super) fn evaluate<'py>(
 /// warning: NumPy sees the non-zero values only, as one contiguous array (its log is the
 /// same function of each value whatever the array's length or alignment).
 fn numpy_log(py: Python<'_>, values: &[f64]) -> PyResult<Vec<f64>> {
-    let nonzero: Vec<f64> = values.iter().copied().filter(|v| *v != 0.0).collect();
+    let nonzero: Vec<f64> = crate::memory::collected("particles", values.iter().copied().filter(|v| *v != 0.0)).map_err(super::to_py)?;
     let logs = py.import("numpy")?.getattr("log")?.call1((PyArray1::from_vec(py, nonzero),))?;
     let logs = logs.cast_into::<PyArray1<f64>>()?;
     let logs = super::borrow(&logs, "log")?;
     let mut logs = slice(&logs, "log")?.iter();
-    Ok(values.iter().map(|v| if *v == 0.0 { f64::NEG_INFINITY } else { *logs.next().unwrap_or(&f64::NAN) }).collect())
+    crate::memory::collected("particles", values.iter().map(|v| if *v == 0.0 { f64::NEG_INFINITY } else { *logs.next().unwrap_or(&f64::NAN) })).map_err(super::to_py)
 }
