@@ -173,7 +173,7 @@ def learned_calls():
         return ctx.prob_detection_particles(**kwargs)
 
     def lam_array(**changes):
-        kwargs = dict(positions=[[50.0, 0.0]], ranges=None)
+        kwargs = dict(positions=[[50.0, 0.0], [400.0, 10.0]], ranges=None)
         kwargs.update(changes)
         return ctx.clutter_spatial_density_array(**kwargs)
 

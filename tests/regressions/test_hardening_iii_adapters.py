@@ -480,7 +480,7 @@ def test_a_target_whose_world_range_is_exactly_max_range_is_inside(radar):
 BAD_PROBABILITIES = [None, "0.9", True, np.bool_(False), NAN, INF, -0.1, 1.0000001, 2, [0.9],
                      np.array([0.9]), 1j, object()]
 BAD_DENSITIES = [None, "x", True, 0, 0.0, -1e-4, NAN, INF, [1e-4], np.array([1e-4]), 1j,
-                 np.float64(0.0)]
+                 np.float64(0.0), 5e-324]
 
 
 @pytest.mark.parametrize("prob_detection", BAD_PROBABILITIES, ids=repr)
@@ -525,7 +525,7 @@ def test_from_stonesoup_names_the_sensor_for_its_bad_settings(attribute, value):
 
 @pytest.mark.parametrize("prob_detection, clutter_density", [
     (0, 1e-4), (1, 1e-4), (np.float32(0.5), np.float32(1e-3)), (np.int64(1), np.int64(2)),
-    (0.5, 1e300), (0.5, 5e-324)], ids=str)
+    (0.5, 1e300), (0.5, 2.2250738585072014e-308)], ids=str)
 def test_from_stonesoup_accepts_every_real_number_type(prob_detection, clutter_density):
     from ctxmodels import SensorModel
     model = SensorModel.from_stonesoup(_radar(), prob_detection, clutter_density, name="r")

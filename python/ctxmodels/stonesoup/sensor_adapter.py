@@ -40,6 +40,7 @@ measurement space.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -98,9 +99,10 @@ def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: 
     if not 0.0 <= p <= 1.0:
         raise ValueError(f"prob_detection: must lie in [0, 1], got {prob_detection!r}")
     density = as_float(clutter_density, "clutter_density", finite=False)
-    if not (math.isfinite(density) and density > 0):
-        raise ValueError(f"clutter_density: must be a finite density > 0 (per unit of the "
-                         f"detections' measurement space), got {clutter_density!r}")
+    if not (math.isfinite(density) and density >= sys.float_info.min):
+        raise ValueError(f"clutter_density: must be a finite density > 0, at least "
+                         f"{sys.float_info.min} (per unit of the detections' measurement "
+                         f"space; trackers divide by it), got {clutter_density!r}")
     if not isinstance(name, str):
         raise TypeError(f"name: expected a string label, got {type(name).__name__} {name!r}")
     factors: list = [p]
