@@ -73,9 +73,10 @@ impl Edge {
 
 /// A validated land mask with its containment index.
 ///
-/// A mask smaller than [`TINY`] is validated and indexed in a frame scaled up by a power of
-/// two (exact): at 1e-200 m the products of coordinate differences in the area and
-/// orientation tests would underflow to 0. Masks of ordinary size use a scale of 1.
+/// A mask smaller than [`TINY`] or larger than [`HUGE`] is validated and indexed in a frame
+/// scaled by a power of two (exact): at 1e-200 m the products of coordinate differences in
+/// the area and orientation tests would underflow to 0, at 1e200 m overflow to infinity.
+/// Masks of ordinary size use a scale of 1.
 #[derive(Debug, Clone)]
 pub struct LandMask {
     /// As given (cleaned), in world coordinates.
@@ -89,14 +90,21 @@ pub struct LandMask {
 /// Masks whose largest coordinate is below this (2⁻²⁰⁰) are scaled up to it.
 pub(crate) const TINY: f64 = f64::from_bits((1023 - 200) << 52);
 
-/// The power of two that brings `size` (the largest |coordinate|) up to about [`TINY`],
-/// or 1 for sizes that need no scaling.
+/// Masks whose largest coordinate is above this (2²⁰⁰) are scaled down to it.
+pub(crate) const HUGE: f64 = f64::from_bits((1023 + 200) << 52);
+
+/// The power of two that brings `size` (the largest |coordinate|) up to about [`TINY`] or
+/// down to about [`HUGE`], or 1 for sizes that need no scaling.
 fn scale_for(size: f64) -> f64 {
-    if !(size > 0.0 && size < TINY) {
+    let exponent = if size > 0.0 && size < TINY {
+        // size ≥ 2⁻¹⁰⁷⁴, so the exponent is at most 1074 − 200: a normal power of two.
+        -200 - size.log2().floor() as i64
+    } else if size > HUGE && size.is_finite() {
+        // size < 2¹⁰²⁴, so the exponent is at least 200 − 1023: a normal power of two.
+        200 - size.log2().floor() as i64
+    } else {
         return 1.0;
-    }
-    // size ≥ 2⁻¹⁰⁷⁴, so the exponent is at most 1074 − 200: a normal power of two.
-    let exponent = -200 - size.log2().floor() as i64;
+    };
     f64::from_bits(((exponent + 1023) as u64) << 52)
 }
 
@@ -905,6 +913,20 @@ mod tests {
         let rock = Polygon { shell: vec![[0.0, 0.0], [1e-200, 0.0], [0.0, 1e-200]], holes: vec![] };
         let err = LandMask::new(vec![Polygon { shell: square(500.0, 500.0, 1000.0), holes: vec![] }, rock]).unwrap_err();
         assert!(err.to_string().contains("too small"), "{err}");
+    }
+
+    #[test]
+    fn huge_rings_are_valid_land() {
+        for size in [1e160, 1e300, f64::MAX / 2.0, 2.0 * HUGE] {
+            let mask = LandMask::new(vec![Polygon { shell: vec![[0.0, 0.0], [size, 0.0], [0.0, size]], holes: vec![] }]).unwrap();
+            assert_eq!(mask.polygons()[0].shell, vec![[0.0, 0.0], [size, 0.0], [0.0, size]], "world coordinates kept");
+            assert!(mask.contains([size / 4.0, size / 4.0]));
+            assert!(mask.contains([size, 0.0]), "vertex is land");
+            assert!(!mask.contains([0.75 * size, 0.75 * size]));
+            assert!(!mask.contains([-size, 0.0]) && !mask.contains([1.0, -1.0]));
+        }
+        let bowtie = vec![[0.0, 0.0], [1e300, 1e300], [1e300, 0.0], [0.0, 1e300]];
+        assert!(LandMask::new(vec![Polygon { shell: bowtie, holes: vec![] }]).is_err());
     }
 
     #[test]

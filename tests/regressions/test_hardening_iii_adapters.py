@@ -290,15 +290,23 @@ def test_lonlat_errors_in_geojson_name_source_and_where():
                    "origin")
 
 
-@pytest.mark.xfail(strict=True, reason="needs the core: rust/land.rs validates rings with an "
-                   "unscaled shoelace area (and unscaled orientation products), which overflow "
-                   "for coordinates beyond ~1e154; only tiny masks are rescaled (scale_for)")
 @pytest.mark.parametrize("scale", [1e160, 1e200, 1e300, 1e307])
 def test_valid_polygons_with_huge_coordinates_are_accepted(scale):
-    triangle = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]) * scale
-    mask = LandMask(polygons=[triangle])
-    np.testing.assert_array_equal(mask.contains(np.array([[0.2, 0.2], [0.9, 0.9]]) * scale),
-                                  [True, False])
+    """Huge masks are validated and indexed in a frame scaled down by a power of two: the
+    same answers as the mask at unit scale, and an invalid ring is still refused."""
+    from ctxmodels import LineOfSight
+    shell = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    hole = np.array([[0.4, 0.4], [0.6, 0.4], [0.6, 0.6], [0.4, 0.6]])
+    points = np.array([[0.2, 0.2], [0.5, 0.5], [0.9, 0.95], [1.5, 0.5], [-0.1, 0.5]])
+    unit = LandMask(polygons=[{"shell": shell, "holes": [hole]}])
+    huge = LandMask(polygons=[{"shell": shell * scale, "holes": [hole * scale]}])
+    np.testing.assert_array_equal(huge.contains(points * scale), unit.contains(points))
+    assert unit.contains(points).tolist() == [True, False, True, False, False]
+    sight = LineOfSight(land=huge)
+    np.testing.assert_array_equal(sight.visible(np.array([-0.5, 0.5]) * scale, points * scale),
+                                  LineOfSight(land=unit).visible(np.array([-0.5, 0.5]), points))
+    bowtie = np.array([[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]]) * scale
+    names_argument(lambda: LandMask(polygons=[bowtie]), ValueError, "polygons")
 
 
 # --- land masks and line of sight -----------------------------------------------------------
