@@ -23,12 +23,13 @@ TINY = ["--scenarios", "mixed-range", "--trackers", "gmphd-context", "--seeds", 
 
 @pytest.fixture
 def no_work(monkeypatch):
-    """Fails the test if the experiment gets as far as running a job."""
-    from ctxmodels.experiment import runner
+    """Fails the test if the experiment or the sweep gets as far as running a job."""
+    from ctxmodels.experiment import runner, sweep
 
     def refuse(*args, **kwargs):
         raise AssertionError("work started before the arguments were checked")
     monkeypatch.setattr(runner, "run_experiment", refuse)
+    monkeypatch.setattr(sweep, "run_sweep", refuse)
 
 
 def usage_error(argv, capsys) -> str:

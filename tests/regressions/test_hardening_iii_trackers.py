@@ -428,30 +428,8 @@ def test_tqdm_is_a_base_dependency():
 
 
 # --- the study's command line -------------------------------------------------------------------
-TINY = ["--scenarios", "mixed-range", "--trackers", "gmphd-context", "--seeds", "1",
-        "--duration", "5", "--workers", "1", "--quiet"]
-
-
-@pytest.fixture
-def no_work(monkeypatch):
-    from ctxmodels.experiment import runner, sweep
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("work started before the arguments were checked")
-    monkeypatch.setattr(runner, "run_experiment", refuse)
-    monkeypatch.setattr(sweep, "run_sweep", refuse)
-
-
-def _usage_error(argv, capsys) -> str:
-    from ctxmodels.cli import main
-    with pytest.raises(SystemExit) as exit_:
-        main(argv)
-    assert exit_.value.code == 2
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    errors = [line for line in err.splitlines() if "error:" in line]
-    assert len(errors) == 1 and errors[0] == err.rstrip("\n").splitlines()[-1], err
-    return errors[0]
+from test_cli_reliability import TINY, no_work  # noqa: E402,F401  (a fixture)
+from test_cli_reliability import usage_error as _usage_error  # noqa: E402
 
 
 @pytest.fixture
