@@ -26,7 +26,7 @@ from stonesoup.types.state import GaussianState
 from stonesoup.types.track import Track
 
 from ctxmodels import (AngularSector, ClutterDensityModel, ClutterMap, ConstantPose,
-                       DetectionEstimate, DetectionProbabilityModel, DetectionSet, Pose,
+                       DetectionEstimate, DetectionProbabilityModel, DetectionSet, LandMask, Pose,
                        RangeBands, SensorModel)
 from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, ClutterMapLearner,
                                  ContextFeeder, DetectionLearner, LearningTracker,
@@ -201,6 +201,31 @@ def test_detection_learner_counts_confirmed_tracks_weighted_by_the_other_factors
     everyone.learn(time, detections, {a, b, c, d})
     # with no confirmation every track counts, but c's weight is 0: the blind sector
     assert list(fresh.hits) == [1.0, 0.0, 1.0] and list(fresh.trials) == [1.0, 1.0, 1.0]
+
+
+def test_a_track_on_land_with_a_land_return_in_its_gate_is_no_evidence():
+    """The land factor gives the track weight 0: ten scans of a land return in its gate
+    leave its band at the prior (a weight-0 hit counted as a full hit drove it to 1.0),
+    while a track on water, detected as often, moves its band."""
+    estimate = DetectionEstimate(edges=(50.0, 400.0, 900.0), prior_probability=0.5,
+                                 forgetting=1.0)
+    island = LandMask(polygons=[[(600.0, -50.0), (700.0, -50.0), (700.0, 50.0), (600.0, 50.0)]])
+    sensor = SensorModel(detection=DetectionProbabilityModel(factors=[estimate, island]),
+                         clutter=ClutterDensityModel(factors=[1e-3]))
+    model = CartesianToBearingRange(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
+    on_land, on_water = (650.0, 0.0), (200.0, 100.0)
+    tracks = [_track((0, on_land)), _track((0, on_water))]
+    learner = DetectionLearner(gate_radius=20.0, confirmation=0)
+    for k in range(1, 11):
+        time = START + datetime.timedelta(seconds=k)
+        for track, (x, y) in zip(tracks, (on_land, on_water)):
+            track.append(_track((k, (x, y))).state)
+        detections = {Detection([[math.atan2(y, x)], [math.hypot(x, y)]], timestamp=time,
+                                measurement_model=model) for x, y in (on_land, on_water)}
+        learner.learn(time, DetectionSet(detections, sensor.context(Pose(x=0.0, y=0.0), time)),
+                      set(tracks))
+    assert estimate.probabilities()[1] == 0.5 and estimate.trials[1] == 0.0
+    assert estimate.trials[0] == 10.0 and estimate.probabilities()[0] == pytest.approx(12.5 / 15)
 
 
 def test_posterior_weights_are_the_trackers_clutter_probabilities():
