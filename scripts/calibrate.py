@@ -60,6 +60,7 @@ def draw(record: dict, path: Path) -> None:
     rates = [r["point"]["lidar_clutter_per_scan"] for r in record["stage2"]]
     bottom[0].plot(rates, [r["loss"] for r in record["stage2"]], marker="o", label="stage-2 loss")
     bottom[0].set_xscale("log")
+    bottom[0].set_yscale("log")
     bottom[0].set_xticks(rates, [f"{r:g}" for r in rates])
     bottom[0].minorticks_off()
     bottom[0].set_xlabel("lidar clutter (truth), points per scan")
