@@ -1,6 +1,6 @@
 """The findings' declared verdicts: one-sided superiority and non-inferiority tests, Holm's
-correction over the family and the size verdict against the paper's Table II.
-Hand-computed on constructed scores.
+correction over the family, the size verdict against the paper's Table II, and the summary
+figure drawing them as the findings table gives them. Hand-computed on constructed scores.
 
 Most cases use three seeds with differences (m − 1, m, m + 1): standard deviation 1 and two
 degrees of freedom, where Student's t has closed forms — the quantile
@@ -13,6 +13,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from ctxmodels.experiment import figures, summary_plots
 from ctxmodels.experiment.findings import (FINDINGS, Finding, evaluate, evaluate_all,
                                            findings_markdown, paper_effect)
 from ctxmodels.experiment.statistics import (INCONCLUSIVE, INFERIOR, MARGINS, NO_PAPER_EFFECT,
@@ -268,3 +269,43 @@ def test_paper_finding_reports_its_size():
     ours = evaluate(Finding("a-beats-b", "A > B", "ours", ("a",), ("b",), "mixed-range"),
                     _by_key(_pair("a", "b", spread(2.0), spread(2.0))))
     assert ours.hota_stats.size == NO_PAPER_EFFECT and ours.as_dict()["paper_effect"] is None
+
+
+# --- the summary figure: the findings table's signs and verdicts -----------------------
+
+def test_summary_figure_draws_the_findings_table(tmp_path):
+    # A finding that wins HOTA and loses GOSPA, like radar-only − uniform on S1 in the
+    # study's run (HOTA +11, GOSPA −74): each panel shows its own verdict, GOSPA with the
+    # table's sign.
+    finding = next(f for f in FINDINGS if f.key == "uniform-loses-radar-only-tracks")
+    scores = _by_key(_pair("gmphd-radar-only", "gmphd-uniform", spread(11.0), spread(-74.0)))
+    result, = evaluate_all(scores, (finding,))
+    assert (result.hota_verdict, result.gospa_verdict, result.verdict) == \
+        (REPRODUCED, NOT_REPRODUCED, NOT_REPRODUCED)
+    score = {"hota": Interval(50.0, 45.0, 55.0), "gospa": Interval(30.0, 28.0, 32.0)}
+    fake = SimpleNamespace(
+        scores=lambda: [{"label": "GM-PHD (radar only)", "mixed-range": score},
+                        {"label": "GM-PHD (uniform)", "mixed-range": score}],
+        findings=lambda: [result], scopes=lambda: ["mixed-range"],
+        config=SimpleNamespace(seeds=(0, 1, 2)))
+    (scope, fields), = figures._summaries(fake)
+    assert scope == "mixed-range"
+    assert tuple(fields["gospa_diff"][0]) == pytest.approx(
+        (result.gospa.mean, result.gospa.low, result.gospa.high))
+    assert fields["gospa_diff"][0][0] == pytest.approx(-74.0)  # as the table: not +74
+    assert list(fields["hota_paper"]) == pytest.approx([75.5])
+    fig = summary_plots._figure_summary(**fields)
+    _, _, d_hota, d_gospa = fig.axes
+    for ax, interval, verdict_ in ((d_hota, result.hota, REPRODUCED),
+                                   (d_gospa, result.gospa, NOT_REPRODUCED)):
+        (container,) = ax.containers
+        point = container.lines[0]
+        assert point.get_xdata()[0] == pytest.approx(interval.mean)
+        assert point.get_marker() == summary_plots.VERDICT_STYLES[verdict_]["marker"]
+        assert point.get_color() == summary_plots.VERDICT_STYLES[verdict_]["color"]
+    # The paper's effect beside it, on the same signed axis.
+    paper = [line for line in d_gospa.lines if line.get_gid() == "paper-GOSPA"]
+    assert len(paper) == 1 and paper[0].get_xdata()[0] == pytest.approx(37.2)
+    assert "B − A" in d_gospa.get_title() and "A better →" in d_gospa.get_title()
+    figures._draw_summary(tmp_path, scope, fields)
+    assert (tmp_path / "summary_mixed-range.png").stat().st_size > 0
