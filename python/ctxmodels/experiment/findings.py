@@ -108,10 +108,11 @@ def paper_effect(finding: Finding) -> tuple[float, float] | None:
     rows = [TABLE_II.get(t, {}).get(finding.scope) for t in finding.trackers]
     if any(row is None for row in rows):
         return None
-    return (min(TABLE_II[b][finding.scope].hota - TABLE_II[w][finding.scope].hota
-                for b in finding.better for w in finding.worse),
-            min(TABLE_II[w][finding.scope].gospa - TABLE_II[b][finding.scope].gospa
-                for b in finding.better for w in finding.worse))
+    # (Rounded off the float noise of subtracting one-decimal table entries.)
+    return (round(min(TABLE_II[b][finding.scope].hota - TABLE_II[w][finding.scope].hota
+                      for b in finding.better for w in finding.worse), 6),
+            round(min(TABLE_II[w][finding.scope].gospa - TABLE_II[b][finding.scope].gospa
+                      for b in finding.better for w in finding.worse), 6))
 
 
 def seed_scores(by_key: dict, tracker: str, scope: str) -> dict[int, tuple[float, float]]:
