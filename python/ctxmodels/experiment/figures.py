@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .findings import COMBINED
+from .findings import COMBINED, paper_effect
 
 _SCOPE_TITLES = {COMBINED: "Scenarios 1 and 2 combined", "mixed-range": "Scenario 1 (mixed-range)",
                  "formation": "Scenario 2 (formation)", "islands": "Scenario 3 (islands)"}
@@ -26,8 +26,8 @@ def draw_experiment_figures(results, folder: Path) -> dict[str, Path]:
                    if r.job.scenario == scenario and r.job.seed == config.plot_seed]
         written.update(_draw_scenario(folder, scenario, config.plot_seed, config.duration,
                                       plotted))
-    for args in _summaries(results):
-        written.update(_draw_summary(folder, *args))
+    for scope, fields in _summaries(results):
+        written.update(_draw_summary(folder, scope, fields))
     return written
 
 
@@ -59,8 +59,11 @@ def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted) ->
     return written
 
 
-def _summaries(results) -> list[tuple]:
-    """Per scope, the arguments of :func:`_draw_summary`."""
+def _summaries(results) -> list[tuple[str, dict]]:
+    """Per scope, the scope and the keyword arguments of
+    :func:`~.summary_plots.plot_summary`. The findings' differences are drawn exactly as
+    the findings table gives them (positive supports the claim, GOSPA too) and each
+    panel's markers are that metric's verdict, not the finding's overall one."""
     rows = results.scores()
     findings = [f for f in results.findings() if f.hota is not None]
     seeds = len(results.config.seeds)
@@ -68,29 +71,29 @@ def _summaries(results) -> list[tuple]:
     for scope in results.scopes():
         scored = [row for row in rows if scope in row]
         here = [f for f in findings if f.finding.scope == scope]
-        out.append((
-            scope, [row["label"] for row in scored],
-            np.array([_triple(row[scope]["hota"]) for row in scored]).reshape(-1, 3),
-            np.array([_triple(row[scope]["gospa"]) for row in scored]).reshape(-1, 3),
-            [f.finding.short or f.finding.key for f in here],
-            np.array([_triple(f.hota) for f in here]).reshape(-1, 3),
-            # The figure shows GOSPA differences as A − B (negative: A better); the
-            # findings sign them so that positive supports the claim.
-            np.array([_triple(f.gospa, negate=True) for f in here]).reshape(-1, 3),
-            [f.verdict for f in here],
-            f"{_SCOPE_TITLES.get(scope, scope)}: mean and 95 % interval over {seeds} seeds"))
+        paper = [paper_effect(f.finding) or (np.nan, np.nan) for f in here]
+        out.append((scope, dict(
+            tracker_labels=[row["label"] for row in scored],
+            hota=np.array([_triple(row[scope]["hota"]) for row in scored]).reshape(-1, 3),
+            gospa=np.array([_triple(row[scope]["gospa"]) for row in scored]).reshape(-1, 3),
+            finding_labels=[f.finding.short or f.finding.key for f in here],
+            hota_diff=np.array([_triple(f.hota) for f in here]).reshape(-1, 3),
+            gospa_diff=np.array([_triple(f.gospa) for f in here]).reshape(-1, 3),
+            verdicts=[f.hota_verdict for f in here],
+            gospa_verdicts=[f.gospa_verdict for f in here],
+            hota_paper=np.array([p[0] for p in paper], dtype=float),
+            gospa_paper=np.array([p[1] for p in paper], dtype=float),
+            title=f"{_SCOPE_TITLES.get(scope, scope)}: mean and 95 % interval over {seeds} "
+                  f"seeds")))
     return out
 
 
-def _draw_summary(folder: Path, scope: str, *args) -> dict[str, Path]:
+def _draw_summary(folder: Path, scope: str, fields: dict) -> dict[str, Path]:
     from .summary_plots import plot_summary
-    *fields, title = args
     path = folder / f"summary_{scope}.png"
-    plot_summary(path, *fields, title=title)
+    plot_summary(path, **fields)
     return {path.stem: path}
 
 
-def _triple(interval, negate: bool = False) -> tuple[float, float, float]:
-    if negate:
-        return (-interval.mean, -interval.high, -interval.low)
+def _triple(interval) -> tuple[float, float, float]:
     return (interval.mean, interval.low, interval.high)

@@ -19,9 +19,15 @@ VERDICT_STYLES = {
     "reproduced": dict(color="#1b9e77", marker="o"),
     "not reproduced": dict(color="#d95f02", marker="X"),
     "inconclusive": dict(color="0.45", marker="s"),
+    "non-inferior": dict(color="#1b9e77", marker="^"),
+    "inferior": dict(color="#d95f02", marker="v"),
 }
+#: The verdicts always in the legend; the others appear when drawn.
+_LEGEND_VERDICTS = ("reproduced", "not reproduced", "inconclusive")
 _OTHER_VERDICT = dict(color="#7570b3", marker="D")
 SCORE_COLOUR = "#1f5fa8"
+#: The paper's own effect beside a finding's simulated difference.
+PAPER_STYLE = dict(marker="D", ms=7, mfc="none", mec="k", mew=1.3, ls="none")
 
 
 def _figure(**kwargs):
@@ -65,20 +71,33 @@ def _interval_rows(ax, labels, stats, styles, *, annotate=True):
     return drawn
 
 
+def _per_finding(values, rows: int, name: str) -> np.ndarray:
+    array = np.full(rows, np.nan) if values is None else np.asarray(values, dtype=float)
+    if array.shape != (rows,):
+        raise ValueError(f"{name}: expected {rows} values, got {np.shape(values)}")
+    return array
+
+
 def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gospa_diff,
-                    verdicts, title=""):
+                    verdicts, title="", gospa_verdicts=None, hota_paper=None,
+                    gospa_paper=None):
     from matplotlib.lines import Line2D
     trackers, findings = list(tracker_labels), list(finding_labels)
     hota = _intervals(hota, len(trackers), "hota")
     gospa = _intervals(gospa, len(trackers), "gospa")
     hota_diff = _intervals(hota_diff, len(findings), "hota_diff")
     gospa_diff = _intervals(gospa_diff, len(findings), "gospa_diff")
+    hota_paper = _per_finding(hota_paper, len(findings), "hota_paper")
+    gospa_paper = _per_finding(gospa_paper, len(findings), "gospa_paper")
     verdicts = [str(v) for v in verdicts]
-    if len(verdicts) != len(findings):
-        raise ValueError(f"verdicts: expected {len(findings)}, got {len(verdicts)}")
+    gospa_verdicts = verdicts if gospa_verdicts is None else [str(v) for v in gospa_verdicts]
+    for name, given in (("verdicts", verdicts), ("gospa_verdicts", gospa_verdicts)):
+        if len(given) != len(findings):
+            raise ValueError(f"{name}: expected {len(findings)}, got {len(given)}")
     # An unexpected verdict is drawn in a fallback style, not an error: a figure at the
     # end of a long run should not fail over a label.
-    styles = [VERDICT_STYLES.get(v.lower(), _OTHER_VERDICT) for v in verdicts]
+    styles = {metric: [VERDICT_STYLES.get(v.lower(), _OTHER_VERDICT) for v in given]
+              for metric, given in (("HOTA", verdicts), ("GOSPA", gospa_verdicts))}
     heights = [max(len(trackers), 1) + 1.2, max(len(findings), 1) + 1.2]
     fig = _figure(figsize=(12.5, 1.6 + 0.42 * sum(heights)), dpi=100, layout="constrained")
     (ax_h, ax_g), (ax_dh, ax_dg) = fig.subplots(2, 2, gridspec_kw={"height_ratios": heights})
@@ -89,26 +108,34 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
     _interval_rows(ax_g, trackers, gospa, tracker_style)
     ax_g.set_title("GOSPA per tracker\n(← lower is better)", fontsize=10)
     ax_g.set_xlabel("GOSPA (m)")
-    for ax, stats, metric, unit, a_better in (
-            (ax_dh, hota_diff, "HOTA", "percentage points", "→"),
-            (ax_dg, gospa_diff, "GOSPA", "m", "←")):
+    # Both difference panels are signed as the findings table: positive supports the
+    # claim "A better than B" (HOTA as A − B, GOSPA — lower is better — as B − A).
+    for ax, stats, paper, metric, unit, order in (
+            (ax_dh, hota_diff, hota_paper, "HOTA", "percentage points", "A − B"),
+            (ax_dg, gospa_diff, gospa_paper, "GOSPA", "m", "B − A")):
         ax.axvline(0.0, color="k", lw=1.0, zorder=1)
-        _interval_rows(ax, findings, stats, styles)
-        side = "A better →" if a_better == "→" else "← A better"
-        ax.set_title(f"Paired {metric} difference A − B\n({side})", fontsize=10)
-        ax.set_xlabel(f"A − B ({unit}); 0 = no difference")
+        _interval_rows(ax, findings, stats, styles[metric])
+        rows = np.flatnonzero(np.isfinite(paper))
+        if rows.size:
+            ax.plot(paper[rows], rows, zorder=4, gid=f"paper-{metric}", **PAPER_STYLE)
+        ax.set_title(f"Paired {metric} difference {order}\n(A better →)", fontsize=10)
+        ax.set_xlabel(f"{order} ({unit}); 0 = no difference")
         lo, hi = ax.get_xlim()  # keep the zero line in view even when all are far from it
         ax.set_xlim(min(lo, -0.05 * (hi - lo)), max(hi, 0.05 * (hi - lo)))
     ax_dg.tick_params(labelleft=False)  # same findings as the panel to its left
     ax_g.tick_params(labelleft=False)
-    seen = dict.fromkeys(list(VERDICT_STYLES) + [v for v in verdicts
-                                                  if v.lower() not in VERDICT_STYLES])
+    drawn = [v.lower() for v in verdicts + gospa_verdicts]
+    seen = dict.fromkeys(list(_LEGEND_VERDICTS) + drawn)
     handles = [Line2D([], [], ls="none", ms=8, label=f"verdict: {v}",
                       **VERDICT_STYLES.get(v, _OTHER_VERDICT)) for v in seen]
     handles.append(Line2D([], [], color="0.3", lw=1.6, marker="|", ms=10,
                           label="bar: 95 % interval"))
-    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=9,
-               title="Each finding 'A − B' compares tracker A with tracker B", title_fontsize=9)
+    if np.isfinite(hota_paper).any() or np.isfinite(gospa_paper).any():
+        handles.append(Line2D([], [], label="paper's effect (Table II)", **PAPER_STYLE))
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5),
+               fontsize=9, title="Each finding 'A − B' compares tracker A with tracker B; "
+                                 "positive differences favour A on both metrics",
+               title_fontsize=9)
     if title:
         fig.suptitle(title)
     return fig
@@ -116,14 +143,20 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
 
 def plot_summary(path: str | Path, tracker_labels: Sequence[str], hota, gospa,
                  finding_labels: Sequence[str], hota_diff, gospa_diff,
-                 verdicts: Sequence[str], title: str = ""):
+                 verdicts: Sequence[str], title: str = "",
+                 gospa_verdicts: Sequence[str] | None = None, hota_paper=None,
+                 gospa_paper=None):
     """Four panels: HOTA (%) and GOSPA (m) per tracker as means with 95 % interval bars;
     below, per finding "A − B", the paired HOTA and GOSPA differences with their intervals
-    around a zero line, marked by verdict ("reproduced", "not reproduced",
-    "inconclusive"). ``hota``/``gospa``: (n_trackers, 3) and ``hota_diff``/``gospa_diff``:
-    (n_findings, 3) rows of (mean, low, high); NaN rows read "n/a"."""
+    around a zero line, signed as the findings table (positive favours A: HOTA A − B,
+    GOSPA B − A) and marked by verdict ("reproduced", "not reproduced", "inconclusive",
+    "non-inferior", "inferior"). ``verdicts`` mark the HOTA panel, and the GOSPA panel too
+    unless ``gospa_verdicts`` gives that metric's own; ``hota_paper``/``gospa_paper``
+    (one value per finding, NaN: none) add the paper's effect as a hollow diamond.
+    ``hota``/``gospa``: (n_trackers, 3) and ``hota_diff``/``gospa_diff``: (n_findings, 3)
+    rows of (mean, low, high); NaN rows read "n/a"."""
     _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gospa_diff,
-                    verdicts, title).savefig(path)
+                    verdicts, title, gospa_verdicts, hota_paper, gospa_paper).savefig(path)
 
 
 def _tick(value) -> str:
