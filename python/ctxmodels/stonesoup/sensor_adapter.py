@@ -25,8 +25,8 @@ the BLAS kernel, so within about :math:`10^{-15}\,r_{\max}` of the edge no other
 computation of the range (the world frame's :math:`\sqrt{\Delta x^2 + \Delta y^2}`, plain
 arithmetic, the Rust core) decides as ``is_detectable`` does: of targets placed exactly at
 ``max_range`` on 240 bearings, the world range put 18 to 60 on the other side of the edge
-on the four radars of the tests (OpenBLAS, x86-64). A context made by :func:`sensor_context` (as
-:class:`PlatformContextFeeder` makes them) decides that sliver with the radar's own
+on the four radars of the tests (OpenBLAS, x86-64). A context made by
+:func:`sensor_context` (as :class:`PlatformContextFeeder` makes them) decides that sliver with the radar's own
 computation: it keeps the measurement model the radar built when the context was made, and
 for a target whose world range lies within a relative :data:`EDGE_SLIVER` (``1e-12``) of
 ``max_range`` it evaluates ``function(state, noise=False)`` on that one state, as
@@ -317,7 +317,8 @@ class _RangeEdge:
     beyond the sliver either way (so its P_D on each side of the edge is the plain model's,
     bit for bit, for every target in the sliver)."""
 
-    __slots__ = ("sliver", "sliver_core", "pose", "mapping", "_context", "_factors",
+    # (not the context itself: a context is freed as soon as its scan is done with it)
+    __slots__ = ("sliver", "sliver_core", "pose", "mapping", "_where", "_radar", "_factors",
                  "_models")
 
     @classmethod
@@ -329,6 +330,7 @@ class _RangeEdge:
             return None
         low, high = limit * (1 - _EDGE_SHIFT), limit * (1 + _EDGE_SHIFT)
         inside, outside = list(snapshot.factors), list(snapshot.factors)
+        found = False
         for i, factor in enumerate(snapshot.factors):
             if not isinstance(factor, RangeBands):
                 continue
@@ -343,14 +345,16 @@ class _RangeEdge:
             inside[i], outside[i] = (
                 RangeBands(edges=edges[:k] + [moved] + edges[k + 1:], values=factor.values,
                            upper_owns=factor.upper_owns) for moved in (high, low))
-        if inside == list(snapshot.factors):
+            found = True
+        if not found:
             return None
         edge = cls()
         edge.mapping = tuple(int(i) for i in context.sensor_model.position_mapping)
         edge.pose = context.pose.as_tuple()
         edge.sliver_core = _sliver_model(limit)._compiled()
         edge.sliver = _core.DetectionAtPose(edge.sliver_core, edge.pose, edge.mapping, "mean", 1)
-        edge._context = context
+        edge._where = context.pose
+        edge._radar = (context.range_model, int(context.range_row), limit)
         edge._factors = (inside, outside)
         edge._models = None
         return edge
@@ -365,20 +369,18 @@ class _RangeEdge:
     def detectable(self, row: np.ndarray) -> bool:
         """The radar's decision for one state: its range as ``is_detectable`` computes it,
         one state per call, ``<= max_range``."""
-        context = self._context
+        range_model, range_row, max_range = self._radar
         vector = StateVector(np.array(row, dtype=np.float64).reshape(-1, 1))
-        measured = context.range_model.function(State(vector), noise=False)
-        return bool(measured[context.range_row, 0] <= context.max_range)
+        measured = range_model.function(State(vector), noise=False)
+        return bool(measured[range_row, 0] <= max_range)
 
     def at_rows(self, rows: np.ndarray) -> np.ndarray:
         """P_D at ``rows`` (K, D), each on the side of the edge the radar puts it."""
-        context = self._context
         inside = np.array([self.detectable(row) for row in rows], dtype=bool)
         pd = np.empty(len(rows))
         for model, which in zip(self._sides(), (inside, ~inside)):
             if which.any():
-                pd[which] = model.evaluate(context.pose, rows[which],
-                                           tuple(context.sensor_model.position_mapping))
+                pd[which] = model.evaluate(self._where, rows[which], self.mapping)
         return pd
 
     def decide(self, near: np.ndarray, rows_at, result, *, log=False, missed=False) -> None:
@@ -390,14 +392,12 @@ class _RangeEdge:
         if not (log or missed):
             result[near] = self.at_rows(rows)
             return
-        context = self._context
         inside = np.array([self.detectable(row) for row in rows], dtype=bool)
         for model, which in zip(self._sides(), (inside, ~inside)):
             if not which.any():
                 continue
-            values = model.evaluate_particles(context.pose, np.ascontiguousarray(rows[which].T),
-                                              tuple(context.sensor_model.position_mapping),
-                                              log=log, missed=missed)
+            values = model.evaluate_particles(self._where, np.ascontiguousarray(rows[which].T),
+                                              self.mapping, log=log, missed=missed)
             if missed:
                 result[0][near[which]], result[1][near[which]] = values
             else:
