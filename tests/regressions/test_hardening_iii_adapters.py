@@ -408,7 +408,7 @@ def test_empty_lonlat_and_numpy_origin_types_work(backend):
 # --- Stone Soup sensor adapter ----------------------------------------------------------------
 
 def _radar(kind="fixed", position=(100.0, -50.0), yaw=0.7, rotation=0.3, max_range=800.0,
-           dwell=0.0, fov=2 * math.pi):
+           dwell=0.0, fov=2 * math.pi, with_platform=False):
     from stonesoup.platform.base import FixedPlatform
     from stonesoup.sensor.radar.radar import RadarBearingRange, RadarRotatingBearingRange
     from stonesoup.types.array import StateVector
@@ -421,9 +421,10 @@ def _radar(kind="fixed", position=(100.0, -50.0), yaw=0.7, rotation=0.3, max_ran
                                            fov_angle=fov, **common)
     else:
         sensor = RadarBearingRange(**common)
-    FixedPlatform(states=[State(StateVector([position[0], 0, position[1], 0]), timestamp=T0)],
-                  position_mapping=(0, 2), orientation=StateVector([0, 0, yaw]), sensors=[sensor])
-    return sensor
+    platform = FixedPlatform(
+        states=[State(StateVector([position[0], 0, position[1], 0]), timestamp=T0)],
+        position_mapping=(0, 2), orientation=StateVector([0, 0, yaw]), sensors=[sensor])
+    return (sensor, platform) if with_platform else sensor
 
 
 EDGE_RADARS = [
@@ -436,34 +437,147 @@ EDGE_RADARS = [
 ]
 
 
-@pytest.mark.parametrize("radar", EDGE_RADARS, ids=lambda r: f"{r['kind']}-{r['max_range']}")
-def test_pd_agrees_with_is_detectable_on_every_bearing_off_the_rounding_sliver(radar):
-    """Either side of ``max_range`` by 1e-12 of it (far beyond the rotation's rounding, far
-    inside any target's size), on 240 bearings: P_D > 0 exactly where Stone Soup's radar
-    says the target is detectable (see the sensor adapter's docs for the sliver between)."""
+EDGE_IDS = [f"{r['kind']}-{r['max_range']}" for r in EDGE_RADARS]
+#: A rotating radar whose field of view is narrower than a turn: its edge is the sector's.
+NARROW = dict(kind="rotating", position=(-40.0, 7.5), yaw=0.4, rotation=0.2, max_range=50.0,
+              dwell=1.1, fov=math.pi)
+
+
+def _detectable(sensor, states) -> np.ndarray:
+    """The radar's own ``is_detectable``, one state at a time."""
     from stonesoup.types.groundtruth import GroundTruthState
-    from ctxmodels import SensorModel
-    from ctxmodels.stonesoup import sensor_pose
-    sensor = _radar(**radar)
-    model = SensorModel.from_stonesoup(sensor, prob_detection=0.9, clutter_density=1e-4)
-    context = model.context(sensor_pose(sensor), T0)
+    return np.array([bool(np.all(sensor.is_detectable(
+        GroundTruthState(s.reshape(-1, 1), timestamp=T0)))) for s in states])
+
+
+def _ring(sensor, r, n=240) -> np.ndarray:
+    """(n, 4) CV states at world range ``r`` from the sensor on n bearings."""
     centre = np.asarray(sensor.position, dtype=float).ravel()
-    bearings = np.linspace(-math.pi, math.pi, 240, endpoint=False)
+    bearings = np.linspace(-math.pi, math.pi, n, endpoint=False)
+    return np.column_stack([centre[0] + r * np.cos(bearings), np.zeros(n),
+                            centre[1] + r * np.sin(bearings), np.zeros(n)])
+
+
+def _pd_on_every_path(context, states) -> dict:
+    """P_D of ``states`` (N, D) by every public path of the context."""
+    from stonesoup.types.hypothesis import SingleHypothesis
+    from stonesoup.types.prediction import GaussianStatePrediction
+    from stonesoup.types.state import GaussianState, State
+    vectors = [s.reshape(-1, 1) for s in states]
+    covars = np.tile(np.eye(4), (len(states), 1, 1))
+    log_pd, log_missed = context.prob_detection_particles(np.asfortranarray(states.T),
+                                                          log=True, missed=True)
+    pd_pair, missed = context.prob_detection_particles(states.T.copy(), missed=True)
+    return {
+        "array": context.prob_detection_array(states),
+        "array-list": context.prob_detection_array(states.tolist()),
+        "array-covars": context.prob_detection_array(states, covars),
+        "states": context.prob_detection_states([GaussianState(v, np.eye(4)) for v in vectors]),
+        "one-state": np.array([float(context.prob_detection(State(v))) for v in vectors]),
+        "one-flat": np.array([float(context.prob_detection(s.copy())) for s in states]),
+        "one-hypothesis": np.array([float(context.prob_detection(SingleHypothesis(
+            GaussianStatePrediction(v, np.eye(4), timestamp=T0), None))) for v in vectors]),
+        "one-list": np.array([float(context.prob_detection(s.tolist())) for s in states]),
+        "particles": context.prob_detection_particles(states.T),
+        "particles-log": np.exp(log_pd),
+        "particles-missed": pd_pair,
+        "particles-missed-complement": 1 - missed,
+        "particles-log-missed": 1 - np.exp(log_missed),
+    }
+
+
+@pytest.mark.parametrize("radar", EDGE_RADARS + [NARROW], ids=EDGE_IDS + ["narrow-fov"])
+@pytest.mark.parametrize("made_by", ["sensor_context", "PlatformContextFeeder"])
+def test_pd_agrees_with_is_detectable_at_max_range_on_every_path(radar, made_by):
+    """The issue's test, at ``max_range`` and one ulp either side on 240 bearings: P_D > 0
+    exactly where the radar's own ``is_detectable`` says the target is detectable (no
+    disagreement) on every P_D path of the context the radar's scan gets, and P_D there is
+    the value inside the coverage (0.9), as bit for bit as the plain context gives it."""
+    sensor, platform = _radar(**radar, with_platform=True)
+    model = _edge_model(sensor)
+    context = _edge_context(sensor, platform, model, made_by)
+    plain = model.context(_sensor_pose(sensor), T0)
+    inside = plain.prob_detection_array(_ring(sensor, sensor.max_range * 0.5))
+    checked = 0
+    for r in (np.nextafter(sensor.max_range, 0), sensor.max_range,
+              np.nextafter(sensor.max_range, INF)):
+        states = _ring(sensor, r)
+        detectable = _detectable(sensor, states)
+        for path, pd in _pd_on_every_path(context, states).items():
+            disagreements = int(np.sum((pd > 0) != detectable))
+            assert disagreements == 0, f"{path} at max_range{r - sensor.max_range:+g}"
+            # inside: the plain context's value there (0.9, or 0 outside the field of view)
+            expected = np.where(detectable, inside, 0.0)
+            if path.startswith(("array", "states", "one", "particles-missed")) \
+                    and path != "particles-missed-complement":
+                np.testing.assert_array_equal(pd, expected, err_msg=path)
+            else:  # through a log or a complement: to their rounding
+                np.testing.assert_allclose(pd, expected, rtol=0, atol=1e-15, err_msg=path)
+            checked += 1
+        if radar is not NARROW:
+            assert detectable.any() and (r <= sensor.max_range or not detectable.all())
+    assert checked == 3 * 13
+
+
+def _sensor_pose(sensor):
+    from ctxmodels.stonesoup import sensor_pose
+    return sensor_pose(sensor)
+
+
+def _edge_model(sensor):
+    from ctxmodels import SensorModel
+    return SensorModel.from_stonesoup(sensor, prob_detection=0.9, clutter_density=1e-4)
+
+
+def _edge_context(sensor, platform, model, made_by):
+    """The context of a scan of ``sensor`` now, from :func:`sensor_context` or as the
+    :class:`PlatformContextFeeder` gives it (its first scan, at the platform's time)."""
+    from ctxmodels.stonesoup import PlatformContextFeeder, sensor_context
+    from ctxmodels.stonesoup.sensor_adapter import SensorContext
+    if made_by == "sensor_context":
+        context = sensor_context(sensor, model, T0)
+    else:
+        from stonesoup.simulator.platform import PlatformDetectionSimulator
+
+        class Still:  # no targets: only the scans and their contexts are read
+            def __iter__(self):
+                yield T0, set()
+        simulator = PlatformDetectionSimulator(groundtruth=Still(), platforms=[platform])
+        [(time, scan)] = list(PlatformContextFeeder(reader=simulator, sensor_models=[model]))
+        context = scan.detector_context
+        assert time == T0 and context.timestamp == T0
+    assert type(context) is SensorContext and context.sensor_model is model
+    assert context.pose == _sensor_pose(sensor)
+    return context
+
+
+@pytest.mark.parametrize("radar", EDGE_RADARS + [NARROW], ids=EDGE_IDS + ["narrow-fov"])
+@pytest.mark.parametrize("made_by", ["plain", "sensor_context"])
+def test_pd_agrees_with_is_detectable_on_every_bearing_off_the_rounding_sliver(radar, made_by):
+    """Either side of ``max_range`` by 1e-12 of it (far beyond the rotation's rounding, far
+    inside any target's size), and well inside and outside, on 240 bearings: P_D > 0 exactly
+    where Stone Soup's radar says the target is detectable, for the plain context (world
+    range) and the sensor's (its own range in the sliver between); the two agree bit for
+    bit there."""
+    sensor, platform = _radar(**radar, with_platform=True)
+    model = _edge_model(sensor)
+    plain = model.context(_sensor_pose(sensor), T0)
+    context = plain if made_by == "plain" else _edge_context(sensor, platform, model, made_by)
     for r in (sensor.max_range * (1 - 1e-12), sensor.max_range * (1 + 1e-12),
               sensor.max_range * 0.5, sensor.max_range * 2):
-        states = np.column_stack([centre[0] + r * np.cos(bearings), np.zeros(240),
-                                  centre[1] + r * np.sin(bearings), np.zeros(240)])
+        states = _ring(sensor, r)
         pd = context.prob_detection_array(states)
-        detectable = np.array([bool(np.all(sensor.is_detectable(
-            GroundTruthState(s.reshape(-1, 1), timestamp=T0)))) for s in states])
+        detectable = _detectable(sensor, states)
         np.testing.assert_array_equal(pd > 0, detectable, err_msg=f"range {r}")
+        np.testing.assert_array_equal(pd, plain.prob_detection_array(states))
         assert detectable.any() == (r < sensor.max_range)  # (the test can fail both ways)
 
 
-@pytest.mark.parametrize("radar", EDGE_RADARS, ids=lambda r: f"{r['kind']}-{r['max_range']}")
+@pytest.mark.parametrize("radar", EDGE_RADARS, ids=EDGE_IDS)
 def test_a_target_whose_world_range_is_exactly_max_range_is_inside(radar):
-    """The documented edge: the world-frame range, ``<=`` as in ``is_detectable``; along the
-    axes the range is exact, so the edge itself is tested, and one ulp beyond is outside."""
+    """The plain context's edge (``SensorModel.context(sensor_pose(sensor))``): the
+    world-frame range, ``<=`` as in ``is_detectable``; along the axes the range is exact, so
+    the edge itself is tested, and one ulp beyond is outside."""
     from ctxmodels import SensorModel
     from ctxmodels.stonesoup import sensor_pose
     sensor = _radar(**radar)
@@ -483,6 +597,82 @@ def test_a_target_whose_world_range_is_exactly_max_range_is_inside(radar):
         while abs(beyond[0, axis] - centre) <= r:
             beyond[0, axis] = np.nextafter(beyond[0, axis], math.copysign(INF, dx or dy))
         assert context.prob_detection_array(beyond)[0] == 0.0
+
+
+def test_sensor_context_keeps_the_radar_as_it_was_and_pickles_and_copies():
+    """The context decides with the radar as it was when made (the radar moving or changing
+    its max_range afterwards reaches it not), survives pickling and deep copies with the
+    same P_D on every target, and hashes and compares by identity."""
+    import copy
+    import pickle
+    from stonesoup.types.array import StateVector
+    from ctxmodels.stonesoup import sensor_context
+    sensor = _radar(**EDGE_RADARS[1])
+    states = _ring(sensor, sensor.max_range)
+    detectable = _detectable(sensor, states)
+    context = sensor_context(sensor, _edge_model(sensor), T0)
+    before = context.prob_detection_array(states)
+    np.testing.assert_array_equal(before > 0, detectable)
+    sensor.max_range = 1.0
+    sensor.dwell_centre = StateVector([2.0])
+    sensor.movement_controller.states[-1].state_vector[0, 0] += 5.0
+    for other in (context, pickle.loads(pickle.dumps(context)), copy.deepcopy(context)):
+        np.testing.assert_array_equal(other.prob_detection_array(states), before)
+        np.testing.assert_array_equal(other.prob_detection_particles(states.T), before)
+        assert other.max_range == EDGE_RADARS[1]["max_range"]
+    copied = copy.deepcopy(context)
+    assert copied != context and context == context and hash(context) == object.__hash__(context)
+    assert {context: 1}[context] == 1
+
+
+def test_sensor_context_with_the_expected_pd_under_a_rule_integrates_the_plain_model():
+    """With covariances and a ``pd_evaluation`` other than 'mean' the expected P_D is the
+    plain context's (documented); without covariances the mean decides, as the radar does."""
+    from ctxmodels import SensorModel
+    from ctxmodels.stonesoup import sensor_context
+    sensor = _radar(**EDGE_RADARS[0])
+    base = _edge_model(sensor)
+    model = SensorModel(detection=base.detection, clutter=base.clutter,
+                        position_mapping=base.position_mapping, pd_evaluation="cubature")
+    context = sensor_context(sensor, model, T0)
+    plain = model.context(_sensor_pose(sensor), T0)
+    states = _ring(sensor, sensor.max_range)
+    covars = np.tile(np.eye(4), (len(states), 1, 1))
+    np.testing.assert_array_equal(context.prob_detection_array(states, covars),
+                                  plain.prob_detection_array(states, covars))
+    np.testing.assert_array_equal(context.prob_detection_array(states) > 0,
+                                  _detectable(sensor, states))
+
+
+@pytest.mark.parametrize("bad", ["sensor", "model", "mounted", "mapping"])
+def test_sensor_context_names_what_it_cannot_use(bad):
+    from ctxmodels import Mounting, SensorModel
+    from ctxmodels.stonesoup import sensor_context
+    sensor = _radar()
+    model = _edge_model(sensor)
+    if bad == "sensor":
+        names_argument(lambda: sensor_context(object(), model), TypeError, "sensor")
+    elif bad == "model":
+        names_argument(lambda: sensor_context(sensor, model.detection), TypeError,
+                       "sensor_model")
+    else:
+        other = SensorModel(detection=model.detection, clutter=model.clutter,
+                            **({"mounting": Mounting(forward=1.0)} if bad == "mounted"
+                               else {"position_mapping": (0, 1)}))
+        names_argument(lambda: sensor_context(sensor, other), ValueError, "sensor_model")
+
+
+def test_platform_feeder_names_a_model_reading_another_position_than_its_sensor():
+    from ctxmodels import SensorModel
+    from ctxmodels.stonesoup import PlatformContextFeeder
+    simulator, sensors = _simulator()
+    models = _models(sensors)
+    models[1] = SensorModel(detection=models[1].detection, clutter=models[1].clutter,
+                            position_mapping=(0, 1))
+    message = names_argument(lambda: PlatformContextFeeder(reader=simulator,
+                                                           sensor_models=models),
+                             ValueError, "sensor_models")
+    assert "item 1" in message and "platform 1 sensor 0" in message
 
 
 BAD_PROBABILITIES = [None, "0.9", True, np.bool_(False), NAN, INF, -0.1, 1.0000001, 2, [0.9],

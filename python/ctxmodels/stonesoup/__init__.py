@@ -2,7 +2,9 @@
 
 * Feeding: :class:`ContextFeeder` attaches one sensor's :class:`~ctxmodels.DetectorContext`
   to each of its scans; :class:`MultiSensorFeeder` interleaves several sensors' scans in
-  time order. Either is the ``detector`` of a stock tracker.
+  time order; :class:`PlatformContextFeeder` gives each scan of Stone Soup's platform
+  simulator the context of the radar that made it (:func:`sensor_context`, which decides
+  the range edge as the radar does). Either is the ``detector`` of a stock tracker.
 * PDA/JPDA: :class:`PDAHypothesiser`, the stock hypothesiser with :math:`P_D` per track and
   :math:`\\lambda` per detection taken from the scan's context (stock behaviour without one).
 * Track management: :class:`ExpectedMissesDeleter` deletes JPDA tracks on the expected, not
@@ -50,8 +52,8 @@ from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
 from .pointprocess import LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
 from .region import CircularRegion, PoseCentredRegion
-from .sensor_adapter import (PlatformContextFeeder, SensorPose, sensor_model_from_stonesoup,
-                             sensor_pose)
+from .sensor_adapter import (PlatformContextFeeder, SensorContext, SensorPose, sensor_context,
+                             sensor_model_from_stonesoup, sensor_pose)
 from .transition import CachedCombinedLinearGaussianTransitionModel
 
 __all__ = [
@@ -82,7 +84,9 @@ __all__ = [
     "in_stable_order",
     "in_track_order",
     "PlatformContextFeeder",
+    "SensorContext",
     "SensorPose",
+    "sensor_context",
     "sensor_model_from_stonesoup",
     "sensor_pose",
 ]
