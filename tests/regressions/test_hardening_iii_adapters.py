@@ -533,7 +533,7 @@ def _edge_context(sensor, platform, model, made_by):
     """The context of a scan of ``sensor`` now, from :func:`sensor_context` or as the
     :class:`PlatformContextFeeder` gives it (its first scan, at the platform's time)."""
     from ctxmodels.stonesoup import PlatformContextFeeder, sensor_context
-    from ctxmodels.stonesoup.sensor_adapter import SensorContext
+    from ctxmodels.stonesoup import SensorContext
     if made_by == "sensor_context":
         context = sensor_context(sensor, model, T0)
     else:
