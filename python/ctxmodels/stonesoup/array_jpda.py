@@ -14,7 +14,9 @@ clusters of tracks sharing detections), every Kalman update and the mixture redu
 Stone Soup state per track is built from the result.
 
 Supported (anything else runs the component path of
-:class:`~ctxmodels.stonesoup.MultiTargetMixtureTracker`, scan by scan):
+:class:`~ctxmodels.stonesoup.MultiTargetMixtureTracker`, scan by scan, counted in
+``component_scans`` — ``array_scans`` counts the others — and the first such scan raises a
+:class:`~ctxmodels.stonesoup.ComponentPathWarning` naming why):
 
 * ``data_associator``: :class:`~stonesoup.dataassociator.probability.JPDAwithEHM2`,
   ``JPDAwithEHM`` or ``JPDA`` (all give the same exact marginals) over a stock or
@@ -22,10 +24,13 @@ Supported (anything else runs the component path of
   ``clutter_spatial_density`` (or a ctxmodels context on the scan);
 * a Kalman / extended Kalman predictor with a linear Gaussian transition model, and Kalman /
   extended Kalman updaters without covariance options;
-* scans whose detections share one time (the scan's) and one measurement model:
+* scans whose detections share one time (the scan's) and one measurement model *value*:
   ``LinearGaussian``, ``CartesianToBearingRange`` (2-D, extended Kalman updaters; Stone
   Soup's finite-difference Jacobian reproduced operation for operation) or
-  :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange` (closed form);
+  :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange` (closed form). Models are
+  compared by type and Properties, bit for bit
+  (:func:`~ctxmodels.model_key.measurement_model_key`): a model object per detection is one
+  model;
 * scans with and without a ctxmodels detector context (P_D per track from the context's
   array form, λ per detection, as the ctxmodels hypothesiser computes them);
 * tracks whose last state is a :class:`~stonesoup.types.state.GaussianState` (or a

@@ -12,7 +12,8 @@ objects are built only for what it hands out: track states, and the mixture when
 
 **Supported configurations** (checked every scan; anything else runs the component path of
 :class:`~ctxmodels.stonesoup.PointProcessMultiTargetTracker` for that scan, with the same
-results):
+results, counted in ``component_scans`` — ``array_scans`` counts the others — and the first
+such scan raises a :class:`~ctxmodels.stonesoup.ComponentPathWarning` naming why):
 
 * ``hypothesiser``: Stone Soup's ``GaussianMixtureHypothesiser(order_by_detection=True)``
   over a ``DistanceHypothesiser`` with a ``Mahalanobis`` or ``SquaredMahalanobis`` measure
@@ -24,10 +25,13 @@ results):
 * ``reducer``: Stone Soup's ``GaussianMixtureReducer``; with ``kdtree_max_distance`` the
   candidates in the gate are visited in increasing weight (stock: in a set's address
   order, which changes from process to process);
-* a scan whose detections share one measurement model — ``LinearGaussian``, or (extended
-  Kalman) ``CartesianToBearingRange`` (Stone Soup's finite-difference Jacobian, reproduced)
-  or :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange` — and the scan's
-  timestamp.
+* a scan whose detections share one measurement model *value* — ``LinearGaussian``, or
+  (extended Kalman) ``CartesianToBearingRange`` (Stone Soup's finite-difference Jacobian,
+  reproduced) or :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange` — and the
+  scan's timestamp. Models are compared by type and Properties, bit for bit
+  (:func:`~ctxmodels.model_key.measurement_model_key`), so a model object per detection
+  (readers, Stone Soup's sensors measured target by target) is one model; detections from
+  two sensor positions in one scan are two.
 
 **Agreement with the component path.** The same formulae in the same order, so results
 agree to rounding. Rounding differs (the core does not call BLAS/LAPACK): with linear models
