@@ -42,6 +42,7 @@ from ctxmodels.stonesoup import (
     AnalyticCartesianToBearingRange,
     ArrayJPDATracker,
     ArrayMultiMeasurementInitiator,
+    ComponentPathWarning,
     ContextFeeder,
     ExpectedMissesDeleter,
     MultiMeasurementInitiator,
@@ -520,11 +521,14 @@ def test_update_hypotheses_are_built_on_demand_and_pickle_as_stock_objects():
 
 def test_unsupported_configuration_runs_the_component_path_bit_for_bit():
     ours, reference = tutorial_pair(associator=JPDAwithLBP)
-    for (_, a), (_, b) in zip(ours, reference):
-        a, b = in_track_order(a), in_track_order(b)
-        assert [[(s.state_vector.tobytes(), s.covar.tobytes()) for s in t] for t in a] == \
-            [[(s.state_vector.tobytes(), s.covar.tobytes()) for s in t] for t in b]
-    assert ours.array_scans == 0 and ours.component_scans > 0
+    assert not ours.array_path
+    with pytest.warns(ComponentPathWarning, match="JPDAwithLBP, not a JPDA") as caught:
+        for (_, a), (_, b) in zip(ours, reference):
+            a, b = in_track_order(a), in_track_order(b)
+            assert [[(s.state_vector.tobytes(), s.covar.tobytes()) for s in t] for t in a] == \
+                [[(s.state_vector.tobytes(), s.covar.tobytes()) for s in t] for t in b]
+    assert ours.array_scans == 0 and ours.component_scans > 1
+    assert len([w for w in caught if w.category is ComponentPathWarning]) == 1  # once
 
 
 # --- bad inputs -----------------------------------------------------------------------------------

@@ -28,6 +28,7 @@ from ctxmodels.experiment.trackers import TRACKERS, build_tracker
 from ctxmodels.stonesoup import (
     ArrayPointProcessTracker,
     CircularRegion,
+    ComponentPathWarning,
     MeasurementDrivenBirth,
     PointProcessMultiTargetTracker,
 )
@@ -305,7 +306,9 @@ def test_unsupported_configuration_runs_the_component_path():
                                   birth_component=birth_component(scenario),
                                   extraction_threshold=0.5)
         assert not tracker.array_path
-        assert lockstep(reference, tracker, compare_mixtures=True) == 0.0
+        with pytest.warns(ComponentPathWarning, match="LCCUpdater, not a PHD updater"):
+            assert lockstep(reference, tracker, compare_mixtures=True) == 0.0
+    assert tracker.array_scans == 0 and tracker.component_scans == 12
 
 
 def test_a_scan_the_core_cannot_take_runs_the_component_path():
@@ -321,7 +324,11 @@ def test_a_scan_the_core_cannot_take_runs_the_component_path():
         reference, tracker = pair(scans, lambda: stock_components(scenario),
                                   birth_component=birth_component(scenario),
                                   extraction_threshold=0.5)
-        assert lockstep(reference, tracker) <= RTOL
+        assert tracker.array_path  # (the configuration is the core's)
+        with pytest.warns(ComponentPathWarning, match="2 distinct measurement models"):
+            assert lockstep(reference, tracker) <= RTOL
+    assert tracker.component_scans == 1 and tracker.array_scans == len(scans) - 1
+    assert not tracker.array_path  # (what ran)
 
 
 def test_an_assigned_mixture_is_the_one_the_next_scan_updates():

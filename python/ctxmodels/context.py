@@ -17,6 +17,7 @@ from stonesoup.models.measurement.linear import LinearGaussian
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.numeric import Probability
 
+from .model_key import scan_model_groups
 from .pose import Pose
 from .scan_calls import ScanCalls
 from .sensor import SensorModel
@@ -106,22 +107,15 @@ def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.nda
 
 
 def _model_groups(detections: Sequence, needed_for: str):
-    """The detections grouped by measurement model, in first-appearance order: ``(model,
+    """The detections grouped by measurement model *value*
+    (:func:`~ctxmodels.model_key.measurement_model_key`: equal models in different objects
+    form one group, its first model the representative), in first-appearance order: ``(model,
     indices, vectors)`` with ``vectors()`` their measurement vectors as float rows (checked
     against the model's ``ndim_meas``; taken from the collection's stacked ``vectors`` when
     it carries them, as :class:`~ctxmodels.stonesoup.ordering.OrderedDetections` does)."""
     n = len(detections)
-    models = [getattr(det, "measurement_model", None) for det in detections]
     stacked = getattr(detections, "vectors", None)
-    first = models[0] if n else None
-    if n and all(model is first for model in models):
-        groups = {id(first): list(range(n))}  # one model per scan: the usual case
-    else:
-        groups = {}
-        for i, model in enumerate(models):
-            groups.setdefault(id(model), []).append(i)
-    for indices in groups.values():
-        model = models[indices[0]]
+    for model, indices in scan_model_groups(detections).values():
         if model is None:
             raise ValueError(f"detections: detection {indices[0]} has no measurement model, "
                              f"so its {needed_for} is unknown")
@@ -211,15 +205,17 @@ def measured_ranges(detections: Sequence) -> np.ndarray:
     bearing–range measurement (Stone Soup's :class:`CartesianToBearingRange`, measured from
     its ``translation_offset``), NaN for any other detection."""
     n = len(detections)
-    models = [getattr(det, "measurement_model", None) for det in detections]
+    groups = scan_model_groups(detections)
     stacked = getattr(detections, "vectors", None)
-    if n and _measures_range(models[0]) and stacked is not None and stacked.shape == (n, 2) \
-            and all(model is models[0] for model in models):
-        return stacked[:, 1].copy()  # one bearing–range model per scan: the usual case
+    if stacked is not None and stacked.shape == (n, 2) and len(groups) == 1 \
+            and _measures_range(next(iter(groups.values()))[0]):
+        return stacked[:, 1].copy()  # one bearing–range model (value) per scan: the usual case
     ranges = np.full(n, np.nan)
-    for i, model in enumerate(models):
+    for model, indices in groups.values():
         if _measures_range(model):
-            ranges[i] = float(np.asarray(detections[i].state_vector, dtype=np.float64).ravel()[1])
+            for i in indices:
+                ranges[i] = float(np.asarray(detections[i].state_vector,
+                                             dtype=np.float64).ravel()[1])
     return ranges
 
 

@@ -20,7 +20,9 @@
 * Whole scans in the Rust core: :class:`ArrayPointProcessTracker` (GM-PHD) and
   :class:`ArrayJPDATracker` with :class:`ArrayMultiMeasurementInitiator` (JPDA) — the same
   Properties and tracks as the component-path trackers above, which stay as the readable
-  reference; :class:`FastGNNWith2DAssignment`, the stock GNN association with all
+  reference (each counts the scans it ran on either path, ``array_scans`` and
+  ``component_scans``, and raises one :class:`ComponentPathWarning` when a scan falls back);
+  :class:`FastGNNWith2DAssignment`, the stock GNN association with all
   track × detection distances of a scan computed at once.
 * Reproducibility: :class:`MultiTargetMixtureTracker` and :class:`MultiMeasurementInitiator`
   (the stock JPDA tracker and M-of-N initiator in a stable order); every ctxmodels tracker
@@ -48,6 +50,7 @@ from .hypothesiser import PDAHypothesiser
 from .learning import ClutterMapLearner, DetectionLearner, LearningTracker
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracker
+from .paths import ComponentPathWarning
 from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
 from .pointprocess import LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
@@ -65,6 +68,7 @@ __all__ = [
     "CachedCombinedLinearGaussianTransitionModel",
     "CircularRegion",
     "ClutterMapLearner",
+    "ComponentPathWarning",
     "DetectionLearner",
     "LCCUpdater",
     "MeasurementDrivenBirth",

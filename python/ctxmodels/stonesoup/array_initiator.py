@@ -41,6 +41,7 @@ from stonesoup.types.hypothesis import SingleDistanceHypothesis
 from stonesoup.types.state import GaussianState
 from stonesoup.types.update import Update
 
+from ..model_key import measurement_model_key, scan_model_groups
 from .deleter import UpdateTimeStepsDeleter
 from .fast import KALMAN_UPDATERS, ObjectFactory, measurement_batch, supports_predictor
 from .fast_association import (
@@ -195,15 +196,16 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
     def _core_model(self, updater, model):
         """(the core's model, its angle rows) for screening predicted states measured by
         ``model``, or None (then the measurement predictions of all rows screen)."""
-        cached = self._core_models.get(id(model))
-        if cached is None or cached[0] is not model or cached[1] is not type(updater):
+        key = (measurement_model_key(model), type(updater))  # equal models share an entry
+        cached = self._core_models.get(key)
+        if cached is None:
             from .array_jpda import _core_model  # (that module builds on this one)
             core, bearing_row = _core_model(type(updater), model)
             entry = None if core is None else (core, {} if bearing_row is None
                                                else {bearing_row: Bearing})
-            cached = self._core_models[id(model)] = (model, type(updater), entry)
+            cached = self._core_models[key] = (model, type(updater), entry)
             if len(self._core_models) > 64:
-                self._core_models = {id(model): cached}
+                self._core_models = {key: cached}
         return cached[2]
 
     # --- a scan ---------------------------------------------------------------------------------
@@ -258,11 +260,9 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
 
         hypotheses: dict[int, list] = {}  # row -> [(column, distance, batch, batch row)]
         if detections:
-            by_model: dict = {}
-            for j, det in enumerate(detections):
-                by_model.setdefault(det.measurement_model, []).append(j)
             squared = type(measure) is SquaredMahalanobis
-            for raw_model, members in by_model.items():
+            # by model value: equal models in different objects are one group (its first)
+            for raw_model, members in scan_model_groups(detections).values():
                 resolved = updater._check_measurement_model(raw_model)
                 group_dets = [detections[j] for j in members]
                 candidates = None if hypothesiser.include_all else screen_states(

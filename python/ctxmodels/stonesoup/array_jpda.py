@@ -14,7 +14,9 @@ clusters of tracks sharing detections), every Kalman update and the mixture redu
 Stone Soup state per track is built from the result.
 
 Supported (anything else runs the component path of
-:class:`~ctxmodels.stonesoup.MultiTargetMixtureTracker`, scan by scan):
+:class:`~ctxmodels.stonesoup.MultiTargetMixtureTracker`, scan by scan, counted in
+``component_scans`` — ``array_scans`` counts the others — and the first such scan raises a
+:class:`~ctxmodels.stonesoup.ComponentPathWarning` naming why):
 
 * ``data_associator``: :class:`~stonesoup.dataassociator.probability.JPDAwithEHM2`,
   ``JPDAwithEHM`` or ``JPDA`` (all give the same exact marginals) over a stock or
@@ -22,10 +24,13 @@ Supported (anything else runs the component path of
   ``clutter_spatial_density`` (or a ctxmodels context on the scan);
 * a Kalman / extended Kalman predictor with a linear Gaussian transition model, and Kalman /
   extended Kalman updaters without covariance options;
-* scans whose detections share one time (the scan's) and one measurement model:
+* scans whose detections share one time (the scan's) and one measurement model *value*:
   ``LinearGaussian``, ``CartesianToBearingRange`` (2-D, extended Kalman updaters; Stone
   Soup's finite-difference Jacobian reproduced operation for operation) or
-  :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange` (closed form);
+  :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange` (closed form). Models are
+  compared by type and Properties, bit for bit
+  (:func:`~ctxmodels.model_key.measurement_model_key`): a model object per detection is one
+  model;
 * scans with and without a ctxmodels detector context (P_D per track from the context's
   array form, λ per detection, as the ctxmodels hypothesiser computes them);
 * tracks whose last state is a :class:`~stonesoup.types.state.GaussianState` (or a
@@ -93,6 +98,7 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from .. import _core
 from ..context import DetectorContext
+from ..model_key import measurement_model_key, scan_model_groups
 from .array_initiator import ArrayMultiMeasurementInitiator
 from .initiator_arrays import ControlTerms
 from .initiator_blocks import PRIOR_PREDICTION as _PRIOR_PREDICTION
@@ -102,6 +108,7 @@ from .fast_association import _copied_properties
 from .hypothesiser import PDAHypothesiser, is_detection_backed, scan_context
 from .measurement import AnalyticCartesianToBearingRange
 from .mixture_tracker import MultiTargetMixtureTracker
+from .paths import PathCounts
 from .ordering import OrderedDetections, context_kwargs, in_track_order
 
 _ASSOCIATORS = (JPDAwithEHM2, JPDAwithEHM, JPDA)
@@ -286,11 +293,12 @@ class _MissCounter:
         self.values = values
 
 
-class ArrayJPDATracker(MultiTargetMixtureTracker):
+class ArrayJPDATracker(PathCounts, MultiTargetMixtureTracker):
     """:class:`~ctxmodels.stonesoup.MultiTargetMixtureTracker` computing each supported scan
     with one call into the Rust core (see the module docstring); the same Properties,
     tracks and states. :attr:`array_scans` and :attr:`component_scans` count the scans each
-    path ran."""
+    path ran; the first component-path scan raises a
+    :class:`~ctxmodels.stonesoup.ComponentPathWarning` naming why (once per tracker)."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -298,77 +306,102 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         self._plan = None
         self._models: dict = {}
         self._control_terms = ControlTerms()
-        self.array_scans = 0
-        self.component_scans = 0
+        self._count_paths()
+
+    @property
+    def array_path(self) -> bool:
+        """Whether every scan so far ran in the core (``component_scans == 0``) and the
+        current associator, hypothesiser, predictor and updaters are ones the core runs;
+        before the first scan, only the latter. A scan the core cannot take (detections
+        with different measurement models, …) makes it False for good."""
+        return self.component_scans == 0 and self._hypothesiser() is not None
 
     # --- configuration --------------------------------------------------------------------
     def _hypothesiser(self):
         """The PDA hypothesiser when the associator/hypothesiser/predictor/updater
         configuration is one the core reproduces, else None."""
+        hypothesiser = self._hypothesiser_or_refusal()
+        return None if isinstance(hypothesiser, str) else hypothesiser
+
+    def _hypothesiser_or_refusal(self):
+        """The PDA hypothesiser, or why the configuration is not one the core runs."""
         associator = self.data_associator
         if type(associator) not in _ASSOCIATORS:
-            return None
+            return f"the data associator is a {type(associator).__name__}, not a JPDA"
         hypothesiser = associator.hypothesiser
         if type(hypothesiser) not in _HYPOTHESISERS:
-            return None
-        if not (supports_predictor(hypothesiser.predictor)
-                and _updater_supported(hypothesiser.updater) and _updater_supported(self.updater)):
-            return None
+            return f"the hypothesiser is a {type(hypothesiser).__name__}, not a PDAHypothesiser"
+        if not supports_predictor(hypothesiser.predictor):
+            return "the predictor is not a Kalman one with a linear Gaussian transition model"
+        if not (_updater_supported(hypothesiser.updater) and _updater_supported(self.updater)):
+            return ("the updaters are not plain (extended) Kalman updaters without Joseph "
+                    "form or forced positive definiteness")
         return hypothesiser
 
     def _model_for(self, hypothesiser, detections):
         """The scan's one measurement model (detections' own, or the updaters'), its core
-        model and bearing row; None when detections differ in model or time."""
-        models = {id(d.measurement_model): d.measurement_model for d in detections}
-        if len(models) != 1:
-            return None
-        model, = models.values()
+        model and bearing row; or why there is none (a string). Detections are grouped by
+        their models' values (:func:`~ctxmodels.model_key.measurement_model_key`), so equal
+        models in different objects are one model (the first detection's)."""
+        groups = scan_model_groups(detections)
+        if len(groups) != 1:
+            return f"detections with {len(groups)} distinct measurement models"
+        (key, (model, _)), = groups.items()
         if model is None:
             model = hypothesiser.updater.measurement_model
             if model is None or self.updater.measurement_model is not model:
-                return None
+                return ("detections without a measurement model, and the updaters do not "
+                        "share one")
+            key = measurement_model_key(model)
         if type(hypothesiser.updater) is not type(self.updater):
-            return None
-        cached = self._models.get(id(model))
-        if cached is None or cached[0] is not model:
+            return "the hypothesiser's and the tracker's updaters are of different types"
+        # cached by value: equal models (a moving radar's recurring ones) share an entry
+        cached = self._models.get(key)
+        if cached is None:
             core, bearing_row = _core_model(type(self.updater), model)
-            cached = self._models[id(model)] = (model, core, bearing_row)
+            cached = self._models[key] = (model, core, bearing_row)
             if len(self._models) > 64:  # per-scan models (a moving radar): keep a few
-                self._models = {key: value for key, value in self._models.items()
-                                if key == id(model) or isinstance(key, tuple)}
+                self._models = {k: value for k, value in self._models.items()
+                                if k == key or (type(k) is tuple and k[0] == "empty")}
+        if cached[1] is None:
+            return (f"a {type(model).__name__} measurement model (the core takes "
+                    "LinearGaussian and, with extended Kalman updaters, 2-D bearing-range)")
         return cached
 
     # --- the scan (``__next__``: the parent's, which checks the scan first) --------------
     def _scan(self, time, detections):
         result = self._array_scan(time, detections)
-        if result is None:
-            self.component_scans += 1
+        if isinstance(result, str):
+            self._ran_component_scan(time, result)
             self._counters.clear()  # states appended by the component path: re-read
             return super()._scan(time, detections)
-        self.array_scans += 1
+        self._ran_array_scan()
         return result
 
     def _array_scan(self, time, detections):
-        hypothesiser = self._hypothesiser()
-        if hypothesiser is None:
-            return None
+        """The scan in the core: ``(time, tracks)``, or why it cannot run there (a string;
+        nothing has changed then)."""
+        hypothesiser = self._hypothesiser_or_refusal()
+        if isinstance(hypothesiser, str):
+            return hypothesiser
         tracks = self.tracks_in_order
         if any(d.timestamp != time for d in detections):
-            return None
+            return "detections with timestamps other than the scan's"
         context = scan_context(detections, {}) if type(hypothesiser) is PDAHypothesiser else None
         if context is not None and not (
                 isinstance(context, DetectorContext)
                 and type(context).prob_detection_states is DetectorContext.prob_detection_states):
-            return None
+            return "a detector context that is not a ctxmodels DetectorContext"
         if detections:
             entry = self._model_for(hypothesiser, detections)
-            if entry is None or entry[1] is None:
-                return None
+            if isinstance(entry, str):
+                return entry
             _, core_model, bearing_row = entry
         else:  # no detection: only missed-detection hypotheses, no model is read
             core_model, bearing_row = self._empty_model(hypothesiser), None
         if context is None and hypothesiser.clutter_spatial_density is None:
-            return None  # the stock validation-region clutter estimate
+            # the stock validation-region clutter estimate
+            return "a PDA hypothesiser without clutter_spatial_density and no context"
 
         predictor = hypothesiser.predictor
         ndim = predictor.transition_model.ndim_state
@@ -383,7 +416,9 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
                     and vector.shape == (ndim, 1) and isinstance(covar, np.ndarray)
                     and covar.dtype in _PRIOR_DTYPES and covar.shape == (ndim, ndim)
                     and stamp is not None):
-                return None
+                return (f"a track whose last state (a {type(prior).__name__}) is not a "
+                        "float64 or integer Gaussian state of the transition model's size "
+                        "with a timestamp")
             priors.append(prior)
             vectors.append(vector)
             covars.append(covar)
@@ -393,8 +428,8 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
         if tracks:
             scan = self._run_core(time, detections, tracks, priors, (vectors, covars, stamps),
                                   hypothesiser, context, core_model, bearing_row)
-            if scan is None:
-                return None
+            if isinstance(scan, str):
+                return scan
             scan_result, out, prob_detect = scan
             self._append_states(time, tracks, priors, scan_result, out, prob_detect,
                                 hypothesiser)
@@ -448,7 +483,7 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
             offset = np.asarray(offset, dtype=np.float64)
             ctrl_noise = np.asarray(ctrl_noise, dtype=np.float64)
             if np.any(offset) or np.any(ctrl_noise):
-                return None  # a control input: the component path
+                return "a control input (the core predicts without one)"
             noises.append(np.asarray(transition.covar(time_interval=interval), dtype=np.float64))
         pred_means, pred_covars = _core.jpda_predict(
             np.ascontiguousarray(means), np.ascontiguousarray(covars), index,
@@ -485,7 +520,8 @@ class ArrayJPDATracker(MultiTargetMixtureTracker):
                                   force_symmetric=bool(self.updater.force_symmetric_covariance))
         except ValueError as error:
             if str(error).startswith(_NOT_POSITIVE_DEFINITE):
-                return None
+                return ("an innovation covariance that is not positive definite (the stock "
+                        "code takes the nearest positive-definite matrix)")
             raise
         scan = _Scan()
         scan.time = time

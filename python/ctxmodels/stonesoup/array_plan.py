@@ -56,26 +56,36 @@ class _Plan:
 
     @classmethod
     def of(cls, tracker) -> _Plan | None:
+        if cls.refusal(tracker) is not None:
+            return None
+        return cls(tracker.hypothesiser, tracker.updater, tracker.reducer)
+
+    @staticmethod
+    def refusal(tracker) -> str | None:
+        """Why the core does not run this configuration (None: it does)."""
         hypothesiser, updater, reducer = tracker.hypothesiser, tracker.updater, tracker.reducer
         if type(hypothesiser) is not GaussianMixtureHypothesiser \
                 or not hypothesiser.order_by_detection:
-            return None
+            return ("the hypothesiser is not a GaussianMixtureHypothesiser with "
+                    "order_by_detection=True")
         inner = hypothesiser.hypothesiser
         if type(inner) is not DistanceHypothesiser or inner.predict_with_measurements:
-            return None
+            return "the inner hypothesiser is not a DistanceHypothesiser"
         measure = inner.measure
         if type(measure) not in (Mahalanobis, SquaredMahalanobis) or measure.mapping is not None \
                 or getattr(measure, "mapping2", None) is not None:
-            return None
+            return "the measure is not a (Squared)Mahalanobis without mapping"
         if not supports_predictor(inner.predictor):
-            return None
+            return ("the predictor is not a Kalman one with a linear Gaussian transition "
+                    "model")
         if type(updater) not in (PHDUpdater, _StockPHDUpdater):
-            return None
+            return f"the updater is a {type(updater).__name__}, not a PHD updater"
         if not (_plain_kalman(updater.updater) and _plain_kalman(inner.updater)):
-            return None
+            return ("the Kalman updaters are not plain (extended) Kalman updaters without "
+                    "Joseph form or forced positive definiteness")
         if type(reducer) is not GaussianMixtureReducer:
-            return None
-        return cls(hypothesiser, updater, reducer)
+            return "the reducer is not a GaussianMixtureReducer"
+        return None
 
     def scan_model(self, model, ndim: int):
         """The core's form of one measurement model, or None if it has none (both updaters

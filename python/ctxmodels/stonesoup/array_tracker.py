@@ -12,7 +12,8 @@ objects are built only for what it hands out: track states, and the mixture when
 
 **Supported configurations** (checked every scan; anything else runs the component path of
 :class:`~ctxmodels.stonesoup.PointProcessMultiTargetTracker` for that scan, with the same
-results):
+results, counted in ``component_scans`` — ``array_scans`` counts the others — and the first
+such scan raises a :class:`~ctxmodels.stonesoup.ComponentPathWarning` naming why):
 
 * ``hypothesiser``: Stone Soup's ``GaussianMixtureHypothesiser(order_by_detection=True)``
   over a ``DistanceHypothesiser`` with a ``Mahalanobis`` or ``SquaredMahalanobis`` measure
@@ -24,10 +25,13 @@ results):
 * ``reducer``: Stone Soup's ``GaussianMixtureReducer``; with ``kdtree_max_distance`` the
   candidates in the gate are visited in increasing weight (stock: in a set's address
   order, which changes from process to process);
-* a scan whose detections share one measurement model — ``LinearGaussian``, or (extended
-  Kalman) ``CartesianToBearingRange`` (Stone Soup's finite-difference Jacobian, reproduced)
-  or :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange` — and the scan's
-  timestamp.
+* a scan whose detections share one measurement model *value* — ``LinearGaussian``, or
+  (extended Kalman) ``CartesianToBearingRange`` (Stone Soup's finite-difference Jacobian,
+  reproduced) or :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange` — and the
+  scan's timestamp. Models are compared by type and Properties, bit for bit
+  (:func:`~ctxmodels.model_key.measurement_model_key`), so a model object per detection
+  (readers, Stone Soup's sensors measured target by target) is one model; detections from
+  two sensor positions in one scan are two.
 
 **Agreement with the component path.** The same formulae in the same order, so results
 agree to rounding. Rounding differs (the core does not call BLAS/LAPACK): with linear models
@@ -52,10 +56,12 @@ from stonesoup.types.track import Track
 
 from .. import _core
 from ..context import detection_positions
+from ..model_key import scan_model_groups
 from ..foreign import as_array_context
 from .array_plan import _Plan
 from .fast import ObjectFactory, plain_track_lists
 from .ordering import declares_context, in_stable_order
+from .paths import PathCounts
 from .pointprocess import PointProcessMultiTargetTracker
 from .region import CircularRegion, scan_region
 
@@ -67,15 +73,19 @@ _STATE = ObjectFactory(TaggedWeightedGaussianState, dict(
     weight=0.5, tag="probe")).maker("state_vector", "covar", "weight", "tag", "timestamp")
 
 
-class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
+class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
     r"""GM-PHD tracker computing each scan in the Rust core (see the module docstring).
 
     Same Properties, inputs and tracks as
-    :class:`~ctxmodels.stonesoup.PointProcessMultiTargetTracker`; configurations the core
-    does not cover run that component path scan by scan.
+    :class:`~ctxmodels.stonesoup.PointProcessMultiTargetTracker`; configurations and scans
+    the core does not cover run that component path scan by scan. :attr:`array_scans` and
+    :attr:`component_scans` count the scans each path ran; the first component-path scan
+    raises a :class:`~ctxmodels.stonesoup.ComponentPathWarning` naming why (once per
+    tracker).
     """
 
     def __init__(self, *args, **kwargs):
+        self._count_paths()
         self._arrays = None          # _core.GaussianMixtureArrays, once the dimension is known
         self._mixture_object = None  # the mixture as Stone Soup objects, when authoritative
         super().__init__(*args, **kwargs)
@@ -102,8 +112,11 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
 
     @property
     def array_path(self) -> bool:
-        """Whether the current configuration runs its scans in the core."""
-        return _Plan.of(self) is not None
+        """Whether every scan so far ran in the core (``component_scans == 0``) and the
+        current configuration is one the core runs; before the first scan, only the latter.
+        A scan the core cannot take (detections with different measurement models, …) makes
+        it False for good."""
+        return self.component_scans == 0 and _Plan.refusal(self) is None
 
     def _tag_name(self, tag: int) -> str:
         name = self._tag_names.get(tag)
@@ -227,12 +240,17 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
     # --- a scan -----------------------------------------------------------------------------
     def _scan(self, time, detections) -> tuple[datetime.datetime, set[Track]]:
         """One checked scan (the parent's ``__next__`` checks it and calls this)."""
-        plan = _Plan.of(self)
-        if plan is not None:  # (the component path sets it itself)
-            self._region = scan_region(self.surveillance_region, time)
-        scan = self._scan_inputs(plan, time, detections) if plan is not None else None
-        if scan is None:
+        refusal = _Plan.refusal(self)
+        if refusal is None:
+            plan = _Plan(self.hypothesiser, self.updater, self.reducer)
+            self._region = scan_region(self.surveillance_region, time)  # (the component
+            scan = self._scan_inputs(plan, time, detections)           # path sets it itself)
+            if isinstance(scan, str):
+                refusal, scan = scan, None
+        if refusal is not None:
+            self._ran_component_scan(time, refusal)
             return self._component_scan(time, detections)
+        self._ran_array_scan()
         if self._mixture_object is not None:
             self._load(self._mixture_object.components)
             self._mixture_object = None
@@ -240,8 +258,11 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
         return time, self.tracks
 
     def _scan_inputs(self, plan: _Plan, time, detections):
-        """The scan's ordered detections, context, measurement vectors and core model; None
-        when the core cannot run this scan."""
+        """The scan's ordered detections, context, measurement vectors and core model; or
+        why the core cannot run this scan (a string). The detections are grouped by their
+        measurement models' values (:func:`~ctxmodels.model_key.measurement_model_key`), so
+        equal models in different objects (one per detection) are one model; the first
+        detection's is the one used."""
         context = getattr(detections, "detector_context", None)
         ordered = in_stable_order(detections)
         if context is not None and not declares_context(self.updater.update):
@@ -251,22 +272,27 @@ class ArrayPointProcessTracker(PointProcessMultiTargetTracker):
                                        "clutter_spatial_density_detections")
         ndim = self._ndim()
         if ndim is None:
-            return None
+            return "the state dimension is not known (no mixture, birth_component or birth)"
         if not ordered:
             return ordered, context, np.empty((0, 1)), None
-        models = {id(d.measurement_model): d.measurement_model for d in ordered}
-        if len(models) != 1 or any(d.timestamp != time for d in ordered):
-            return None
-        model = plan.gate_updater._check_measurement_model(next(iter(models.values())))
+        groups = scan_model_groups(ordered)
+        if len(groups) != 1:
+            return f"detections with {len(groups)} distinct measurement models"
+        if any(d.timestamp != time for d in ordered):
+            return "detections with timestamps other than the scan's"
+        (model, _), = groups.values()
+        model = plan.gate_updater._check_measurement_model(model)
         if plan.measurement_updater._check_measurement_model(model) is not model:
-            return None
+            return "the hypothesiser's and the updater's measurement models differ"
         scan_model = plan.scan_model(model, ndim)
         if scan_model is None:
-            return None
+            return (f"a {type(model).__name__} measurement model (the core takes "
+                    "LinearGaussian and, with extended Kalman updaters, 2-D bearing-range)")
         if ordered.vectors is None or ordered.vectors.shape[1] != scan_model.ndim_meas:
-            return None
+            return "measurement vectors not of the model's ndim_meas rows"
         if type(model) is LinearGaussian and any(d.state_vector.dtype == object for d in ordered):
-            return None  # typed (angle) elements in a linear model: the component path
+            # typed (angle) elements in a linear model: the component path
+            return "typed (angle) measurement elements in a linear model"
         return ordered, context, ordered.vectors, scan_model
 
     def _ndim(self):

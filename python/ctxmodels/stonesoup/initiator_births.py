@@ -20,6 +20,7 @@ from stonesoup.types.state import GaussianState
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
+from ..model_key import measurement_model_key
 from .fast import ObjectFactory, _analytic_bearing_range_batch, _bearing_range_batch
 from .measurement import AnalyticCartesianToBearingRange
 
@@ -129,7 +130,8 @@ class Births:
             model = det.measurement_model if det.measurement_model is not None \
                 else inner.measurement_model
             if type(model) is LinearGaussian or _bearing_range(model):
-                groups.setdefault(id(model), (model, []))[1].append(det)
+                # by value: equal models in different objects are one group (its first)
+                groups.setdefault(measurement_model_key(model), (model, []))[1].append(det)
             else:
                 other.append(det)
         tracks = inner.initiate(set(other), timestamp) if other else set()

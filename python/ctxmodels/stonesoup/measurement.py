@@ -19,6 +19,8 @@ import operator
 import numpy as np
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 
+from ..model_key import compared_by_value
+
 
 def _checked_mapping(mapping) -> None:
     """Raise :class:`ValueError` unless ``mapping`` is two integer state indices."""
@@ -76,6 +78,7 @@ def bearing_range_jacobians(rotation: np.ndarray, mapping, rotated: np.ndarray,
     return jac, rho == 0
 
 
+@compared_by_value
 class AnalyticCartesianToBearingRange(CartesianToBearingRange):
     r""":class:`~stonesoup.models.measurement.nonlinear.CartesianToBearingRange` whose
     :meth:`jacobian` is exact instead of a finite difference.
