@@ -10,7 +10,6 @@ import math
 import random
 from types import SimpleNamespace
 
-import numpy as np
 import pytest
 
 from ctxmodels.experiment import figures, summary_plots
@@ -19,7 +18,7 @@ from ctxmodels.experiment.findings import (FINDINGS, Finding, evaluate, evaluate
 from ctxmodels.experiment.statistics import (INCONCLUSIVE, INFERIOR, MARGINS, NO_PAPER_EFFECT,
                                              NON_INFERIOR, NON_INFERIORITY, NOT_REPRODUCED,
                                              REPRODUCED, SIZE_INSIDE, SIZE_LARGER,
-                                             SIZE_SMALLER, SUPERIORITY, Interval, holm,
+                                             SIZE_SMALLER, Interval, holm,
                                              one_sided_p, one_sided_test, overall_verdict,
                                              size_verdict, t_interval, verdict)
 
