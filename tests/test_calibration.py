@@ -92,3 +92,23 @@ def test_a_stage_runs_real_jobs_and_scores_them():
         assert score.hota == pytest.approx(sum(100 * r.hota.hota for r in mine) / 2)
         assert score.gospa == pytest.approx(sum(r.gospa.rms for r in mine) / 2)
         assert 0 <= score.hota <= 100 and math.isfinite(score.gospa) and score.gospa >= 0
+
+
+def test_the_default_truth_is_the_calibrations_choice():
+    """The scenarios' default sensors are the values docs/calibration.md's run chose (its
+    committed JSON), and the stress truth is the earlier default the docs describe."""
+    import json
+    from pathlib import Path
+
+    from ctxmodels.experiment.scenarios import TRUTHS, LidarConfig
+    chosen = json.loads((Path(__file__).parents[1] / "docs" / "figures" /
+                         "calibration.json").read_text())["chosen"]
+    point = calibration.RadarPoint(**chosen["radar"])
+    assert point.config() == RadarConfig()
+    assert calibration.lidar_config(chosen["lidar_clutter_per_scan"]) == LidarConfig()
+    assert TRUTHS["calibrated"].radar == RadarConfig() and TRUTHS["calibrated"].lidar == LidarConfig()
+    stress = TRUTHS["stress"]
+    assert stress.radar.prob_detection == 0.4
+    assert math.isclose(stress.radar.clutter_density_far, 1.0e-2, rel_tol=0.05)
+    assert math.isclose(math.degrees(stress.radar.bearing_std), 1.0)
+    assert stress.lidar.clutter_per_scan == 3.0

@@ -195,12 +195,12 @@ def test_cli_sensitivity_options_change_the_simulated_sensors_only(tmp_path, cap
     code = main(["experiment", "--scenarios", "mixed-range", "--trackers", "gmphd-radar-only",
                  "--seeds", "1", "--duration", "6", "--workers", "1", "--output", str(out),
                  "--quiet", "--no-plots", "--radar-clutter", "5", "3.2", "--lidar-clutter",
-                 "0.5", "--radar-bearing-std", "0.5"])
+                 "0.5", "--radar-bearing-std", "0.8"])
     assert code == 0
     printed = capsys.readouterr().out
     assert "radar.clutter_per_scan_far=3.2" in printed
     assert "lidar.clutter_per_scan=0.5" in printed
-    assert f"radar.bearing_std={math.radians(0.5):g}" in printed
+    assert f"radar.bearing_std={math.radians(0.8):g}" in printed
     config = json.loads((out / "results.json").read_text())["config"]
     assert config["radar"]["clutter_per_scan_far"] == 3.2
     assert config["radar"]["clutter_per_scan_near"] == 5.0

@@ -34,7 +34,7 @@ def _run_experiment(args, folder) -> int:
                               duration=args.duration, stock=args.stock, workers=args.workers,
                               static_distractors=not args.static_as_false,
                               plot_seed=None if args.no_plots else args.seed_start,
-                              radar=radar, lidar=lidar)
+                              radar=radar, lidar=lidar, extract=args.extract)
     for tracker in dict.fromkeys(t for t, _ in args.skipped):
         print(f"ctxmodels experiment: {tracker} does not run on "
               f"{', '.join(s for t, s in args.skipped if t == tracker)}; skipped there",
@@ -148,10 +148,12 @@ def _check_experiment(args) -> None:
 
 
 def _simulated_sensors(args):
-    """The simulation's sensor settings from the sensitivity options (None: defaults)."""
+    """The simulation's sensor settings: the named truth changed by the sensitivity options
+    (None: the calibrated default)."""
     import dataclasses
 
-    from .experiment.scenarios import LidarConfig, RadarConfig
+    from .experiment.scenarios import TRUTHS
+    truth = TRUTHS[args.truth]
     radar_changes, lidar_changes = {}, {}
     if args.radar_clutter is not None:
         near, far = args.radar_clutter
@@ -160,8 +162,11 @@ def _simulated_sensors(args):
         radar_changes["bearing_std"] = math.radians(args.radar_bearing_std)
     if args.lidar_clutter is not None:
         lidar_changes["clutter_per_scan"] = args.lidar_clutter
-    radar = dataclasses.replace(RadarConfig(), **radar_changes) if radar_changes else None
-    lidar = dataclasses.replace(LidarConfig(), **lidar_changes) if lidar_changes else None
+    radar = dataclasses.replace(truth.radar, **radar_changes)
+    lidar = dataclasses.replace(truth.lidar, **lidar_changes)
+    if args.truth == "calibrated":  # None: the defaults, as a results file names them
+        radar = None if radar == truth.radar else radar
+        lidar = None if lidar == truth.lidar else lidar
     return radar, lidar
 
 
@@ -246,8 +251,9 @@ def study_options(sub, output: str, full_seeds: int, quick_seeds: int,
 
 def parser() -> argparse.ArgumentParser:
     from .cli_sweep import add_sweep_command
+    from .experiment.extraction import EXTRACTIONS
     from .experiment.runner import FULL_SEEDS, QUICK_DURATION, QUICK_SEEDS
-    from .experiment.scenarios import SCENARIOS
+    from .experiment.scenarios import SCENARIOS, TRUTHS
     main = argparse.ArgumentParser(
         prog="ctxmodels",
         description="Context-aware sensor models for Stone Soup trackers: run the paper's "
@@ -274,23 +280,33 @@ def parser() -> argparse.ArgumentParser:
     exp.add_argument("--static-as-false", action="store_true",
                      help="count tracks on static sea markers and islets as false tracks "
                           "(default: they are distractors, neither hits nor false tracks)")
+    exp.add_argument("--extract", choices=list(EXTRACTIONS), default="stone-soup",
+                     help="which GM-PHD states are scored: 'stone-soup' (default) every state "
+                          "of every reported track, as Stone Soup's tracker reports them; "
+                          "'weight' only states of weight ≥ 0.5")
     sim = exp.add_argument_group(
         "simulated sensors (sensitivity studies: these change the simulated truth only, "
         "never the trackers' models)")
+    sim.add_argument("--truth", choices=list(TRUTHS), default="calibrated",
+                     help="the simulated truth the options below start from: 'calibrated' "
+                          "(default; docs/calibration.md) or 'stress' (radar P_D 0.4, far "
+                          "clutter 1e-2 per rad·m, bearing σ 1°, 3 lidar clutter points a "
+                          "scan: the trackers' settings copied into the truth)")
     # Bounded so that the simulated scans (drawn up front) cannot exhaust memory.
     sim.add_argument("--radar-clutter", nargs=2, type=number(0, MAX_RADAR_CLUTTER),
                      metavar=("NEAR", "FAR"), default=None,
                      help="mean radar clutter returns per scan inside / beyond 1000 m (default "
-                          "5 32, i.e. 1e-3 and 1e-2 per rad·m: the paper's context-aware λ; "
-                          "5 3.2 makes the uniform λ = 1e-3 true everywhere); each ≥ 0, "
+                          "4.89 9.45, i.e. 1e-3 and 3e-3 per rad·m; 5 32 is 1e-3 and 1e-2, "
+                          "the paper's context-aware λ; 5 3.2 makes the uniform λ = 1e-3 "
+                          "true everywhere); each ≥ 0, "
                           f"NEAR + FAR ≤ {MAX_RADAR_CLUTTER:g}")
     sim.add_argument("--lidar-clutter", type=number(0, MAX_LIDAR_CLUTTER), metavar="N",
                      default=None,
-                     help="mean lidar clutter segments per scan within 80 m (default 3; "
+                     help="mean lidar clutter segments per scan within 80 m (default 0.3; "
                           f"0–{MAX_LIDAR_CLUTTER:g})")
     sim.add_argument("--radar-bearing-std", type=number(0, MAX_BEARING_STD_DEG, above=True),
                      metavar="DEG", default=None,
-                     help=f"radar bearing noise σ in degrees (default 1; > 0, ≤ "
+                     help=f"radar bearing noise σ in degrees (default 0.5; > 0, ≤ "
                           f"{MAX_BEARING_STD_DEG:g})")
     exp.set_defaults(run=_experiment, check=_check_experiment, error=exp.error)
 

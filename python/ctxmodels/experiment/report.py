@@ -40,6 +40,18 @@ def simulation_changes(radar, lidar) -> str:
     return ", ".join(parts)
 
 
+def truth_line(radar, lidar) -> str:
+    """One sentence naming the simulated truth: a named truth
+    (:data:`~ctxmodels.experiment.scenarios.TRUTHS`) or its changes from the calibrated
+    defaults."""
+    from .scenarios import TRUTHS, LidarConfig, RadarConfig
+    radar, lidar = radar or RadarConfig(), lidar or LidarConfig()
+    for truth in TRUTHS.values():
+        if (truth.radar, truth.lidar) == (radar, lidar):
+            return f"Simulated truth: {truth.name} ({truth.description})."
+    return (f"Simulated truth: the calibrated one with {simulation_changes(radar, lidar)}.")
+
+
 @dataclass
 class ExperimentResults:
     config: object  # ExperimentConfig
@@ -126,9 +138,11 @@ class ExperimentResults:
                      f"{f'{self.config.duration:g} s' if self.config.duration else 'the whole'} "
                      f"of each scenario; "
                      f"{'component-path' if self.config.stock else 'array'} trackers.")
-        changed = simulation_changes(self.config.radar, self.config.lidar)
-        if changed:
-            lines.append(f"Simulated sensors changed from the defaults: {changed}.")
+        lines.append(truth_line(self.config.radar, self.config.lidar))
+        extract = getattr(self.config, "extract", "stone-soup")
+        lines.append("Scored states: " + ("every state of every reported track (Stone Soup's "
+                                          "extraction)." if extract == "stone-soup" else
+                                          "GM-PHD states of weight ≥ 0.5 only."))
         return "\n".join(lines)
 
     def track_counts_markdown(self) -> str:

@@ -37,6 +37,7 @@ import numpy as np
 
 from . import metrics
 from .executors import InlineExecutor, sigint_blocked, stop_now, worker_ignores_sigint
+from .extraction import extracted
 from .report import ExperimentResults, simulation_changes  # noqa: F401 (re-exported)
 from .scenarios import SCENARIOS, LidarConfig, RadarConfig, make_scenario
 from .scoring import score_run, tracks_digest
@@ -58,6 +59,8 @@ class Job:
     #: models never change with these: they are the sensitivity knobs of the simulation.
     radar: RadarConfig | None = None
     lidar: LidarConfig | None = None
+    #: Which states are scored (:mod:`~ctxmodels.experiment.extraction`).
+    extract: str = "stone-soup"
 
 
 @dataclass
@@ -135,7 +138,8 @@ def run_job(job: Job) -> JobResult:
         cpu_seconds = time.process_time() - cpu_started
         # By content, not set (address) order: the metrics then see the same track order
         # in every process.
-        reported = [track for track in in_track_order(all_tracks) if len(track)]
+        reported = extracted([track for track in in_track_order(all_tracks) if len(track)],
+                             job.extract)
         score = score_run(run, reported, job.static_distractors)
         kept = kept_paths(reported, run.radar_times[0]) if job.keep_tracks else []
         digest = tracks_digest(reported) if job.digest else ""
@@ -190,8 +194,9 @@ class ExperimentConfig:
     workers: int | None = None
     plot_seed: int | None = 0
     static_distractors: bool = True
-    radar: RadarConfig | None = None  # simulated radar (None: RadarConfig())
-    lidar: LidarConfig | None = None  # simulated lidar (None: LidarConfig())
+    radar: RadarConfig | None = None  # simulated radar (None: RadarConfig(), calibrated)
+    lidar: LidarConfig | None = None  # simulated lidar (None: LidarConfig(), calibrated)
+    extract: str = "stone-soup"  # which states are scored (see .extraction)
 
     def jobs(self) -> list[Job]:
         from .trackers import DEFAULT_TRACKERS, TRACKERS, applicable
@@ -204,7 +209,7 @@ class ExperimentConfig:
                 raise ValueError(f"scenarios: unknown scenario {name!r}; choose from {list(SCENARIOS)}")
         return [Job(s, seed, t, self.duration, self.stock, keep_tracks=(seed == self.plot_seed),
                     static_distractors=self.static_distractors, radar=self.radar,
-                    lidar=self.lidar)
+                    lidar=self.lidar, extract=self.extract)
                 for s in self.scenarios for t in trackers if applicable(t, s)
                 for seed in self.seeds]
 

@@ -44,12 +44,15 @@ measurement noise stands for all error sources). Timestamps are naive
 
 Overview
 --------
-Radar 0.8 Hz, 50–1612 m outside a 65° blind sector astern, P_D 0.4, bearing σ 1° and
-range σ 5 m, clutter uniform in bearing–range (1.02e-3 per rad·m below 1 km, 1.02e-2
+Radar 0.8 Hz, 50–1612 m outside a 65° blind sector astern, P_D 0.7, bearing σ 0.5° and
+range σ 5 m, clutter uniform in bearing–range (1e-3 per rad·m below 1 km, 3e-3
 beyond), land returns from the coast it sees. Lidar 10 Hz (first scan 43 ms after the
 epoch: the sensors never share a timestamp), P_D 0.95 below 50 m and 0.2 to 80 m, x/y
-centroids with σ 0.5 m and a segment ``area``, Poisson(3) small clutter segments per
-scan. Static objects (markers, islets) are detected but are not ground truth; land
+centroids with σ 0.5 m and a segment ``area``, Poisson(0.3) small clutter segments per
+scan. The radar's P_D, clutter and bearing σ and the lidar's clutter rate are *calibrated*
+on the paper's baseline rows (``docs/calibration.md``); :data:`TRUTHS` names them
+(``calibrated``, the default) beside a ``stress`` setting that copies the trackers' P_D 0.4
+and far λ 1e-2 into the truth. Static objects (markers, islets) are detected but are not ground truth; land
 occludes both sensors. Scenarios: ``"mixed-range"`` (1), ``"formation"`` (2),
 ``"islands"`` (3, ours), 480 s each. Truth trajectories are fixed per scenario: legs and
 turns, with the turn rate ramping over 4 s into and out of each turn so that truth
@@ -66,6 +69,8 @@ Public API
     :class:`DriftMotion`, :class:`TargetSpec`, :class:`StaticObject`).
 ``SCENARIOS``
     ``{name: ScenarioSpec}``; ``ScenarioSpec.layout()`` builds its layout.
+``TRUTHS``
+    ``{name: Truth}``: named radar and lidar truths (``calibrated``, ``stress``).
 
 :class:`ScenarioRun` fields: ``name, seed, duration, truths`` (set of
 ``GroundTruthPath``, stable ``id``, a state at every radar and lidar timestamp while
@@ -94,10 +99,12 @@ from .simulation.radar import RadarConfig
 from .simulation.run import EPOCH, EgoNavigation, ScenarioRun, simulate
 from .simulation.scans import Scan, SensorPose
 from .simulation.scene import SceneLayout, StaticObject, TargetSpec
+from .simulation.truths import TRUTHS, Truth
 
 __all__ = [
     "EPOCH",
     "SCENARIOS",
+    "TRUTHS",
     "DriftMotion",
     "EgoNavigation",
     "FormationMotion",
@@ -114,6 +121,7 @@ __all__ = [
     "SensorPose",
     "StaticObject",
     "TargetSpec",
+    "Truth",
     "WeaveMotion",
     "make_scenario",
     "simulate",

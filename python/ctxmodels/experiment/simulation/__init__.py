@@ -8,7 +8,8 @@ ground truth), one module per concept:
 * :mod:`.geometry`: angles, polar coordinates, land and line of sight;
 * :mod:`.scans`: what a scan is, scan timing, how a detection is typed;
 * :mod:`.run`: :func:`~.run.simulate`, a layout and a seed → a :class:`~.run.ScenarioRun`;
-* :mod:`.layouts`: the three scenarios and :func:`~.layouts.make_scenario`.
+* :mod:`.layouts`: the three scenarios and :func:`~.layouts.make_scenario`;
+* :mod:`.truths`: named sensor truths (calibrated, stress).
 
 Import the public names from :mod:`ctxmodels.experiment.scenarios`. Nothing here may
 import ``ctxmodels._core`` or the context models: it is what they are judged against.

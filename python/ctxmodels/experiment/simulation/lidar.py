@@ -12,8 +12,9 @@ asynchronous and never share a timestamp):
   below 10 m² (nominal 15–30 m²: small boats seen from ≤ 80 m);
 * static markers: their own small nominal area (buoys ~2 m²) with the same jitter,
   so close markers look like clutter to an area rule — as in reality;
-* clutter: Poisson(3) segments per scan uniform in area over 3 m < r < 80 m around the
-  ego, i.e. 1.49e-4 per m²; areas lognormal with median 2.5 m² and σ = 0.8
+* clutter: Poisson(0.3) segments per scan (calibrated, ``docs/calibration.md``), i.i.d.
+  from scan to scan, uniform in area over 3 m < r < 80 m around the ego, i.e. 1.49e-5
+  per m²; areas lognormal with median 2.5 m² and σ = 0.8
   (≈ 96 % below 10 m²). The paper's λ_lidar (0.1 / 1e-3) is a tuning value, not a
   density (taken per m² it would mean ~2000 clutter points per scan).
 """
@@ -46,7 +47,7 @@ class LidarConfig:
     phase: float = 0.043
     range_bands: tuple[tuple[float, float], ...] = ((50.0, 0.95), (80.0, 0.2))
     position_std: float = 0.5
-    clutter_per_scan: float = 3.0
+    clutter_per_scan: float = 0.3
     clutter_min_range: float = 3.0
     clutter_area_median: float = 2.5
     clutter_area_log_std: float = 0.8
