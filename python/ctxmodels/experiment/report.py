@@ -159,8 +159,8 @@ class ExperimentResults:
         lines += ["", "Mean over seeds; a scope's runs of one seed are pooled first (counts "
                   "summed over its scenarios, rates as ratios of sums). Truths and tracks are "
                   "matched by GOSPA's assignment (c = 30 m) at each radar time, static-object "
-                  "tracks dropped. GOSPA's terms are means over radar times of the squared "
-                  "GOSPA's parts: they add up to the squared RMS GOSPA of the seed. False "
+                  "tracks dropped. GOSPA's terms are the means over radar times of the parts of "
+                  "the squared GOSPA: they add up to the mean over seeds of RMS GOSPA². False "
                   "tracks are never matched; their life runs from first to last radar time; "
                   "time to track runs from a vessel's first radar time to its first match "
                   "(never-tracked vessels count their whole presence)."]
