@@ -121,10 +121,45 @@ def test_run_experiment_writes_table_and_files(tmp_path):
         hota = row["combined"]["hota"]
         assert 0 <= hota["low"] <= hota["mean"] <= hota["high"] <= 100
     assert len(paths["csv"].read_text().splitlines()) == 1 + 8
+    _check_management_table(results, summary, paths)
     findings = json.loads(paths["findings_json"].read_text())
     # No finding has all its trackers among these two: each says so instead of a verdict.
     assert findings and {f["verdict"] for f in findings} == {"not run"}
     assert all(f["hota_difference"] is None for f in findings)
+
+
+def _check_management_table(results, summary, paths):
+    """The track-management table: every tracker on every scope, pooled per seed."""
+    from ctxmodels.experiment import metrics
+    from ctxmodels.experiment.report import MANAGEMENT_COLUMNS
+    rows = {(row["tracker"], row["scope"]): row for row in summary["management"]}
+    assert set(rows) == {(t, s) for t in ("gmphd-uniform", "gmphd-context")
+                         for s in ("combined", "mixed-range", "formation")}
+    markdown = paths["markdown"].read_text()
+    assert "## Track management" in markdown
+    assert all(header in markdown for _, header, _ in MANAGEMENT_COLUMNS)
+    for tracker in ("gmphd-uniform", "gmphd-context"):
+        combined, s1, s2 = (rows[(tracker, s)] for s in ("combined", "mixed-range", "formation"))
+        assert combined["seeds"] == 2
+        # counts of the combined scope are the scenarios' counts summed per seed
+        for key in ("false_tracks", "id_switches", "fragmentations", "never_tracked"):
+            assert combined[key] == pytest.approx(s1[key] + s2[key])
+        assert all(0 <= row[k] <= 100 for row in (combined, s1, s2)
+                   for k in ("deta", "assa", "loca", "tracked_percent"))
+        # GOSPA's terms add up to the seeds' mean squared RMS GOSPA
+        by_key = results.by_key()
+        squares = [metrics.combine_gospa([by_key[(tracker, s, seed)].gospa
+                                          for s in ("mixed-range", "formation")]).rms ** 2
+                   for seed in (0, 1)]
+        parts = combined["gospa_localisation"] + combined["gospa_missed"] + combined["gospa_false"]
+        assert parts == pytest.approx(np.mean(squares), rel=1e-9)
+    header = paths["csv"].read_text().splitlines()[0].split(",")
+    assert header[:10] == ["tracker", "scenario", "seed", "hota_percent", "deta", "assa",
+                           "gospa_rms", "tracks", "mean_tracks_per_scan", "scans"]
+    assert {"id_switches", "fragmentations", "false_track_lifetime", "time_to_track",
+            "gospa_missed"} <= set(header)
+    assert all(r.management is not None and r.management.frames == len(r.tracks_per_time)
+               for r in results.results)
 
 
 def test_any_executor_works(tmp_path):
@@ -188,6 +223,13 @@ def test_tracks_on_static_objects_are_distractors():
     assert (scored.track_count, plain.track_count) == (1, 2)
     assert scored.gospa.rms < plain.gospa.rms
     assert scored.tracks_per_time == (1,) * len(times) and plain.tracks_per_time == (2,) * len(times)
+    # Track management sees the same frames: the marker track is a false track (alive for
+    # the whole run, in seconds) only when static objects are not distractors.
+    assert (scored.management.false_tracks, plain.management.false_tracks) == (0, 1)
+    assert plain.management.false_track_lifetime == (times[-1] - times[0]).total_seconds()
+    for score in (scored, plain):
+        assert score.management.unmatched_track_frames == int(score.gospa.num_false.sum())
+        assert score.management.frames == len(times) and score.management.id_switches == 0
 
 
 def test_cli_sensitivity_options_change_the_simulated_sensors_only(tmp_path, capsys):

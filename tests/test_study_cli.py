@@ -15,7 +15,7 @@ def test_quick_run_end_to_end(tmp_path, capsys):
     out = tmp_path / "quick"
     assert main(["experiment", "--quick", "--workers", "2", "--quiet", "--output", str(out)]) == 0
     printed = capsys.readouterr().out
-    for heading in ("## Scores", "## Findings", "## Tracks per radar scan"):
+    for heading in ("## Scores", "## Findings", "## Track management", "## Tracks per radar scan"):
         assert heading in printed
     findings = json.loads((out / "findings.json").read_text())
     assert [f["key"] for f in findings] == [f.key for f in FINDINGS]

@@ -86,7 +86,15 @@ minimising over partial assignments :math:`\gamma` whose pairs are closer than
 ``distance**p == localisation + missed + false``, as Stone Soup's
 ``GOSPAMetric`` reports them). The paper's single number is the RMS over
 evaluation times, :math:`\sqrt{\frac{1}{T}\sum_t d_t^2}`; :func:`combine_gospa`
-pools the times of several sequences before taking it.
+pools the times of several sequences before taking it. :func:`gospa_split` splits
+its square (at :math:`p = 2`) into the means over times of the three terms,
+
+.. math::
+    \frac{1}{T}\sum_t d_t^2 = \overline{\text{localisation}} + \overline{\text{missed}}
+        + \overline{\text{false}},
+
+in square metres: how much of the RMS GOSPA is poor positions, missed targets and
+false tracks.
 """
 from __future__ import annotations
 
@@ -110,6 +118,7 @@ __all__ = [
     "combine_hota",
     "gospa_from_frames",
     "combine_gospa",
+    "gospa_split",
     "frames_from_stonesoup",
     "hota",
     "gospa",
@@ -560,12 +569,14 @@ class GOSPAResult:
         return float(np.mean(self.distance))
 
 
-def _gospa_one_time(truth_positions: np.ndarray, track_positions: np.ndarray, c: float,
-                    p: float) -> tuple[float, int, int]:
-    """Return (localisation term, number missed, number false) at one time."""
-    n_truths, n_tracks = truth_positions.shape[0], track_positions.shape[0]
-    if n_truths == 0 or n_tracks == 0:
-        return 0.0, n_truths, n_tracks
+def _gospa_assignment(truth_positions: np.ndarray, track_positions: np.ndarray, c: float,
+                      p: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """GOSPA's optimal assignment at one time: the assigned pairs' truth rows, track rows
+    and distances, only pairs closer than ``c`` (the track-management metrics match truths
+    to tracks with exactly these pairs)."""
+    if truth_positions.shape[0] == 0 or track_positions.shape[0] == 0:
+        empty = np.zeros(0, dtype=np.intp)
+        return empty, empty, np.zeros(0)
     distance = _distances(truth_positions, track_positions)
     # Assigning a pair at distance >= c costs c**p, the same as leaving both
     # unassigned (2 * c**p / 2), so capping at c gives the optimal partial
@@ -573,9 +584,17 @@ def _gospa_one_time(truth_positions: np.ndarray, track_positions: np.ndarray, c:
     rows, cols = linear_sum_assignment(np.minimum(distance, c) ** p)
     pair_distance = distance[rows, cols]
     proper = pair_distance < c
-    n_assigned = int(np.count_nonzero(proper))
-    localisation = float(np.sum(pair_distance[proper] ** p))
-    return localisation, n_truths - n_assigned, n_tracks - n_assigned
+    return rows[proper], cols[proper], pair_distance[proper]
+
+
+def _gospa_one_time(truth_positions: np.ndarray, track_positions: np.ndarray, c: float,
+                    p: float) -> tuple[float, int, int]:
+    """Return (localisation term, number missed, number false) at one time."""
+    _, _, pair_distance = _gospa_assignment(truth_positions, track_positions, c, p)
+    n_assigned = pair_distance.size
+    localisation = float(np.sum(pair_distance ** p))
+    return (localisation, truth_positions.shape[0] - n_assigned,
+            track_positions.shape[0] - n_assigned)
 
 
 def gospa_from_frames(frames: Iterable[EvaluationFrame], *, c: float = _DEFAULT_GOSPA_C,
@@ -612,6 +631,17 @@ def combine_gospa(results: Iterable[GOSPAResult]) -> GOSPAResult:
         **{field: np.concatenate([getattr(result, field) for result in results])
            for field in ("distance", "localisation", "missed", "false", "num_missed",
                          "num_false")})
+
+
+def gospa_split(result: GOSPAResult) -> tuple[float, float, float]:
+    """``(localisation, missed, false)``: the mean over evaluation times of each GOSPA term
+    (units of distance**p: square metres at p = 2). They add up to the mean of
+    ``distance**p``, so at p = 2 to ``result.rms ** 2`` (up to rounding); pool sequences
+    with :func:`combine_gospa` first, as for the RMS."""
+    if not isinstance(result, GOSPAResult):
+        raise TypeError(f"result must be a GOSPAResult, got {type(result).__name__}")
+    return (float(np.mean(result.localisation)), float(np.mean(result.missed)),
+            float(np.mean(result.false)))
 
 
 # ---------------------------------------------------------------------------

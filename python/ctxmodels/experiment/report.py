@@ -5,6 +5,12 @@ interval (:func:`~.statistics.bootstrap_mean`); findings compare trackers paired
 (:mod:`~.findings`). Every number written depends only on the jobs' results, never on
 their completion order: no timing goes into the files (two runs write identical files),
 it is printed (:meth:`ExperimentResults.timing_line`).
+
+Beside the scores, a track-management table (:meth:`ExperimentResults.management`) breaks
+them down per tracker and scope: HOTA's DetA, AssA and LocA, GOSPA's localisation, missed
+and false terms (:func:`~.metrics.gospa_split`), and the track-management metrics of
+:mod:`~.track_management`. A scope's runs of one seed are pooled first (HOTA, GOSPA and
+track management each by its own combine: ratios of sums), then the seeds are averaged.
 """
 from __future__ import annotations
 
@@ -17,12 +23,54 @@ from pathlib import Path
 import numpy as np
 
 from . import findings as findings_
+from . import metrics
+from . import track_management as management_
 from .executors import write_atomic, write_json
-from .findings import COMBINED, seed_scores
+from .findings import COMBINED, COMBINED_SCENARIOS, seed_scores
 from .statistics import bootstrap_mean
 
 #: Scenario names in table order, and the short labels of the results table.
 SCENARIO_LABELS = {"mixed-range": "Scenario 1", "formation": "Scenario 2", "islands": "Scenario 3"}
+
+#: The track-management table's columns: key, markdown header, format.
+MANAGEMENT_COLUMNS = (
+    ("deta", "DetA (%)", ".1f"), ("assa", "AssA (%)", ".1f"), ("loca", "LocA (%)", ".1f"),
+    ("gospa_localisation", "GOSPA² loc. (m²)", ".1f"),
+    ("gospa_missed", "GOSPA² missed (m²)", ".1f"), ("gospa_false", "GOSPA² false (m²)", ".1f"),
+    ("false_tracks_per_scan", "false tracks / scan", ".2f"),
+    ("false_tracks", "false tracks", ".1f"),
+    ("false_track_lifetime", "false-track life (s)", ".1f"),
+    ("id_switches", "ID switches", ".1f"), ("fragmentations", "fragmentations", ".1f"),
+    ("tracked_percent", "tracked (%)", ".1f"), ("time_to_track", "time to track (s)", ".1f"),
+    ("never_tracked", "never tracked", ".1f"))
+
+
+def _scope_runs(by_key: dict, tracker: str, scope: str) -> dict[int, list]:
+    """``{seed: [JobResult, ...]}``: the runs of ``tracker`` that make up ``scope`` on each
+    seed (seeds missing a scenario of the combined scope are left out, as in the scores)."""
+    scenarios = COMBINED_SCENARIOS if scope == COMBINED else (scope,)
+    seeds = sorted({seed for (t, _, seed) in by_key if t == tracker})
+    runs = {seed: [by_key.get((tracker, s, seed)) for s in scenarios] for seed in seeds}
+    return {seed: parts for seed, parts in runs.items()
+            if all(p is not None and p.management is not None for p in parts)}
+
+
+def management_values(parts: list) -> dict[str, float]:
+    """The track-management table's values of runs pooled as one (one seed of a scope)."""
+    hota = metrics.combine_hota([p.hota for p in parts])
+    localisation, missed, false = metrics.gospa_split(
+        metrics.combine_gospa([p.gospa for p in parts]))
+    pooled = management_.combine([p.management for p in parts])
+    return {"deta": 100 * hota.deta, "assa": 100 * hota.assa, "loca": 100 * hota.loca,
+            "gospa_localisation": localisation, "gospa_missed": missed, "gospa_false": false,
+            "false_tracks_per_scan": pooled.false_tracks_per_scan,
+            "false_tracks": float(pooled.false_tracks),
+            "false_track_lifetime": pooled.false_track_lifetime,
+            "id_switches": float(pooled.id_switches),
+            "fragmentations": float(pooled.fragmentations),
+            "tracked_percent": 100 * pooled.tracked_fraction,
+            "time_to_track": pooled.time_to_track,
+            "never_tracked": float(pooled.never_tracked)}
 
 
 def simulation_changes(radar, lidar) -> str:
@@ -92,6 +140,43 @@ class ExperimentResults:
 
     def findings(self) -> list:
         return findings_.evaluate_all(self.by_key())
+
+    def management(self) -> list[dict]:
+        """Per tracker and scope (as in the scores): each track-management column
+        (:data:`MANAGEMENT_COLUMNS`) as the mean over seeds of the seed's pooled runs, and
+        the number of seeds."""
+        from .trackers import TRACKERS
+        by_key = self.by_key()
+        rows = []
+        for tracker in self.trackers():
+            for scope in self.scopes():
+                per_seed = [management_values(parts)
+                            for parts in _scope_runs(by_key, tracker, scope).values()]
+                if not per_seed:
+                    continue
+                means = {key: float(np.mean([values[key] for values in per_seed]))
+                         for key, _, _ in MANAGEMENT_COLUMNS}
+                rows.append({"tracker": tracker, "label": TRACKERS[tracker].label,
+                             "scope": scope, "seeds": len(per_seed), **means})
+        return rows
+
+    def management_markdown(self) -> str:
+        names = {COMBINED: "Combined (S1+S2)", **SCENARIO_LABELS}
+        lines = ["| Method | Scope | " + " | ".join(h for _, h, _ in MANAGEMENT_COLUMNS) + " |",
+                 "|---|---|" + "---|" * len(MANAGEMENT_COLUMNS)]
+        for row in self.management():
+            lines.append(f"| {row['label']} | {names.get(row['scope'], row['scope'])} | "
+                         + " | ".join(format(row[key], spec)
+                                      for key, _, spec in MANAGEMENT_COLUMNS) + " |")
+        lines += ["", "Mean over seeds; a scope's runs of one seed are pooled first (counts "
+                  "summed over its scenarios, rates as ratios of sums). Truths and tracks are "
+                  "matched by GOSPA's assignment (c = 30 m) at each radar time, static-object "
+                  "tracks dropped. GOSPA's terms are the means over radar times of the parts of "
+                  "the squared GOSPA: they add up to the mean over seeds of RMS GOSPA². False "
+                  "tracks are never matched; their life runs from first to last radar time; "
+                  "time to track runs from a vessel's first radar time to its first match "
+                  "(never-tracked vessels count their whole presence)."]
+        return "\n".join(lines)
 
     def track_counts(self) -> list[dict]:
         """Per tracker and scenario: tracks reported per radar scan (mean over scans and
@@ -170,6 +255,7 @@ class ExperimentResults:
         return "\n\n".join([
             "## Scores", self.table_markdown(),
             "## Findings", findings_.findings_markdown(self.findings()),
+            "## Track management", self.management_markdown(),
             "## Tracks per radar scan", self.track_counts_markdown()])
 
     def save(self, folder: str | Path) -> dict[str, Path]:
@@ -182,24 +268,43 @@ class ExperimentResults:
                  "findings_json": folder / "findings.json"}
         table = io.StringIO(newline="")
         writer = csv.writer(table)
+        # (new columns go last: readers by position keep working)
         writer.writerow(["tracker", "scenario", "seed", "hota_percent", "deta", "assa",
-                         "gospa_rms", "tracks", "mean_tracks_per_scan", "scans"])
+                         "gospa_rms", "tracks", "mean_tracks_per_scan", "scans", *_CSV_EXTRA])
         for r in sorted(self.results, key=lambda r: (r.job.tracker, r.job.scenario, r.job.seed)):
             writer.writerow([r.job.tracker, r.job.scenario, r.job.seed,
                              f"{100 * r.hota.hota:.4f}", f"{r.hota.deta:.6f}",
                              f"{r.hota.assa:.6f}", f"{r.gospa.rms:.4f}", r.track_count,
                              f"{np.mean(r.tracks_per_time):.3f}" if r.tracks_per_time else "",
-                             r.scans])
+                             r.scans, *_csv_extra(r)])
         scores = [{k: ({m: i.as_dict() for m, i in v.items()} if isinstance(v, dict) else v)
                    for k, v in row.items() if k != "seconds"} for row in self.scores()]
         config = {k: (list(v) if isinstance(v, (list, tuple)) else v)
                   for k, v in asdict(self.config).items() if k != "workers"}
         findings = [f.as_dict() for f in self.findings()]
         summary = {"config": config, "scores": scores, "findings": findings,
-                   "track_counts": self.track_counts()}
+                   "management": self.management(), "track_counts": self.track_counts()}
         write_atomic(paths["markdown"], self.markdown() + "\n")
         write_atomic(paths["csv"], table.getvalue())
         write_json(paths["json"], summary)  # (NaN, e.g. the interval of one seed: null)
         write_atomic(paths["findings"], findings_.findings_markdown(self.findings()) + "\n")
         write_json(paths["findings_json"], findings)
         return paths
+
+
+#: results.csv's per-run track-management columns.
+_CSV_EXTRA = ("loca", "gospa_localisation", "gospa_missed", "gospa_false",
+              "false_tracks_per_scan", "false_tracks", "false_track_lifetime", "id_switches",
+              "fragmentations", "tracked_fraction", "time_to_track", "never_tracked")
+
+
+def _csv_extra(result) -> list[str]:
+    """A run's :data:`_CSV_EXTRA` cells (empty when it has no track-management metrics)."""
+    if result.management is None:
+        return [""] * len(_CSV_EXTRA)
+    localisation, missed, false = metrics.gospa_split(result.gospa)
+    m = result.management
+    return [f"{result.hota.loca:.6f}", f"{localisation:.4f}", f"{missed:.4f}", f"{false:.4f}",
+            f"{m.false_tracks_per_scan:.4f}", str(m.false_tracks),
+            f"{m.false_track_lifetime:.4f}", str(m.id_switches), str(m.fragmentations),
+            f"{m.tracked_fraction:.6f}", f"{m.time_to_track:.4f}", str(m.never_tracked)]

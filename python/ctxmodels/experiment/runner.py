@@ -41,6 +41,7 @@ from .extraction import extracted
 from .report import ExperimentResults, simulation_changes  # noqa: F401 (re-exported)
 from .scenarios import SCENARIOS, LidarConfig, RadarConfig, make_scenario
 from .scoring import score_run, tracks_digest
+from .track_management import TrackManagement
 
 
 @dataclass(frozen=True)
@@ -84,6 +85,8 @@ class JobResult:
     #: of the default pool; an executor running jobs in threads of one process counts the
     #: other threads' CPU time too.
     cpu_seconds: float = 0.0
+    #: False tracks, ID switches, fragmentations, time to track (None: not scored).
+    management: TrackManagement | None = None
 
 
 @contextlib.contextmanager
@@ -146,7 +149,7 @@ def run_job(job: Job) -> JobResult:
         del tracker, all_tracks, reported
     return JobResult(job, score.hota, score.gospa, seconds, scans, score.track_count, kept,
                      digest, score.tracks_per_time, score.truths_per_time,
-                     cpu_seconds=cpu_seconds)
+                     cpu_seconds=cpu_seconds, management=score.management)
 
 
 def kept_paths(tracks, epoch) -> list:

@@ -10,8 +10,9 @@ nor a false track; without this, the paper's scores (HOTA ≈ 90 % on Scenario 1
 markers and islets in view) would be impossible.
 
 The reported tracks are converted once to :class:`~.metrics.EvaluationFrame` s (one per
-radar time); distractors are dropped from the frames, and HOTA and GOSPA are computed from
-the same frames.
+radar time); distractors are dropped from the frames, and HOTA, GOSPA and the
+track-management metrics (:mod:`~.track_management`, at the radar times in seconds from the
+first) are computed from the same frames.
 """
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from . import metrics
+from .track_management import TrackManagement, track_management
 
 #: Similarity at or above which a track position assigned to a static object is dropped.
 DISTRACTOR_SIMILARITY = 0.5
@@ -36,6 +38,8 @@ class RunScore:
     #: Tracks and vessels present at each evaluation time, distractors dropped.
     tracks_per_time: tuple[int, ...]
     truths_per_time: tuple[int, ...]
+    #: False tracks, ID switches, fragmentations, time to track (GOSPA's matching).
+    management: TrackManagement
 
 
 def drop_distractors(frames: list[metrics.EvaluationFrame],
@@ -69,8 +73,9 @@ def drop_distractors(frames: list[metrics.EvaluationFrame],
 
 def score_run(run, tracks: list, static_distractors: bool = True,
               mapping=(0, 2)) -> RunScore:
-    """HOTA and GOSPA of ``tracks`` (in a fixed order) against ``run``'s vessels at its radar
-    times, static objects as distractors unless ``static_distractors`` is false."""
+    """HOTA, GOSPA and the track-management metrics of ``tracks`` (in a fixed order) against
+    ``run``'s vessels at its radar times, static objects as distractors unless
+    ``static_distractors`` is false."""
     truths = list(run.truth_by_id.values())  # by id, not set (address) order
     frames = metrics.frames_from_stonesoup(truths, tracks, run.radar_times,
                                            position_mapping=mapping)
@@ -82,9 +87,12 @@ def score_run(run, tracks: list, static_distractors: bool = True,
             dropped_per_track = np.bincount(dropped, minlength=len(tracks))
             lengths = np.array([len(track.states) for track in tracks])
             track_count -= int(np.count_nonzero(dropped_per_track == lengths))
+    start = run.radar_times[0]
+    seconds = [(time - start).total_seconds() for time in run.radar_times]
     return RunScore(metrics.hota_from_frames(frames), metrics.gospa_from_frames(frames),
                     track_count, tuple(int(frame.track_ids.size) for frame in frames),
-                    tuple(int(frame.truth_ids.size) for frame in frames))
+                    tuple(int(frame.truth_ids.size) for frame in frames),
+                    track_management(frames, seconds))
 
 
 def tracks_digest(tracks) -> str:
