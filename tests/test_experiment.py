@@ -121,6 +121,18 @@ def test_run_experiment_writes_table_and_files(tmp_path):
         hota = row["combined"]["hota"]
         assert 0 <= hota["low"] <= hota["mean"] <= hota["high"] <= 100
     assert len(paths["csv"].read_text().splitlines()) == 1 + 8
+    # the paper's Table II beside each row, per scope, in the table and the JSON
+    from ctxmodels.experiment.paper import TABLE_II
+    uniform = next(line for line in table.splitlines() if line.startswith("| GM-PHD (uniform)"))
+    cells = [cell.strip() for cell in uniform.strip("|").split("|")][1:]
+    expected = [TABLE_II["gmphd-uniform"][scope] for scope in ("combined", "mixed-range",
+                                                               "formation")]
+    for k, paper in enumerate(expected):
+        assert cells[2 * k].endswith(f"({paper.hota:.1f})")
+        assert cells[2 * k + 1].endswith(f"({paper.gospa:.1f})")
+    by_tracker = {row["tracker"]: row for row in summary["scores"]}
+    assert by_tracker["gmphd-context"]["paper"]["formation"] == {"hota": 73.5, "gospa": 31.0}
+    assert "Calibrated:" in table and "Simulated truth: calibrated" in table
     _check_management_table(results, summary, paths)
     findings = json.loads(paths["findings_json"].read_text())
     # No finding has all its trackers among these two: each says so instead of a verdict.

@@ -27,6 +27,7 @@ from . import metrics
 from . import track_management as management_
 from .executors import write_atomic, write_json
 from .findings import COMBINED, COMBINED_SCENARIOS, seed_scores
+from .paper import TABLE_II
 from .statistics import bootstrap_mean
 
 #: Scenario names in table order, and the short labels of the results table.
@@ -134,6 +135,9 @@ class ExperimentResults:
                     values = np.array(list(per_seed.values()))
                     row[scope] = {"hota": bootstrap_mean(values[:, 0]),
                                   "gospa": bootstrap_mean(values[:, 1])}
+            paper = TABLE_II.get(tracker, {})
+            row["paper"] = {scope: paper[scope]._asdict() for scope in self.scopes()
+                            if scope in paper}
             row["seconds"] = float(np.mean([r.seconds for r in self.results if r.job.tracker == tracker]))
             rows.append(row)
         return rows
@@ -202,16 +206,18 @@ class ExperimentResults:
         columns = self.scopes()
         names = {COMBINED: "Combined (S1+S2)", **SCENARIO_LABELS}
         header = "| Method | " + " | ".join(
-            f"{names.get(c, c)} HOTA (%) ↑ | {names.get(c, c)} GOSPA (m) ↓" for c in columns) + " |"
+            f"{names.get(c, c)} HOTA (%) ↑ (paper) | {names.get(c, c)} GOSPA (m) ↓ (paper)"
+            for c in columns) + " |"
         lines = [header, "|" + "---|" * (1 + 2 * len(columns))]
 
         def cell(row, column, metric):
             if column not in row:
                 return "—"
             value = row[column][metric]
-            if math.isnan(value.low):
-                return f"{value.mean:.1f}"
-            return f"{value.mean:.1f} [{value.low:.1f}, {value.high:.1f}]"
+            paper = row["paper"].get(column)
+            text = (f"{value.mean:.1f}" if math.isnan(value.low)
+                    else f"{value.mean:.1f} [{value.low:.1f}, {value.high:.1f}]")
+            return text + (f" ({paper[metric]:.1f})" if paper else "")
 
         for row in rows:
             lines.append(f"| {row['label']} | " + " | ".join(
@@ -222,7 +228,14 @@ class ExperimentResults:
                      f"({seeds[0]}–{seeds[-1]}); "
                      f"{f'{self.config.duration:g} s' if self.config.duration else 'the whole'} "
                      f"of each scenario; "
-                     f"{'component-path' if self.config.stock else 'array'} trackers.")
+                     f"{'component-path' if self.config.stock else 'array'} trackers. "
+                     "In parentheses: the paper's Table II on its recorded data.")
+        lines.append("Simulated: the sensors, clutter and scenes (hand-built after the paper's "
+                     "descriptions; its paths are not public). Calibrated: the radar's P_D, "
+                     "clutter and bearing σ and the lidar's clutter rate, on the paper's "
+                     "baseline rows only (docs/calibration.md). Not reproduced by any "
+                     "calibrated setting: the baselines' absolute scores (docs/calibration.md "
+                     "says why), so compare differences, not levels.")
         lines.append(truth_line(self.config.radar, self.config.lidar))
         extract = getattr(self.config, "extract", "stone-soup")
         lines.append("Scored states: " + ("every state of every reported track (Stone Soup's "
@@ -277,7 +290,8 @@ class ExperimentResults:
                              f"{r.hota.assa:.6f}", f"{r.gospa.rms:.4f}", r.track_count,
                              f"{np.mean(r.tracks_per_time):.3f}" if r.tracks_per_time else "",
                              r.scans, *_csv_extra(r)])
-        scores = [{k: ({m: i.as_dict() for m, i in v.items()} if isinstance(v, dict) else v)
+        scores = [{k: ({m: i.as_dict() for m, i in v.items()}
+                       if isinstance(v, dict) and k != "paper" else v)
                    for k, v in row.items() if k != "seconds"} for row in self.scores()]
         config = {k: (list(v) if isinstance(v, (list, tuple)) else v)
                   for k, v in asdict(self.config).items() if k != "workers"}
