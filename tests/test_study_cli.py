@@ -58,35 +58,50 @@ def test_jobs_are_grouped_by_simulated_run_costliest_first():
 
 
 def test_sweep_grid_and_maps(tmp_path):
+    from ctxmodels.experiment.scenarios import TRUTHS, LidarConfig, RadarConfig
+    from ctxmodels.experiment.sweep import Cell, calibrated_cell
     config = SweepConfig(ExperimentConfig(scenarios=("mixed-range",),
                                           trackers=("gmphd-uniform", "gmphd-radar-only"),
                                           seeds=(0, 1), duration=6.0, workers=1),
-                         far_clutter=(3.2, 32.0), bearing_std_deg=(0.5, 1.0),
-                         lidar_clutter=(0.0, 3.0))
+                         prob_detection=(0.4, 0.7), far_clutter=(1e-3, 3e-3),
+                         bearing_std_deg=(0.5, 1.0), lidar_clutter=(0.3, 3.0))
     cells = config.cells()
-    # 2 × 2 radar cells at the default lidar (3), plus lidar 0 at the default radar.
-    assert len(cells) == 5 and len({c.sensors() for c in cells}) == 5
-    assert len(SweepConfig(ExperimentConfig()).cells()) == 11
+    # 2 × 2 radar cells (one is the calibrated truth), bearing 1°, lidar 3, the stress truth
+    assert len(cells) == 7 and len({c.sensors() for c in cells}) == 7
+    assert calibrated_cell() in cells
+    assert calibrated_cell().sensors() == (RadarConfig(), LidarConfig())
+    assert Cell.of_truth("stress").sensors() == (TRUTHS["stress"].radar, TRUTHS["stress"].lidar)
+    assert Cell.of_truth("stress") in cells
+    assert len(SweepConfig(ExperimentConfig()).cells()) == 13
+    assert len(SweepConfig(ExperimentConfig(), stress=False).cells()) == 12
     results = run_sweep(config, progress=False)
     xs, ys, mean, low, high = results.grids("uniform-loses-radar-only-tracks")
-    assert xs == [3.2, 32.0] and ys == [0.5, 1.0] and mean.shape == (2, 2)
+    assert xs == [1e-3, 3e-3] and ys == [0.4, 0.7] and mean.shape == (2, 2)
     assert (low <= mean).all() and (mean <= high).all()
     xs, _, line, _, _ = results.lidar_line("uniform-loses-radar-only-tracks")
-    assert xs == [0.0, 3.0] and line.shape == (1, 2) and not any(map(lambda v: v != v, line[0]))
+    assert xs == [0.3, 3.0] and line.shape == (1, 2) and not any(map(lambda v: v != v, line[0]))
+    xs, _, line, _, _ = results.bearing_line("uniform-loses-radar-only-tracks")
+    assert xs == [0.5, 1.0] and not any(map(lambda v: v != v, line[0]))
     # Findings whose trackers did not run have no map.
     assert (results.grids("context-beats-jpda")[2] != results.grids("context-beats-jpda")[2]).all()
     paths = results.save(tmp_path)
-    assert (tmp_path / "sweep_uniform-loses-radar-only-tracks_radar.png").stat().st_size > 0
+    for name in ("radar", "bearing", "lidar"):
+        assert (tmp_path / f"sweep_uniform-loses-radar-only-tracks_{name}.png").stat().st_size > 0
     assert not (tmp_path / "sweep_context-beats-jpda_radar.png").exists()
     rows = json.loads(paths["json"].read_text())["cells"]
-    assert {(r["far_clutter"], r["lidar_clutter"]) for r in rows if r["key"] ==
-            "uniform-loses-radar-only-tracks"} == {(3.2, 3.0), (32.0, 3.0), (32.0, 0.0)}
+    assert {(r["truth"], r["prob_detection"], r["lidar_clutter"]) for r in rows if r["key"] ==
+            "uniform-loses-radar-only-tracks"} == {("calibrated", 0.4, 0.3),
+                                                   ("calibrated", 0.7, 0.3),
+                                                   ("calibrated", 0.7, 3.0), ("stress", 0.4, 3.0)}
+    assert "| stress | 0.4 |" in paths["markdown"].read_text()
 
 
 @pytest.mark.parametrize("argv, option", [
     (["--radar-bearing-std", "0"], "--radar-bearing-std"),
     (["--radar-far-clutter", "-1"], "--radar-far-clutter"),
-    (["--radar-far-clutter", "999"], "--radar-far-clutter"),
+    (["--radar-far-clutter", "1"], "--radar-far-clutter"),
+    (["--radar-pd", "0"], "--radar-pd"),
+    (["--radar-pd", "1.5"], "--radar-pd"),
     (["--lidar-clutter", "1e9"], "--lidar-clutter"),
     (["--seeds", "0"], "--seeds"),
     (["--duration", "1e6"], "--duration"),

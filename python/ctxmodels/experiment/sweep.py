@@ -1,14 +1,17 @@
 """Sensitivity map: the study's findings over a grid of simulated-sensor settings.
 
-The findings depend on how the simulated truth is set up (its sensors' clutter and
-accuracy), never on the trackers, which keep their models in every cell. Two maps:
+The findings depend on how the simulated truth is set up, never on the trackers, which
+keep their models in every cell. Around the calibrated truth (``docs/calibration.md``):
 
-* radar: far clutter (returns per scan beyond 1000 m) × bearing noise σ, the lidar at its
-  default. Far clutter 3.2 per scan makes the trackers' uniform λ = 1e-3 per rad·m true
-  everywhere; 32 per scan is the paper's context λ = 1e-2 (the default simulation); 10 lies
-  between. Bearing σ 1° is the default, 0.3° about what brings the absolute scores near the
-  paper's.
-* lidar: clutter segments per scan within 80 m, the radar at its default.
+* radar map: the radar's true P_D × its far clutter density (per rad·m beyond 1000 m). P_D
+  is the value the calibration could not identify (0.6–0.95 fitted the baseline rows
+  equally); far clutter 1e-3 makes the trackers' uniform λ true everywhere, 3e-3 is the
+  calibrated value, 1e-2 the paper's context λ;
+* bearing line: the radar's bearing σ (0.5° calibrated, 1° the earlier default);
+* lidar line: lidar clutter points per scan within 80 m (0.3 calibrated);
+* the ``stress`` truth (:data:`~ctxmodels.experiment.scenarios.TRUTHS`) as one more cell:
+  the trackers' P_D 0.4 and far λ 1e-2 copied into the truth, bearing σ 1°, 3 lidar
+  clutter points a scan.
 
 Every cell is the full study's set of jobs with its own simulated sensors; all cells' jobs
 share one pool. Each finding is evaluated per cell exactly as in the main study
@@ -32,44 +35,74 @@ from . import findings as findings_
 from .executors import write_atomic, write_json
 from .report import ExperimentResults
 from .runner import ExperimentConfig, run_jobs
-from .scenarios import LidarConfig, RadarConfig
+from .scenarios import TRUTHS, LidarConfig, RadarConfig
+from .simulation.radar import CALIBRATED_CLUTTER_DENSITY
 
-DEFAULT_FAR_CLUTTER = (3.2, 10.0, 32.0)
-DEFAULT_BEARING_STD_DEG = (0.3, 0.6, 1.0)
-DEFAULT_LIDAR_CLUTTER = (0.0, 3.0, 10.0)
-#: Seeds per cell by default: a full sweep is eleven studies.
+DEFAULT_RADAR_PD = (0.4, 0.7, 0.9)
+DEFAULT_FAR_CLUTTER = (1e-3, 3e-3, 1e-2)  # per rad·m beyond 1000 m
+DEFAULT_BEARING_STD_DEG = (0.5, 1.0)
+DEFAULT_LIDAR_CLUTTER = (0.3, 3.0, 10.0)
+#: Seeds per cell by default.
 SWEEP_SEEDS = 5
 
 
 @dataclass(frozen=True)
 class Cell:
-    """One simulated-sensor setting of the sweep."""
-    far_clutter: float
+    """One simulated-sensor setting of the sweep: the calibrated truth with these values,
+    or (``truth="stress"``) the named stress truth as it is, described by its values."""
+    prob_detection: float
+    far_clutter: float  # per rad·m beyond 1000 m
     bearing_std_deg: float
     lidar_clutter: float
+    truth: str = "calibrated"
+
+    @classmethod
+    def of_truth(cls, name: str) -> Cell:
+        radar, lidar = TRUTHS[name].radar, TRUTHS[name].lidar
+        # (the calibrated density exactly, so that its cell is the default study's truth)
+        far = (CALIBRATED_CLUTTER_DENSITY[1] if name == "calibrated"
+               else radar.clutter_density_far)
+        return cls(radar.prob_detection, far, math.degrees(radar.bearing_std),
+                   lidar.clutter_per_scan, name)
 
     def sensors(self) -> tuple[RadarConfig, LidarConfig]:
-        radar = dataclasses.replace(RadarConfig(), clutter_per_scan_far=self.far_clutter,
+        truth = TRUTHS[self.truth]
+        if self.truth != "calibrated":
+            return truth.radar, truth.lidar
+        base = truth.radar
+        # (the product in RadarConfig's order, so the calibrated cell is bit-identical)
+        far = self.far_clutter * base.covered_bearing_extent * (
+            base.max_range - base.clutter_boundary_range)
+        radar = dataclasses.replace(base, prob_detection=self.prob_detection,
+                                    clutter_per_scan_far=far,
                                     bearing_std=math.radians(self.bearing_std_deg))
-        lidar = dataclasses.replace(LidarConfig(), clutter_per_scan=self.lidar_clutter)
+        lidar = dataclasses.replace(truth.lidar, clutter_per_scan=self.lidar_clutter)
         return radar, lidar
+
+
+def calibrated_cell() -> Cell:
+    return Cell.of_truth("calibrated")
 
 
 @dataclass
 class SweepConfig:
     base: ExperimentConfig  # trackers, scenarios, seeds, duration, workers
+    prob_detection: Sequence[float] = DEFAULT_RADAR_PD
     far_clutter: Sequence[float] = DEFAULT_FAR_CLUTTER
     bearing_std_deg: Sequence[float] = DEFAULT_BEARING_STD_DEG
     lidar_clutter: Sequence[float] = DEFAULT_LIDAR_CLUTTER
+    stress: bool = True  # the stress truth as one more cell
 
     def cells(self) -> list[Cell]:
-        """The radar grid at the default lidar, then the lidar line at the default radar
-        (the default setting once)."""
-        radar, lidar = RadarConfig(), LidarConfig()
-        bearing = math.degrees(radar.bearing_std)
-        cells = [Cell(c, b, lidar.clutter_per_scan) for b in self.bearing_std_deg
-                 for c in self.far_clutter]
-        cells += [Cell(radar.clutter_per_scan_far, bearing, n) for n in self.lidar_clutter]
+        """The radar map, then the bearing and lidar lines at the calibrated radar (the
+        calibrated setting once), then the stress truth."""
+        home = calibrated_cell()
+        cells = [dataclasses.replace(home, prob_detection=pd, far_clutter=far)
+                 for pd in self.prob_detection for far in self.far_clutter]
+        cells += [dataclasses.replace(home, bearing_std_deg=b) for b in self.bearing_std_deg]
+        cells += [dataclasses.replace(home, lidar_clutter=n) for n in self.lidar_clutter]
+        if self.stress:
+            cells.append(Cell.of_truth("stress"))
         unique: dict = {}
         for cell in cells:  # one cell per distinct simulation
             unique.setdefault(cell.sensors(), cell)
@@ -95,24 +128,29 @@ class SweepResults:
         return table
 
     def grids(self, key: str, metric: str = "hota"):
-        """The radar map of one finding: ``(far clutter values, bearing values, mean, low,
-        high)`` with arrays of shape (bearings, clutters); NaN where not run."""
+        """The radar map of one finding: ``(far clutter values, P_D values, mean, low,
+        high)`` with arrays of shape (P_Ds, clutters); NaN where not run."""
+        home = calibrated_cell()
         return self._grid(key, metric, list(self.config.far_clutter),
-                          list(self.config.bearing_std_deg),
-                          lambda x, y: (x, y, LidarConfig().clutter_per_scan))
+                          list(self.config.prob_detection),
+                          lambda x, y: dataclasses.replace(home, prob_detection=y, far_clutter=x))
+
+    def bearing_line(self, key: str, metric: str = "hota"):
+        home = calibrated_cell()
+        return self._grid(key, metric, list(self.config.bearing_std_deg), [None],
+                          lambda x, _: dataclasses.replace(home, bearing_std_deg=x))
 
     def lidar_line(self, key: str, metric: str = "hota"):
-        radar = RadarConfig()
+        home = calibrated_cell()
         return self._grid(key, metric, list(self.config.lidar_clutter), [None],
-                          lambda x, _: (radar.clutter_per_scan_far,
-                                        math.degrees(radar.bearing_std), x))
+                          lambda x, _: dataclasses.replace(home, lidar_clutter=x))
 
     def _grid(self, key, metric, xs, ys, cell_at):
         by_cell = self.findings()[key]
         values = np.full((3, len(ys), len(xs)), math.nan)
         for i, y in enumerate(ys):
             for j, x in enumerate(xs):
-                result = by_cell.get(Cell(*cell_at(x, y)))
+                result = by_cell.get(cell_at(x, y))
                 interval = getattr(result, metric, None) if result else None
                 if interval is not None:
                     values[:, i, j] = (interval.mean, interval.low, interval.high)
@@ -141,24 +179,25 @@ class SweepResults:
                  "\"≥\" findings, Holm's correction over that setting's findings × metrics); "
                  "the family is the setting's, not the whole map's: read the map as where "
                  "each finding holds, not as one confirmatory test.", ""]
-        lines.append("| Finding | far clutter /scan | bearing σ (°) | lidar clutter /scan | "
-                     "ΔHOTA (pp) [95 % CI] | ΔGOSPA (m) [95 % CI] | verdict |")
-        lines.append("|---|---|---|---|---|---|---|")
+        lines.append("| Finding | truth | radar P_D | far clutter (/rad·m) | bearing σ (°) | "
+                     "lidar clutter /scan | ΔHOTA (pp) [95 % CI] | ΔGOSPA (m) [95 % CI] | "
+                     "verdict |")
+        lines.append("|---|---|---|---|---|---|---|---|---|")
         for finding in findings_.FINDINGS:
             for cell, result in self.findings()[finding.key].items():
                 if result.hota is None:
                     continue
                 lines.append(
-                    f"| {finding.short} | {cell.far_clutter:g} | {cell.bearing_std_deg:g} | "
-                    f"{cell.lidar_clutter:g} | {_cell(result.hota)} | {_cell(result.gospa)} | "
-                    f"{result.verdict} |")
+                    f"| {finding.short} | {_setting(cell)} | {_cell(result.hota)} | "
+                    f"{_cell(result.gospa)} | {result.verdict} |")
         lines += ["", "Scores per setting (mean over seeds; S1+S2 combined where the tracker "
                   "ran there) and tracks per radar scan (mean over scenarios):", "",
-                  "| far clutter /scan | bearing σ (°) | lidar clutter /scan | tracker | scope | "
-                  "HOTA (%) | GOSPA (m) | tracks per scan |", "|---|---|---|---|---|---|---|---|"]
+                  "| truth | radar P_D | far clutter (/rad·m) | bearing σ (°) | lidar clutter /scan "
+                  "| tracker | scope | HOTA (%) | GOSPA (m) | tracks per scan |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
         for row in self.tracker_scores():
-            lines.append(f"| {row['far_clutter']:g} | {row['bearing_std_deg']:g} | "
-                         f"{row['lidar_clutter']:g} | {row['tracker']} | {row['scope']} | "
+            cell = Cell(*(row[f.name] for f in dataclasses.fields(Cell)))
+            lines.append(f"| {_setting(cell)} | {row['tracker']} | {row['scope']} | "
                          f"{row['hota']:.1f} | {row['gospa']:.1f} | {row['tracks_per_scan']:.1f} |")
         return "\n".join(lines)
 
@@ -187,17 +226,24 @@ class SweepResults:
                 continue
             path = folder / f"sweep_{finding.key}_radar.png"
             plot_sensitivity(path, f"{finding.short}: {finding.claim}",
-                             "radar far clutter (returns per scan beyond 1 km)", xs,
-                             "radar bearing σ (°)", ys, mean, low, high,
-                             "ΔHOTA (pp)")
+                             "radar far clutter (per rad·m beyond 1 km)", xs,
+                             "radar P_D (truth)", ys, mean, low, high, "ΔHOTA (pp)")
             written[path.stem] = path
-            xs, _, mean, low, high = self.lidar_line(finding.key)
-            path = folder / f"sweep_{finding.key}_lidar.png"
-            plot_sensitivity(path, f"{finding.short}: {finding.claim}",
-                             "lidar clutter (segments per scan within 80 m)", xs, "", [0.0],
-                             mean, low, high, "ΔHOTA (pp)")
-            written[path.stem] = path
+            for name, axis, line in (
+                    ("bearing", "radar bearing σ (°)", self.bearing_line(finding.key)),
+                    ("lidar", "lidar clutter (points per scan within 80 m)",
+                     self.lidar_line(finding.key))):
+                path = folder / f"sweep_{finding.key}_{name}.png"
+                plot_sensitivity(path, f"{finding.short}: {finding.claim}", axis, line[0], "",
+                                 [0.0], line[2], line[3], line[4], "ΔHOTA (pp)")
+                written[path.stem] = path
         return written
+
+
+def _setting(cell: Cell) -> str:
+    """A cell's truth columns: name, radar P_D, far clutter, bearing σ, lidar clutter."""
+    return (f"{cell.truth} | {cell.prob_detection:g} | {cell.far_clutter:.3g} | "
+            f"{cell.bearing_std_deg:g} | {cell.lidar_clutter:g}")
 
 
 def _cell(interval) -> str:

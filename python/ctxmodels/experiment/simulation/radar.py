@@ -51,9 +51,11 @@ from .geometry import (
 )
 from .scans import Scan, SensorPose, SensorScene, object_detection, object_metadata
 
-__all__ = ["RadarConfig", "generate_radar_scans"]
+__all__ = ["CALIBRATED_CLUTTER_DENSITY", "RadarConfig", "generate_radar_scans"]
 
 
+#: The calibrated clutter densities per rad·m below and beyond 1000 m (docs/calibration.md).
+CALIBRATED_CLUTTER_DENSITY = (1e-3, 3e-3)
 #: The covered arc of the default geometry (rad): the calibrated densities per rad·m become
 #: Poisson means per scan over it.
 _ARC = TWO_PI - math.radians(65.0)
@@ -73,8 +75,8 @@ class RadarConfig:
     range_std: float = 5.0
     clutter_boundary_range: float = 1000.0
     # 1e-3 and 3e-3 per rad·m over 50–1000 m and 1000–1612 m of the covered arc
-    clutter_per_scan_near: float = 1e-3 * _ARC * (1000.0 - 50.0)
-    clutter_per_scan_far: float = 3e-3 * _ARC * (1612.0 - 1000.0)
+    clutter_per_scan_near: float = CALIBRATED_CLUTTER_DENSITY[0] * _ARC * (1000.0 - 50.0)
+    clutter_per_scan_far: float = CALIBRATED_CLUTTER_DENSITY[1] * _ARC * (1612.0 - 1000.0)
     land_returns_per_metre: float = 0.01
 
     @property
