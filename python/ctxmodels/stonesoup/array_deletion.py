@@ -1,19 +1,39 @@
 r"""Deletion on :class:`~ctxmodels.stonesoup.ArrayJPDATracker`'s array path: the deleter's
-verdicts reached from per-track counters kept as states are appended, instead of walking
-every track at every scan (see that module's "Deletion" paragraph for what is supported).
+verdicts reached without walking every track at every scan.
+
+Each supported (member) deleter is evaluated from what the array path already holds:
+
+* miss counters, kept per track as states are appended (read from the track once, or
+  again after a change from outside): the distinct timestamps since the last
+  detection-backed state (``UpdateTimeStepsDeleter``), the P_D of each state since then
+  (:class:`~ctxmodels.stonesoup.ExpectedMissesDeleter`), the time of the latest
+  detection-backed state (Stone Soup's :class:`~stonesoup.deleter.time.UpdateTimeDeleter`);
+* the last state's covariance (:class:`~stonesoup.deleter.error.CovarianceBasedDeleter`);
+* the scan's posterior means and covariances, stacked
+  (:class:`~ctxmodels.stonesoup.DuplicateTrackDeleter`, which compares tracks in pairs).
+
+A :class:`~stonesoup.deleter.multi.CompositeDeleter` (Stone Soup's, or ctxmodels'
+:class:`~ctxmodels.stonesoup.CompositeDeleter`, the one that takes a pairwise member) of
+such members is evaluated with its own rule, member by member in its order.
 """
 from __future__ import annotations
+
+import datetime
 
 import numpy as np
 from stonesoup.deleter.error import CovarianceBasedDeleter
 from stonesoup.deleter.multi import CompositeDeleter
+from stonesoup.deleter.time import UpdateTimeDeleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 from stonesoup.types.array import CovarianceMatrix
 
-from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
+from .composite_deleter import CompositeDeleter as _PairwiseCompositeDeleter
+from .deleter import DuplicateTrackDeleter, ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast import plain_track_lists
 from .hypothesiser import is_detection_backed
 from .ordering import context_kwargs
+
+_COMPOSITES = (CompositeDeleter, _PairwiseCompositeDeleter)
 
 
 def _track_length(track) -> int:
@@ -21,12 +41,40 @@ def _track_length(track) -> int:
     return len(track) if lists is None else len(lists[0])
 
 
+def _last_timestamp(track):
+    """``track.timestamp`` (its last state's), read without Stone Soup's attribute proxy."""
+    lists = plain_track_lists(track)
+    return track.timestamp if lists is None else lists[0][-1].timestamp
+
+
+def latest_backed_time(states):
+    """The latest timestamp of a detection-backed state of ``states`` (all of them are read:
+    a track's states need not be in time order), or None if there is none."""
+    latest = None
+    for state in states:
+        if is_detection_backed(state):
+            stamp = state.timestamp
+            if latest is None or stamp > latest:
+                latest = stamp
+    return latest
+
+
+def update_time_verdict(latest_backed, last, time_since_update) -> bool:
+    """``UpdateTimeDeleter.check_for_deletion`` from a track's latest detection-backed time
+    and last timestamp. The deleter looks for a detection-backed state in
+    ``track[last - time_since_update:]``, and Stone Soup's time slice keeps the states with
+    ``timestamp >= start`` (it skips ``timestamp < start``): the window includes its start,
+    so a track last updated exactly ``time_since_update`` ago is kept."""
+    return latest_backed is None or latest_backed < last - time_since_update
+
+
 class _MissCounter:
     """Per track and counting deleter (``values``, one entry per member of the deletion plan
     with a counter), what it reads from the states since the track's last detection-backed
     one: the distinct timestamps (``UpdateTimeStepsDeleter``) or the P_D of each state,
     newest last (``ExpectedMissesDeleter``; zeros are dropped, as adding 0.0 never changes a
-    sum). ``length`` is the track length the entry describes: a track changed from outside
+    sum); or the latest detection-backed timestamp, None before the first
+    (``UpdateTimeDeleter``). ``length`` is the track length the entry describes: a track changed from outside
     is re-read once."""
 
     __slots__ = ("length", "values")
@@ -34,7 +82,6 @@ class _MissCounter:
     def __init__(self, length, values):
         self.length = length
         self.values = values
-
 
 
 class ArrayDeletion:
@@ -50,19 +97,22 @@ class ArrayDeletion:
         """How the array path reaches the deleter's verdicts, or None to call the deleter.
         A supported deleter, or a ``CompositeDeleter`` of supported deleters, is a
         :class:`_DeletionPlan`; the composite's own ``delete_last_pred`` must be off (its
-        members' is never read: the composite asks only their ``check_for_deletion``)."""
+        members' is never read: the composite asks only their ``check_for_deletion``, or a
+        pairwise member's ``tracks_to_delete``). Stone Soup's composite cannot hold a
+        pairwise member (it would ask it about one track): it is called, and raises."""
         deleter = self.deleter
         if getattr(deleter, "delete_last_pred", False):
             return None
         plan = self._plan
         if plan is not None and plan.deleter is deleter and plan.still_describes(deleter):
             return plan
-        if type(deleter) is CompositeDeleter:
+        if type(deleter) in _COMPOSITES:
             members = deleter.deleters
             if not isinstance(members, (list, tuple)):
                 return None  # (a set's order, a one-shot iterator: the deleter decides)
             kinds = [_member_kind(member) for member in members]
-            if any(kind is None for kind in kinds):
+            if any(kind is None for kind in kinds) or (
+                    "pairwise" in kinds and type(deleter) is CompositeDeleter):
                 return None
             plan = _DeletionPlan(deleter, bool(deleter.intersect), list(zip(kinds, members)))
         else:
@@ -76,13 +126,14 @@ class ArrayDeletion:
 
     @staticmethod
     def _counting(plan, hypothesiser):
-        """Per counter slot of ``plan``, what ``_count`` appends for a miss: "steps" (the
-        timestamp), or the P_D the expected-misses member reads for the state (the scan's
-        P_D when its hypothesiser is the scan's, else its default: None)."""
+        """Per counter slot of ``plan``, what ``_count`` keeps: "steps" (the timestamp of
+        a miss), "time" (the timestamp of a detection-backed state), or the P_D the
+        expected-misses member reads for a miss (the scan's P_D when its hypothesiser is the
+        scan's, else its default: None)."""
         counting = []
         for kind, member in plan.counted:
-            if kind == "steps":
-                counting.append(("steps", None))
+            if kind in ("steps", "time"):
+                counting.append((kind, None))
             elif member.hypothesiser is not None and member.hypothesiser is hypothesiser:
                 counting.append(("expected", None))
             else:
@@ -106,6 +157,9 @@ class ArrayDeletion:
                     values[k] = {state.timestamp}
                 else:
                     values[k].add(state.timestamp)
+            elif kind == "time":
+                if backed and (values[k] is None or state.timestamp > values[k]):
+                    values[k] = state.timestamp
             elif backed:
                 values[k] = []
             else:
@@ -126,6 +180,8 @@ class ArrayDeletion:
                     if is_detection_backed(state):
                         break
                 values.append(stamps)
+            elif kind == "time":
+                values.append(latest_backed_time(states))
             else:
                 misses = []
                 for index in range(len(states) - 1, 0, -1):
@@ -140,7 +196,10 @@ class ArrayDeletion:
         self._counters[track] = counter
         return counter
 
-    def _delete(self, tracks, detections):
+    def _delete(self, tracks, detections, latest=None):
+        """The tracks of ``tracks`` to delete. ``latest``: (the scan's tracks in order,
+        their posterior means (N, D), covariances (N, D, D), the scan time), which a
+        pairwise member reads when they are all of ``tracks``."""
         plan = self._deletion_plan()
         if plan is None:
             deleter = self.deleter
@@ -153,6 +212,14 @@ class ArrayDeletion:
                 checks.append((kind, k, member.time_steps_since_update))
             elif kind == "expected":
                 checks.append((kind, k, float(member.expected_misses)))
+            elif kind == "time":
+                window = member.time_since_update
+                if type(window) is datetime.timedelta:
+                    checks.append((kind, k, window))
+                else:  # (times that are not datetimes: the deleter's own arithmetic)
+                    checks.append(("call", k, member.check_for_deletion))
+            elif kind == "pairwise":
+                checks.append((kind, k, _pairwise_verdicts(member, tracks, latest)))
             else:
                 checks.append((kind, k, _covariance_check(member)))
         deleted = set()
@@ -169,6 +236,11 @@ class ArrayDeletion:
             for kind, k, parameter in checks:
                 if kind == "steps":
                     says = len(counter.values[k]) > parameter
+                elif kind == "time":
+                    says = update_time_verdict(counter.values[k], _last_timestamp(track),
+                                               parameter)
+                elif kind == "pairwise":
+                    says = track in parameter
                 elif kind == "expected":
                     total = 0.0
                     says = False
@@ -178,7 +250,7 @@ class ArrayDeletion:
                             says = True
                             break
                 else:
-                    says = parameter(track)
+                    says = bool(parameter(track))
                 if says != intersect:
                     verdict = says
                     break
@@ -190,16 +262,31 @@ class ArrayDeletion:
 
 
 def _member_kind(deleter):
-    """What the array path evaluates for a (member) deleter: miss counters ("steps",
-    "expected"), the last covariance ("covariance"), or None (not supported)."""
+    """What the array path evaluates for a (member) deleter: counters ("steps", "expected",
+    "time"), the last covariance ("covariance"), the scan's posteriors ("pairwise"), or None
+    (not supported)."""
     kind = type(deleter)
     if kind in (UpdateTimeStepsDeleter, _StockUpdateTimeStepsDeleter):
         return "steps"
     if kind is ExpectedMissesDeleter:
         return "expected"
+    if kind is UpdateTimeDeleter:
+        return "time"
     if kind is CovarianceBasedDeleter:
         return "covariance"
+    if kind is DuplicateTrackDeleter:
+        return "pairwise"
     return None
+
+
+def _pairwise_verdicts(member, tracks, latest) -> set:
+    """The tracks a pairwise member deletes: from the scan's stacked posteriors when they
+    are those of all ``tracks`` (the states are views of these arrays: the same numbers),
+    else asked of the tracks."""
+    if latest is not None and len(latest[0]) == len(tracks):
+        scan_tracks, means, covars, time = latest
+        return member.duplicates(scan_tracks, means, covars, [time] * len(scan_tracks))
+    return member.tracks_to_delete(tracks)
 
 
 class _DeletionPlan:
@@ -213,14 +300,15 @@ class _DeletionPlan:
     def __init__(self, deleter, intersect, members):
         self.deleter = deleter
         self.intersect = intersect
-        self.counted = [(kind, member) for kind, member in members if kind != "covariance"]
+        self.counted = [(kind, member) for kind, member in members
+                        if kind in ("steps", "expected", "time")]
         slots = {id(member): k for k, (_, member) in enumerate(self.counted)}
         self.members = [(kind, member, slots.get(id(member))) for kind, member in members]
         self._seen = self._signature(deleter)
 
     @staticmethod
     def _signature(deleter):
-        if type(deleter) is CompositeDeleter:
+        if type(deleter) in _COMPOSITES:
             return (bool(deleter.intersect), tuple(id(m) for m in deleter.deleters))
         return None
 

@@ -60,16 +60,21 @@ States: an update when some detection's marginal exceeds the missed detection's 
 reads it), else a :class:`~stonesoup.types.prediction.GaussianStatePrediction`; track
 metadata follow the stock rule (metadata of the hypotheses' detections, most likely last).
 
-Deletion: with a ctxmodels or stock :class:`~stonesoup.deleter.time.UpdateTimeStepsDeleter`
-or a ctxmodels :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` (``delete_last_pred``
-off), each track's misses since its last detection-backed state are counted as states are
-appended instead of walking the track; the verdicts are the deleter's own (the expected
-misses are summed newest first, as the deleter sums them). A
+Deletion (:mod:`~ctxmodels.stonesoup.array_deletion`): with a ctxmodels or stock
+:class:`~stonesoup.deleter.time.UpdateTimeStepsDeleter`, a ctxmodels
+:class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` or a stock
+:class:`~stonesoup.deleter.time.UpdateTimeDeleter` (``delete_last_pred`` off), each track's
+misses since its last detection-backed state (or that state's time) are counted as states
+are appended instead of walking the track; the verdicts are the deleter's own (the expected
+misses are summed newest first, as the deleter sums them; the time window includes its
+start, as Stone Soup's time slice does). A
 :class:`~stonesoup.deleter.error.CovarianceBasedDeleter` reads only the last state's
-covariance, which is checked directly. A :class:`~stonesoup.deleter.multi.CompositeDeleter`
-(``delete_last_pred`` off) whose members (a list or tuple) are any of these is evaluated
-member by member with its own rule: delete when all say so (``intersect``) or when any does.
-Any other deleter is called.
+covariance, which is checked directly; a :class:`~ctxmodels.stonesoup.DuplicateTrackDeleter`
+reads the scan's stacked posterior means and covariances. A
+:class:`~stonesoup.deleter.multi.CompositeDeleter` or ctxmodels'
+:class:`~ctxmodels.stonesoup.CompositeDeleter` (``delete_last_pred`` off) whose members (a
+list or tuple) are any of these is evaluated member by member with its own rule: delete when
+all say so (``intersect``) or when any does. Any other deleter is called.
 
 Determinism: detections in :func:`~ctxmodels.stonesoup.in_stable_order`, tracks in creation
 order; the core runs on one thread in index order.
@@ -398,7 +403,7 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
             covars.append(covar)
             stamps.append(stamp)
 
-        taken_mask = None
+        taken_mask = latest = None
         if tracks:
             scan = self._run_core(time, detections, tracks, priors, (vectors, covars, stamps),
                                   hypothesiser, context, core_model, bearing_row)
@@ -408,9 +413,10 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
             self._append_states(time, tracks, priors, scan_result, out, prob_detect,
                                 hypothesiser)
             taken_mask = out["taken"]
+            latest = (tracks, out["means"], out["covars"], time)
         # deletion, then the initiator on the detections no track took (as the stock loop),
         # each handed the scan's context as the component path hands it
-        self._tracks -= self._delete(self._tracks, detections)
+        self._tracks -= self._delete(self._tracks, detections, latest)
         free = list(detections) if taken_mask is None else \
             [d for d, taken in zip(detections, taken_mask.tolist()) if not taken]
         if isinstance(self.initiator, ArrayMultiMeasurementInitiator):
