@@ -272,3 +272,13 @@ def test_stone_soups_composite_with_a_pairwise_member_raises_on_both_paths():
             for _ in tracker:
                 pass
     assert ours._plan is None  # the deleter was called, as on the component path
+
+
+def test_properties_set_after_construction_are_read_and_checked():
+    a, b = track(0.0, 0.0, vx=0.0), track(0.0, 0.0, vx=100.0)
+    deleter = DuplicateTrackDeleter()
+    deleter.mapping = [0, 1]
+    assert deleter.delete_tracks([a, b]) == set()
+    deleter.threshold = -1.0
+    with pytest.raises(ValueError, match="^threshold: "):
+        deleter.delete_tracks([a, b])

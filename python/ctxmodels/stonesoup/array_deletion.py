@@ -74,8 +74,8 @@ class _MissCounter:
     one: the distinct timestamps (``UpdateTimeStepsDeleter``) or the P_D of each state,
     newest last (``ExpectedMissesDeleter``; zeros are dropped, as adding 0.0 never changes a
     sum); or the latest detection-backed timestamp, None before the first
-    (``UpdateTimeDeleter``). ``length`` is the track length the entry describes: a track changed from outside
-    is re-read once."""
+    (``UpdateTimeDeleter``). ``length`` is the track length the entry describes: a track
+    changed from outside is re-read once."""
 
     __slots__ = ("length", "values")
 

@@ -194,6 +194,11 @@ class DuplicateTrackDeleter(PairwiseDeleter):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
+        self._parameters()
+
+    def _parameters(self):
+        """(γ as a float, the mapping as an index array), checked (read at every call: the
+        Properties may be set after construction)."""
         threshold = self.threshold
         if isinstance(threshold, bool) or not isinstance(threshold, Real):
             raise TypeError(f"threshold: expected a number, got {threshold!r}")
@@ -212,7 +217,7 @@ class DuplicateTrackDeleter(PairwiseDeleter):
             raise TypeError(f"mapping: expected non-negative integer indices, got {mapping!r}")
         if len(set(indices)) != len(indices):
             raise ValueError(f"mapping: indices must be distinct, got {mapping!r}")
-        self._index = np.array([int(i) for i in indices])
+        return float(threshold), np.array([int(i) for i in indices])
 
     def tracks_to_delete(self, tracks, **kwargs) -> set:
         """The tracks of ``tracks`` (any iterable) to delete; nothing is changed."""
@@ -231,13 +236,12 @@ class DuplicateTrackDeleter(PairwiseDeleter):
         """The tracks to delete, given each track's latest mean (rows of ``means``,
         (N, D)), covariance (``covars``, (N, D, D)) and timestamp, aligned with the list
         ``tracks``."""
-        index = self._index
+        threshold, index = self._parameters()
         means = means[:, index]
         covars = covars[:, index][:, :, index]
         groups: dict = {}
         for k, stamp in enumerate(timestamps):
             groups.setdefault(stamp, []).append(k)
-        threshold = float(self.threshold)
         candidates = []  # (d², k, l)
         for members in groups.values():
             if len(members) < 2:
