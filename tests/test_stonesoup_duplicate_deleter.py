@@ -282,3 +282,18 @@ def test_properties_set_after_construction_are_read_and_checked():
     deleter.threshold = -1.0
     with pytest.raises(ValueError, match="^threshold: "):
         deleter.delete_tracks([a, b])
+
+
+def test_tuned_jpda_on_the_experiment_scenario():
+    """The experiment's JPDA on 10 s of its mixed-range scenario (radar 0.8 Hz, lidar
+    10 Hz; the closed-form bearing–range Jacobian, for agreement to RTOL) with the windows
+    in time and duplicates deleted: the array path's tracks are the component path's."""
+    from test_stonesoup_array_jpda import _scenario_pair
+    ours, reference = _scenario_pair("jpda", 10.0, closed_form=True)
+    for tracker in (ours, reference):
+        tracker.initiator.deleter = UpdateTimeDeleter(datetime.timedelta(seconds=2.5))
+        tracker.deleter = _tuned(2.5)
+    worst, scans = run_side_by_side(ours, reference)
+    assert worst <= RTOL
+    assert ours.array_scans == scans > 100 and ours.component_scans == 0
+    assert ours.initiator.component_calls == 0 and ours._plan is not None
