@@ -274,7 +274,7 @@ def test_covariance_verdict_is_the_deleters_at_the_boundary():
     mapping the deleter would index otherwise (a tuple, NumPy integers) asks the deleter."""
     from stonesoup.types.state import GaussianState as State
     from stonesoup.types.track import Track
-    from ctxmodels.stonesoup.array_jpda import _covariance_check
+    from ctxmodels.stonesoup.array_deletion import _covariance_check
     threshold = 2.0 * 200.0 ** 2
     for pxx in (40000.0, np.nextafter(40000.0, 0.0), np.nextafter(40000.0, np.inf), 7e4, 1e3):
         track = Track([State(np.zeros((4, 1)), np.diag([pxx, 1.0, 40000.0, 1.0]))])

@@ -9,7 +9,10 @@
   :math:`\\lambda` per detection taken from the scan's context (stock behaviour without one).
 * Track management: :class:`ExpectedMissesDeleter` deletes JPDA tracks on the expected, not
   the counted, number of missed detections; :class:`UpdateTimeStepsDeleter` is the stock
-  miss-counting deleter reading only a track's trailing states.
+  miss-counting deleter reading only a track's trailing states;
+  :class:`DuplicateTrackDeleter` deletes one of two tracks on one target (the
+  track-to-track χ² test), in a :class:`CompositeDeleter` (Stone Soup's, which also takes
+  members that compare tracks with each other) beside per-track deleters.
 * GM-PHD / LCC: :class:`PHDUpdater`, :class:`LCCUpdater` (P_D per component, λ per
   detection, one array call each per scan) and :class:`PointProcessMultiTargetTracker`, which
   passes each scan's context to the updater and adds measurement-driven birth
@@ -43,7 +46,8 @@ from .array_tracker import ArrayPointProcessTracker
 from .array_initiator import ArrayMultiMeasurementInitiator
 from .array_jpda import ArrayJPDATracker
 from .birth import MeasurementDrivenBirth
-from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
+from .composite_deleter import CompositeDeleter
+from .deleter import DuplicateTrackDeleter, ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast_association import FastGNNWith2DAssignment
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .hypothesiser import PDAHypothesiser
@@ -69,7 +73,9 @@ __all__ = [
     "CircularRegion",
     "ClutterMapLearner",
     "ComponentPathWarning",
+    "CompositeDeleter",
     "DetectionLearner",
+    "DuplicateTrackDeleter",
     "LCCUpdater",
     "MeasurementDrivenBirth",
     "PHDUpdater",

@@ -10,8 +10,8 @@ arrays; a scan predicts them in one product, screens all track × detection pair
 (as :class:`~ctxmodels.stonesoup.FastGNNWith2DAssignment` does) and takes Stone Soup's own
 distance, assignment and Kalman update for the few pairs that can pass the gate. A holding
 track's coasting predictions are kept as array rows and turned into Stone Soup states only
-when the track is updated or released; the deleter's verdict comes from a count of the
-distinct times since the track's last detection.
+when the track is updated or released; the deleter's verdict comes from a count kept per
+track (the distinct times since its last detection, or that detection's time).
 
 So a holding track (in :attr:`holding_tracks`, the live set, as stock) holds its states up
 to its last update; the predictions since are added when it is updated or released, or
@@ -23,15 +23,16 @@ or :class:`~ctxmodels.stonesoup.FastGNNWith2DAssignment` over a plain
 :class:`~stonesoup.hypothesiser.distance.DistanceHypothesiser` (Mahalanobis or squared
 Mahalanobis measure without mapping, no ``predict_with_measurements``), a Kalman / extended
 Kalman predictor with a linear Gaussian transition model, Kalman / extended Kalman updaters,
-a stock or ctxmodels ``UpdateTimeStepsDeleter`` (``delete_last_pred`` off), Gaussian
-float64 states, and detections stamped with the scan time.
+a stock or ctxmodels ``UpdateTimeStepsDeleter`` or Stone Soup's ``UpdateTimeDeleter`` with a
+``timedelta`` window (``delete_last_pred`` off; the verdicts from per-row counts, see
+:mod:`~ctxmodels.stonesoup.initiator_deletion`), Gaussian float64 states, and detections
+stamped with the scan time.
 """
 from __future__ import annotations
 
 import numpy as np
 from stonesoup.dataassociator import neighbour as _stock_neighbour
 from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
-from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 from stonesoup.hypothesiser.distance import DistanceHypothesiser
 from stonesoup.measures import Mahalanobis, SquaredMahalanobis
 from stonesoup.models.base import LinearModel, ReversibleModel
@@ -39,16 +40,15 @@ from stonesoup.types.angle import Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.hypothesis import SingleDistanceHypothesis
 from stonesoup.types.state import GaussianState
-from stonesoup.types.update import Update
 
 from ..model_key import measurement_model_key, scan_model_groups
-from .deleter import UpdateTimeStepsDeleter
 from .fast import KALMAN_UPDATERS, ObjectFactory, measurement_batch, supports_predictor
 from .fast_association import (
     FastGNNWith2DAssignment,
     _copied_properties,
     _measurement_prediction,
 )
+from . import initiator_deletion
 from .initiator_births import UPDATE_STATE, Births
 from .initiator_blocks import PRIOR_PREDICTION, Block, Holding, materialise
 from .initiator_arrays import (ControlTerms, angle_wrap, kalman_updates, pair_distances,
@@ -73,7 +73,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._next_serial = 0
         self._means = None  # (H, D, 1): each holding track's last state, aligned with _records
         self._covars = None  # (H, D, D)
-        self._since = np.empty(0, dtype=np.int64)  # distinct times since the last detection
+        self._deletion = initiator_deletion.HoldingCounts()  # what the deleter reads, per row
         self._counted = np.empty(0, dtype=np.int64)  # points towards release
         self._last_times: list = []
         self._blocks: dict[int, Block] = {}
@@ -99,9 +99,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             return False
         if type(hypothesiser.updater) not in KALMAN_UPDATERS or type(self.updater) not in KALMAN_UPDATERS:
             return False
-        deleter = self.deleter
-        return (type(deleter) in (UpdateTimeStepsDeleter, _StockUpdateTimeStepsDeleter)
-                and not deleter.delete_last_pred)
+        return initiator_deletion.supported(self.deleter)
 
     # --- pending states ------------------------------------------------------------------------
     def _materialise(self, record: Holding) -> None:
@@ -116,7 +114,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._records = []
         self._serials = []
         self._means = self._covars = None
-        self._since = np.empty(0, dtype=np.int64)
+        self._deletion = initiator_deletion.HoldingCounts()
         self._counted = np.empty(0, dtype=np.int64)
         self._last_times = []
         self._blocks = {}
@@ -128,8 +126,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             del self._blocks[b]
 
     def _read_track(self, track, ndim):
-        """(last state, points, distinct times since the last detection) of a track joining
-        the holding set, or None if its last state cannot be held as arrays."""
+        """(last state, points, deletion counts (:func:`initiator_deletion.read`)) of a
+        track joining the holding set, or None if its last state cannot be held as arrays."""
         states = track.states
         state = states[-1] if len(states) else None
         vector, covar = getattr(state, "state_vector", None), getattr(state, "covar", None)
@@ -139,15 +137,11 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 and covar.dtype == np.float64 and covar.shape == (ndim, ndim)
                 and state.timestamp is not None):
             return None
-        if len(states) == 1:  # a new track: one state, one time
-            return state, (1 if self._counts(state) else 0), 1
-        points = sum(1 for s in states if self._counts(s))
-        since = set()
-        for s in reversed(states):
-            since.add(s.timestamp)
-            if isinstance(s, Update) and s.hypothesis:
-                break
-        return state, points, len(since)
+        if len(states) == 1:  # a new track: one state
+            points = 1 if self._counts(state) else 0
+        else:
+            points = sum(1 for s in states if self._counts(s))
+        return state, points, initiator_deletion.read(states)
 
     def _sync(self, ndim) -> bool:
         """Aligns the records with :attr:`holding_tracks` (tracks removed or added from
@@ -165,7 +159,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             self._serials = [self._serials[k] for k in keep]
             if self._means is not None:
                 self._means, self._covars = self._means[keep], self._covars[keep]
-            self._counted, self._since = self._counted[keep], self._since[keep]
+            self._counted = self._counted[keep]
+            self._deletion.take(keep)
             self._last_times = [self._last_times[k] for k in keep]
         return self._add(added, ndim)
 
@@ -189,7 +184,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             [np.empty((0, ndim, ndim)) if empty else self._covars]
             + [state.covar[np.newaxis] for state, _, _ in read])
         self._counted = np.concatenate([self._counted, [p for _, p, _ in read]]).astype(np.int64)
-        self._since = np.concatenate([self._since, [n for _, _, n in read]]).astype(np.int64)
+        self._deletion.add([n for _, _, n in read])
         self._last_times = self._last_times + [state.timestamp for state, _, _ in read]
         return True
 
@@ -380,10 +375,10 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                     state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
                     hypothesis=hypothesis, timestamp=hypothesis.measurement.timestamp)
                 means[k], covars[k] = mean, covar
-        # points: updates (and predictions unless updates_only); the deleter's count of
-        # distinct times: reset by a detection, one more for each new time
+        # points: updates (and predictions unless updates_only); the deleter's counts:
+        # distinct times (reset by a detection, one more for each new time), detection time
         self._counted += updated if self.updates_only else appended
-        self._since = np.where(updated, 1, self._since + (appended & new_time))
+        self._deletion.advance(updated, appended & new_time, timestamp)
         self._last_times = [timestamp if a else t for a, t in zip(appended.tolist(),
                                                                   self._last_times)]
         keep = np.ones(len(records), dtype=bool)
@@ -393,8 +388,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             sure_tracks.add(record.track)
             self.holding_tracks.discard(record.track)
             keep[k] = False
-        limit = self.deleter.time_steps_since_update
-        for k in np.flatnonzero(keep & (self._since > limit)).tolist():
+        for k in self._deletion.expired(self.deleter, np.flatnonzero(keep).tolist(),
+                                        self._last_times):
             self.holding_tracks.discard(records[k].track)
             keep[k] = False
         if not keep.all():
@@ -403,7 +398,8 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             self._serials = [r for r, k in zip(self._serials, kept) if k]
             self._last_times = [t for t, k in zip(self._last_times, kept) if k]
             means, covars = means[keep], covars[keep]
-            self._counted, self._since = self._counted[keep], self._since[keep]
+            self._counted = self._counted[keep]
+            self._deletion.take(keep)
         self._means, self._covars = means, covars
         if index % 32 == 0:
             self._prune_blocks()

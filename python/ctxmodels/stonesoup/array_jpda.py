@@ -60,16 +60,21 @@ States: an update when some detection's marginal exceeds the missed detection's 
 reads it), else a :class:`~stonesoup.types.prediction.GaussianStatePrediction`; track
 metadata follow the stock rule (metadata of the hypotheses' detections, most likely last).
 
-Deletion: with a ctxmodels or stock :class:`~stonesoup.deleter.time.UpdateTimeStepsDeleter`
-or a ctxmodels :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` (``delete_last_pred``
-off), each track's misses since its last detection-backed state are counted as states are
-appended instead of walking the track; the verdicts are the deleter's own (the expected
-misses are summed newest first, as the deleter sums them). A
+Deletion (:mod:`~ctxmodels.stonesoup.array_deletion`): with a ctxmodels or stock
+:class:`~stonesoup.deleter.time.UpdateTimeStepsDeleter`, a ctxmodels
+:class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` or a stock
+:class:`~stonesoup.deleter.time.UpdateTimeDeleter` (``delete_last_pred`` off), each track's
+misses since its last detection-backed state (or that state's time) are counted as states
+are appended instead of walking the track; the verdicts are the deleter's own (the expected
+misses are summed newest first, as the deleter sums them; the time window includes its
+start, as Stone Soup's time slice does). A
 :class:`~stonesoup.deleter.error.CovarianceBasedDeleter` reads only the last state's
-covariance, which is checked directly. A :class:`~stonesoup.deleter.multi.CompositeDeleter`
-(``delete_last_pred`` off) whose members (a list or tuple) are any of these is evaluated
-member by member with its own rule: delete when all say so (``intersect``) or when any does.
-Any other deleter is called.
+covariance, which is checked directly; a :class:`~ctxmodels.stonesoup.DuplicateTrackDeleter`
+reads the scan's stacked posterior means and covariances. A
+:class:`~stonesoup.deleter.multi.CompositeDeleter` or ctxmodels'
+:class:`~ctxmodels.stonesoup.CompositeDeleter` (``delete_last_pred`` off) whose members (a
+list or tuple) are any of these is evaluated member by member with its own rule: delete when
+all say so (``intersect``) or when any does. Any other deleter is called.
 
 Determinism: detections in :func:`~ctxmodels.stonesoup.in_stable_order`, tracks in creation
 order; the core runs on one thread in index order.
@@ -79,9 +84,6 @@ from __future__ import annotations
 
 import numpy as np
 from stonesoup.dataassociator.probability import JPDA, JPDAwithEHM, JPDAwithEHM2
-from stonesoup.deleter.error import CovarianceBasedDeleter
-from stonesoup.deleter.multi import CompositeDeleter
-from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 from stonesoup.hypothesiser.probability import PDAHypothesiser as _StockPDAHypothesiser
 from stonesoup.models.measurement.linear import LinearGaussian
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
@@ -92,17 +94,16 @@ from stonesoup.types.multihypothesis import MultipleHypothesis
 from stonesoup.types.numeric import Probability
 from stonesoup.types.prediction import GaussianMeasurementPrediction, GaussianStatePrediction
 from stonesoup.types.state import GaussianState
-from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from .. import _core
 from ..context import DetectorContext
 from ..model_key import measurement_model_key, scan_model_groups
+from .array_deletion import ArrayDeletion
 from .array_initiator import ArrayMultiMeasurementInitiator
 from .initiator_arrays import ControlTerms
 from .initiator_blocks import PRIOR_PREDICTION as _PRIOR_PREDICTION
-from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .fast import KALMAN_UPDATERS, ObjectFactory, plain_track_lists, supports_predictor
 from .fast_association import _copied_properties
 from .hypothesiser import PDAHypothesiser, is_detection_backed, scan_context
@@ -267,33 +268,12 @@ def _gaussian_prior_type(kind: type) -> bool:
     return known
 
 
-def _track_length(track) -> int:
-    lists = plain_track_lists(track)
-    return len(track) if lists is None else len(lists[0])
-
-
 def _is_backed(state) -> bool:
     """:func:`is_detection_backed`, answered at once for the array path's predictions."""
     return type(state) is not GaussianStatePrediction and is_detection_backed(state)
 
 
-# --- deletion counters ----------------------------------------------------------------------
-class _MissCounter:
-    """Per track and counting deleter (``values``, one entry per member of the deletion plan
-    with a counter), what it reads from the states since the track's last detection-backed
-    one: the distinct timestamps (``UpdateTimeStepsDeleter``) or the P_D of each state,
-    newest last (``ExpectedMissesDeleter``; zeros are dropped, as adding 0.0 never changes a
-    sum). ``length`` is the track length the entry describes: a track changed from outside
-    is re-read once."""
-
-    __slots__ = ("length", "values")
-
-    def __init__(self, length, values):
-        self.length = length
-        self.values = values
-
-
-class ArrayJPDATracker(PathCounts, MultiTargetMixtureTracker):
+class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
     """:class:`~ctxmodels.stonesoup.MultiTargetMixtureTracker` computing each supported scan
     with one call into the Rust core (see the module docstring); the same Properties,
     tracks and states. :attr:`array_scans` and :attr:`component_scans` count the scans each
@@ -302,8 +282,7 @@ class ArrayJPDATracker(PathCounts, MultiTargetMixtureTracker):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._counters: dict[Track, _MissCounter] = {}
-        self._plan = None
+        self._init_deletion()
         self._models: dict = {}
         self._control_terms = ControlTerms()
         self._count_paths()
@@ -424,7 +403,7 @@ class ArrayJPDATracker(PathCounts, MultiTargetMixtureTracker):
             covars.append(covar)
             stamps.append(stamp)
 
-        taken_mask = None
+        taken_mask = latest = None
         if tracks:
             scan = self._run_core(time, detections, tracks, priors, (vectors, covars, stamps),
                                   hypothesiser, context, core_model, bearing_row)
@@ -434,9 +413,10 @@ class ArrayJPDATracker(PathCounts, MultiTargetMixtureTracker):
             self._append_states(time, tracks, priors, scan_result, out, prob_detect,
                                 hypothesiser)
             taken_mask = out["taken"]
+            latest = (tracks, out["means"], out["covars"], time)
         # deletion, then the initiator on the detections no track took (as the stock loop),
         # each handed the scan's context as the component path hands it
-        self._tracks -= self._delete(self._tracks, detections)
+        self._tracks -= self._delete(self._tracks, detections, latest)
         free = list(detections) if taken_mask is None else \
             [d for d, taken in zip(detections, taken_mask.tolist()) if not taken]
         if isinstance(self.initiator, ArrayMultiMeasurementInitiator):
@@ -603,217 +583,6 @@ class ArrayJPDATracker(PathCounts, MultiTargetMixtureTracker):
         metadatas.append(metadata)
         states.append(state)
         return len(states) - 1
-
-    # --- deletion -------------------------------------------------------------------------
-    def _deletion_plan(self):
-        """How the array path reaches the deleter's verdicts, or None to call the deleter.
-        A supported deleter, or a ``CompositeDeleter`` of supported deleters, is a
-        :class:`_DeletionPlan`; the composite's own ``delete_last_pred`` must be off (its
-        members' is never read: the composite asks only their ``check_for_deletion``)."""
-        deleter = self.deleter
-        if getattr(deleter, "delete_last_pred", False):
-            return None
-        plan = self._plan
-        if plan is not None and plan.deleter is deleter and plan.still_describes(deleter):
-            return plan
-        if type(deleter) is CompositeDeleter:
-            members = deleter.deleters
-            if not isinstance(members, (list, tuple)):
-                return None  # (a set's order, a one-shot iterator: the deleter decides)
-            kinds = [_member_kind(member) for member in members]
-            if any(kind is None for kind in kinds):
-                return None
-            plan = _DeletionPlan(deleter, bool(deleter.intersect), list(zip(kinds, members)))
-        else:
-            kind = _member_kind(deleter)
-            if kind is None:
-                return None
-            plan = _DeletionPlan(deleter, True, [(kind, deleter)])
-        self._plan = plan
-        self._counters.clear()  # counters of another plan: re-read
-        return plan
-
-    @staticmethod
-    def _counting(plan, hypothesiser):
-        """Per counter slot of ``plan``, what ``_count`` appends for a miss: "steps" (the
-        timestamp), or the P_D the expected-misses member reads for the state (the scan's
-        P_D when its hypothesiser is the scan's, else its default: None)."""
-        counting = []
-        for kind, member in plan.counted:
-            if kind == "steps":
-                counting.append(("steps", None))
-            elif member.hypothesiser is not None and member.hypothesiser is hypothesiser:
-                counting.append(("expected", None))
-            else:
-                counting.append(("expected", float(member.default_prob_detect)))
-        return counting
-
-    def _count(self, track, length, backed, state, prob_detect, counting):
-        """Counts ``state``, just appended to ``track`` (of ``length`` states before; is it
-        ``backed`` by a detection), into the track's miss counter."""
-        if not counting:
-            return
-        counter = self._counters.get(track)
-        if counter is None or counter.length != length:
-            self._counters.pop(track, None)
-            return  # re-read from the track when next needed
-        counter.length += 1
-        values = counter.values
-        for k, (kind, default) in enumerate(counting):
-            if kind == "steps":
-                if backed:
-                    values[k] = {state.timestamp}
-                else:
-                    values[k].add(state.timestamp)
-            elif backed:
-                values[k] = []
-            else:
-                pd = prob_detect if default is None else default
-                if pd != 0.0:
-                    values[k].append(pd)
-
-    def _read_counter(self, track, plan):
-        """The counter of ``track`` read from its states (once per track, or after a change
-        from outside)."""
-        states = track.states
-        values = []
-        for kind, member in plan.counted:
-            if kind == "steps":
-                stamps = set()
-                for state in reversed(states):
-                    stamps.add(state.timestamp)
-                    if is_detection_backed(state):
-                        break
-                values.append(stamps)
-            else:
-                misses = []
-                for index in range(len(states) - 1, 0, -1):
-                    if is_detection_backed(states[index]):
-                        break
-                    pd = member._prob_detect(track, index)
-                    if pd != 0.0:
-                        misses.append(pd)
-                misses.reverse()
-                values.append(misses)
-        counter = _MissCounter(len(track), values)
-        self._counters[track] = counter
-        return counter
-
-    def _delete(self, tracks, detections):
-        plan = self._deletion_plan()
-        if plan is None:
-            deleter = self.deleter
-            return deleter.delete_tracks(tracks,
-                                         **context_kwargs(detections, deleter.delete_tracks))
-        # each member's check, its parameters read once a scan, in the composite's order
-        checks = []
-        for kind, member, k in plan.members:
-            if kind == "steps":
-                checks.append((kind, k, member.time_steps_since_update))
-            elif kind == "expected":
-                checks.append((kind, k, float(member.expected_misses)))
-            else:
-                checks.append((kind, k, _covariance_check(member)))
-        deleted = set()
-        counters = self._counters
-        intersect = plan.intersect
-        counted = bool(plan.counted)
-        for track in tracks:
-            if counted:
-                counter = counters.get(track)
-                if counter is None or counter.length != _track_length(track):
-                    counter = self._read_counter(track, plan)
-            # the composite's rule, member by member in its order: all (intersect) or any
-            verdict = intersect
-            for kind, k, parameter in checks:
-                if kind == "steps":
-                    says = len(counter.values[k]) > parameter
-                elif kind == "expected":
-                    total = 0.0
-                    says = False
-                    for pd in reversed(counter.values[k]):  # newest first, as the deleter sums
-                        total += pd
-                        if total >= parameter:
-                            says = True
-                            break
-                else:
-                    says = parameter(track)
-                if says != intersect:
-                    verdict = says
-                    break
-            if verdict:
-                deleted.add(track)
-        for track in deleted:
-            counters.pop(track, None)
-        return deleted
-
-
-def _member_kind(deleter):
-    """What the array path evaluates for a (member) deleter: miss counters ("steps",
-    "expected"), the last covariance ("covariance"), or None (not supported)."""
-    kind = type(deleter)
-    if kind in (UpdateTimeStepsDeleter, _StockUpdateTimeStepsDeleter):
-        return "steps"
-    if kind is ExpectedMissesDeleter:
-        return "expected"
-    if kind is CovarianceBasedDeleter:
-        return "covariance"
-    return None
-
-
-class _DeletionPlan:
-    """A supported deleter as the array path evaluates it: ``members`` are (kind, deleter,
-    counter slot) in the composite's order (one member for a plain deleter; a plain deleter
-    is an intersection of one), ``counted`` the members with a miss counter, in slot order.
-    The plan is rebuilt when the composite's members or rule change."""
-
-    __slots__ = ("deleter", "intersect", "members", "counted", "_seen")
-
-    def __init__(self, deleter, intersect, members):
-        self.deleter = deleter
-        self.intersect = intersect
-        self.counted = [(kind, member) for kind, member in members if kind != "covariance"]
-        slots = {id(member): k for k, (_, member) in enumerate(self.counted)}
-        self.members = [(kind, member, slots.get(id(member))) for kind, member in members]
-        self._seen = self._signature(deleter)
-
-    @staticmethod
-    def _signature(deleter):
-        if type(deleter) is CompositeDeleter:
-            return (bool(deleter.intersect), tuple(id(m) for m in deleter.deleters))
-        return None
-
-    def still_describes(self, deleter) -> bool:
-        return self._signature(deleter) == self._seen
-
-
-def _covariance_check(deleter):
-    """``CovarianceBasedDeleter.check_for_deletion`` as a function of the track: Stone Soup
-    1.9.1 deletes when the sum of the last state's covariance diagonal over ``mapping`` (all
-    of it when ``mapping`` is None or empty) is strictly greater than ``covar_trace_thresh``.
-    With a list of one or two plain int indices and a float threshold the sum is read
-    directly (NumPy's sum of two float64 is their one IEEE addition, so the verdict is the
-    same); any other mapping or threshold, or a covariance that is not a 2-D float64 array,
-    asks the deleter."""
-    mapping = deleter.mapping
-    threshold = deleter.covar_trace_thresh
-    if not (type(mapping) is list and 0 < len(mapping) <= 2
-            and all(type(i) is int for i in mapping) and type(threshold) is float):
-        return lambda track: bool(deleter.check_for_deletion(track))
-    i, j = mapping if len(mapping) == 2 else (mapping[0], None)
-
-    def check(track) -> bool:
-        lists = plain_track_lists(track)
-        covar = (track.states if lists is None else lists[0])[-1].covar
-        if not (type(covar) in _COVARIANCE_TYPES and covar.dtype == np.float64
-                and covar.ndim == 2):
-            return bool(deleter.check_for_deletion(track))
-        trace = covar.item(i, i) if j is None else covar.item(i, i) + covar.item(j, j)
-        return trace > threshold
-    return check
-
-
-_COVARIANCE_TYPES = (CovarianceMatrix, np.ndarray)
 
 
 __all__ = ["ArrayJPDATracker"]

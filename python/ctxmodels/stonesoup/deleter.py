@@ -1,4 +1,4 @@
-r"""Observability-aware track deletion: count the detections a track *should* have produced.
+r"""Track deletion: observability-aware miss counting, and duplicate tracks.
 
 A miss-counting deleter (Stone Soup's
 :class:`~stonesoup.deleter.time.UpdateTimeStepsDeleter`) treats every scan without a
@@ -8,17 +8,27 @@ deleter must tolerate dozens of misses (the paper needed N = 30 for its JPDA) �
 keeps false tracks alive that long. Weighting each miss by the probability that the sensor
 could have detected the target removes the trade-off: a scan that cannot see the track
 costs it nothing.
+
+Two tracks may also follow one target (two holding tracks confirmed on the same detections,
+or a track split by clutter): :class:`DuplicateTrackDeleter` deletes one of each such pair
+by the standard track-to-track association test.
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from numbers import Integral, Real
 
+import numpy as np
 from stonesoup.base import Property
 from stonesoup.deleter.base import Deleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 from stonesoup.types.update import Update
 
+from .composite_deleter import PairwiseDeleter
+from .fast import plain_track_lists
 from .hypothesiser import PDAHypothesiser, is_detection_backed
+from .ordering import track_key
 
 
 class ExpectedMissesDeleter(Deleter):
@@ -133,4 +143,164 @@ class UpdateTimeStepsDeleter(_StockUpdateTimeStepsDeleter):
         return False
 
 
-__all__ = ["ExpectedMissesDeleter", "UpdateTimeStepsDeleter"]
+class DuplicateTrackDeleter(PairwiseDeleter):
+    r"""Deletes one track of each pair of duplicates, by the standard track-to-track
+    association test.
+
+    Two tracks whose latest states share a timestamp are duplicates when
+
+    .. math::
+        d^2 = \Delta^\mathsf{T} (P_1 + P_2)^{-1} \Delta \ <\ \gamma,
+        \qquad \Delta = H (\hat{x}_1 - \hat{x}_2), \quad P_i = H P_i^{x} H^\mathsf{T},
+
+    where :math:`\hat{x}_i, P_i^{x}` are the latest mean and covariance of track :math:`i`
+    and :math:`H` selects the components in :attr:`mapping` (the position). If both tracks
+    estimate one target with independent errors, :math:`\Delta` is zero-mean with covariance
+    :math:`P_1 + P_2` and :math:`d^2` is :math:`\chi^2`-distributed with ``len(mapping)``
+    degrees of freedom, so :attr:`threshold` :math:`\gamma` is a :math:`\chi^2` quantile:
+    the default 9.21 is the 99 % quantile with 2 degrees of freedom
+    (:math:`-2 \ln 0.01 = 9.2103`; 95 %: 5.99; for 3 degrees of freedom 11.34 at 99 %). The
+    cross-covariance :math:`P_{12}` of the two estimates (common process noise, shared
+    detections) is neglected: it is positive, so the true :math:`\operatorname{Cov}\Delta
+    = P_1 + P_2 - P_{12} - P_{12}^\mathsf{T}` is smaller and the test calls duplicates
+    somewhat more readily than the exact one. A pair whose :math:`P_1 + P_2` is singular, or
+    whose :math:`d^2` is NaN, is not a pair of duplicates.
+
+    Of a pair, the track with fewer detection-backed states (each an
+    :class:`~stonesoup.types.update.Update` with a non-empty hypothesis: Stone Soup's
+    deleters' criterion) is deleted; on a tie the younger one (later first state); then the
+    later in content order (:func:`~ctxmodels.stonesoup.ordering.track_key`, then the
+    track ``id``) — never by memory address or set order. Chains (A duplicates B, B
+    duplicates C) are resolved pair by pair in increasing :math:`d^2` (ties in content
+    order): a pair one of whose tracks is already deleted is skipped, so a deleted track
+    deletes no other; a track that kept its place in one pair can still lose a later one.
+    The verdicts do not depend on the order of the tracks handed in: each :math:`d^2` is the
+    same number whichever track comes first (:math:`\Delta` only changes sign, exactly).
+
+    The verdict on a track depends on the other tracks, so there is no per-track
+    ``check_for_deletion`` (it raises ``TypeError``); :meth:`delete_tracks` judges a set.
+    Combined with per-track deleters, use :class:`~ctxmodels.stonesoup.CompositeDeleter`
+    (Stone Soup's asks its members one track at a time).
+    """
+
+    threshold: float = Property(
+        default=9.21,
+        doc="The gate γ on d² (finite, > 0): a χ² quantile with len(mapping) degrees of "
+            "freedom; the default is the 99 % quantile with 2.")
+    mapping: Sequence[int] = Property(
+        default=(0, 2),
+        doc="The state components compared (distinct indices, non-empty): the position, "
+            "x and y of a constant-velocity state [x, vx, y, vy] by default.")
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._parameters()
+
+    def _parameters(self):
+        """(γ as a float, the mapping as an index array), checked (read at every call: the
+        Properties may be set after construction)."""
+        threshold = self.threshold
+        if isinstance(threshold, bool) or not isinstance(threshold, Real):
+            raise TypeError(f"threshold: expected a number, got {threshold!r}")
+        if not (math.isfinite(threshold) and threshold > 0):
+            raise ValueError(f"threshold: must be finite and > 0, got {threshold}")
+        mapping = self.mapping
+        try:
+            indices = list(mapping)
+        except TypeError:
+            raise TypeError(f"mapping: expected a sequence of state indices, "
+                            f"got {mapping!r}") from None
+        if not indices:
+            raise ValueError("mapping: must name at least one state component, got an "
+                             "empty sequence")
+        if any(isinstance(i, bool) or not isinstance(i, Integral) or i < 0 for i in indices):
+            raise TypeError(f"mapping: expected non-negative integer indices, got {mapping!r}")
+        if len(set(indices)) != len(indices):
+            raise ValueError(f"mapping: indices must be distinct, got {mapping!r}")
+        return float(threshold), np.array([int(i) for i in indices])
+
+    def tracks_to_delete(self, tracks, **kwargs) -> set:
+        """The tracks of ``tracks`` (any iterable) to delete; nothing is changed."""
+        tracks = [t for t in tracks if len(t)]
+        latest = []
+        for track in tracks:
+            lists = plain_track_lists(track)
+            latest.append(track.states[-1] if lists is None else lists[0][-1])
+        if len(latest) < 2:
+            return set()
+        means = np.array([np.asarray(s.state_vector, dtype=np.float64)[:, 0] for s in latest])
+        covars = np.array([np.asarray(s.covar, dtype=np.float64) for s in latest])
+        return self.duplicates(tracks, means, covars, [s.timestamp for s in latest])
+
+    def duplicates(self, tracks, means, covars, timestamps) -> set:
+        """The tracks to delete, given each track's latest mean (rows of ``means``,
+        (N, D)), covariance (``covars``, (N, D, D)) and timestamp, aligned with the list
+        ``tracks``."""
+        threshold, index = self._parameters()
+        means = means[:, index]
+        covars = covars[:, index][:, :, index]
+        groups: dict = {}
+        for k, stamp in enumerate(timestamps):
+            groups.setdefault(stamp, []).append(k)
+        candidates = []  # (d², k, l)
+        for members in groups.values():
+            if len(members) < 2:
+                continue
+            members = np.asarray(members)
+            i, j = np.triu_indices(len(members), 1)
+            a, b = members[i], members[j]
+            d2 = _squared_distances(means[a] - means[b], covars[a] + covars[b])
+            for p in np.flatnonzero(d2 < threshold).tolist():
+                candidates.append((float(d2[p]), int(a[p]), int(b[p])))
+        if not candidates:
+            return set()
+        keys: dict = {}
+
+        def key(k):
+            if k not in keys:
+                keys[k] = (track_key(tracks[k]), str(getattr(tracks[k], "id", "")))
+            return keys[k]
+        # increasing d², then the pair's content order: the same order for any input order
+        candidates.sort(key=lambda c: (c[0],) + tuple(sorted((key(c[1]), key(c[2])))))
+        backed: dict = {}
+        deleted = set()
+        for _, k, m in candidates:
+            if k in deleted or m in deleted:
+                continue  # a deleted track deletes no other
+            deleted.add(self._loser(tracks, k, m, key, backed))
+        return {tracks[k] for k in deleted}
+
+    @staticmethod
+    def _loser(tracks, k, m, key, backed):
+        """Which of tracks ``k`` and ``m`` (duplicates) is deleted."""
+        for n in (k, m):
+            if n not in backed:
+                backed[n] = sum(1 for s in tracks[n].states if is_detection_backed(s))
+        if backed[k] != backed[m]:
+            return k if backed[k] < backed[m] else m
+        first_k, first_m = tracks[k].states[0].timestamp, tracks[m].states[0].timestamp
+        if first_k is not None and first_m is not None and first_k != first_m:
+            return k if first_k > first_m else m  # the younger
+        return k if key(m) < key(k) else m
+
+
+def _squared_distances(delta, covars):
+    """Δᵀ S⁻¹ Δ per row of ``delta`` (K, m) and ``covars`` (K, m, m), each from its own
+    LU solve (so a row's value does not depend on the others); NaN where S is singular.
+    Negating Δ negates the solution exactly, so the value is symmetric in the pair."""
+    try:
+        solved = np.linalg.solve(covars, delta[:, :, np.newaxis])[:, :, 0]
+    except np.linalg.LinAlgError:  # some S singular: row by row (rare)
+        solved = np.full(delta.shape, np.nan)
+        for p in range(len(delta)):
+            try:
+                solved[p] = np.linalg.solve(covars[p], delta[p][:, np.newaxis])[:, 0]
+            except np.linalg.LinAlgError:
+                pass
+    total = delta[:, 0] * solved[:, 0]
+    for c in range(1, delta.shape[1]):  # left to right, the same sum for every row
+        total = total + delta[:, c] * solved[:, c]
+    return total
+
+
+__all__ = ["DuplicateTrackDeleter", "ExpectedMissesDeleter", "UpdateTimeStepsDeleter"]

@@ -1,0 +1,89 @@
+"""The holding tracks' deletion in :class:`~ctxmodels.stonesoup.array_initiator.ArrayMultiMeasurementInitiator`:
+per holding row, what its deleter reads, kept as the rows advance instead of walking the
+tracks (whose coasting predictions are not even appended yet).
+
+* ``UpdateTimeStepsDeleter`` (stock or ctxmodels): the number of distinct timestamps since
+  the row's last detection-backed state; delete when it exceeds ``time_steps_since_update``.
+* Stone Soup's ``UpdateTimeDeleter``: the latest timestamp of a detection-backed state;
+  delete when there is none at or after ``last - time_since_update`` (``last``: the row's
+  last state's time), as :func:`~ctxmodels.stonesoup.array_deletion.update_time_verdict`
+  decides.
+"""
+from __future__ import annotations
+
+import datetime
+
+import numpy as np
+from stonesoup.deleter.time import UpdateTimeDeleter
+from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
+
+from .array_deletion import latest_backed_time, update_time_verdict
+from .deleter import UpdateTimeStepsDeleter
+from .hypothesiser import is_detection_backed
+
+
+def supported(deleter) -> bool:
+    """Whether the rows can reach ``deleter``'s verdicts (``delete_last_pred`` off)."""
+    if getattr(deleter, "delete_last_pred", True):
+        return False
+    kind = type(deleter)
+    if kind in (UpdateTimeStepsDeleter, _StockUpdateTimeStepsDeleter):
+        return True
+    return kind is UpdateTimeDeleter and type(deleter.time_since_update) is datetime.timedelta
+
+
+def read(states) -> tuple:
+    """(distinct times since the last detection-backed state, latest detection-backed
+    time or None) of a track's ``states``."""
+    if len(states) == 1:  # a new track: one state, one time
+        state = states[0]
+        return 1, (state.timestamp if is_detection_backed(state) else None)
+    since = set()
+    for state in reversed(states):
+        since.add(state.timestamp)
+        if is_detection_backed(state):
+            break
+    return len(since), latest_backed_time(states)
+
+
+class HoldingCounts:
+    """The counts of the holding rows (aligned with the initiator's records): ``since``
+    (distinct times since the last detection) and ``backed`` (latest detection-backed
+    time)."""
+
+    def __init__(self):
+        self.since = np.empty(0, dtype=np.int64)
+        self.backed: list = []
+
+    def add(self, counts) -> None:
+        """Appends rows with ``counts`` (pairs from :func:`read`)."""
+        self.since = np.concatenate([self.since, [n for n, _ in counts]]).astype(np.int64)
+        self.backed = self.backed + [b for _, b in counts]
+
+    def take(self, keep) -> None:
+        """Keeps the rows ``keep`` (indices, or a boolean mask), in that order."""
+        self.since = self.since[keep]
+        if isinstance(keep, np.ndarray) and keep.dtype == bool:
+            keep = np.flatnonzero(keep).tolist()
+        self.backed = [self.backed[k] for k in keep]
+
+    def advance(self, updated, appended_new_time, timestamp) -> None:
+        """A scan at ``timestamp``: rows ``updated`` (mask) got a detection; the rows
+        ``appended_new_time`` (mask) got a state at a time they had not seen."""
+        self.since = np.where(updated, 1, self.since + appended_new_time)
+        for k in np.flatnonzero(updated).tolist():
+            if self.backed[k] is None or timestamp > self.backed[k]:
+                self.backed[k] = timestamp
+
+    def expired(self, deleter, rows, last_times) -> list:
+        """Of the rows ``rows`` (indices), those ``deleter`` deletes; ``last_times``: each
+        row's last state's time."""
+        if type(deleter) is UpdateTimeDeleter:
+            window = deleter.time_since_update
+            return [k for k in rows
+                    if update_time_verdict(self.backed[k], last_times[k], window)]
+        limit = deleter.time_steps_since_update
+        return [k for k in rows if self.since[k] > limit]
+
+
+__all__ = ["HoldingCounts", "read", "supported"]
