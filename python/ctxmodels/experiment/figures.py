@@ -3,6 +3,7 @@ context-aware models' coverage per scenario, and a summary per scope (scores wit
 intervals, and the paired differences of the findings on that scope)."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +27,9 @@ def draw_experiment_figures(results, folder: Path) -> dict[str, Path]:
                    if r.job.scenario == scenario and r.job.seed == config.plot_seed]
         written.update(_draw_scenario(folder, scenario, config.plot_seed, config.duration,
                                       plotted))
+        if scenario == "mixed-range":
+            written.update(_draw_paper_figures(folder, config.plot_seed, config.duration,
+                                               dict(plotted), config.radar, config.lidar))
     for scope, fields in _summaries(results):
         written.update(_draw_summary(folder, scope, fields))
     return written
@@ -45,7 +49,7 @@ def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted) ->
               for t in sorted(run.truths, key=lambda t: t.id)]
     ego = Polyline([(t - epoch).total_seconds() for t in run.ego.timestamps], run.ego.positions)
     for tracker, paths in plotted:
-        tracks = [Polyline(times, xy) for times, xy in paths]
+        tracks = [Polyline(times, xy) for times, xy, _ in paths]
         path = folder / f"tracks_{scenario}_{tracker}.png"
         plot_tracks(path, f"{scenario}: {TRACKERS[tracker].label} (seed {seed})",
                     tracks, truths, ego, float(run.ego.headings[-1]), land=run.land,
@@ -57,6 +61,85 @@ def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted) ->
                   title=f"P_D of the context-aware models, {scenario}, first radar scan")
     written[path.stem] = path
     return written
+
+
+#: The paper's Fig. 4 panels on scenario 1: the better JPDA baseline, uniform, context-aware.
+FIG4_TRACKERS = (("jpda-tuned", "jpda"), ("gmphd-uniform",), ("gmphd-context",))
+#: The mechanism figure's trackers: the weight a far vessel keeps under each.
+MECHANISM_TRACKERS = ("gmphd-uniform", "gmphd-pd-aware", "gmphd-context")
+
+
+def _draw_paper_figures(folder: Path, seed: int, duration, plotted: dict, radar=None,
+                        lidar=None) -> dict[str, Path]:
+    """Scenario 1 as the paper shows it: trackers side by side (its Fig. 4), and the
+    mechanism — the far vessel's GM-PHD weight over time under each tracker."""
+    from .scenarios import make_scenario
+    from .track_plots import Polyline, plot_mechanism, plot_track_panels
+    from .trackers import TRACKERS
+    written = {}
+    run = make_scenario("mixed-range", seed, duration, radar=radar, lidar=lidar)
+    epoch = run.radar_times[0]
+    truths = [Polyline.from_states(t.states, epoch, label=t.id)
+              for t in sorted(run.truths, key=lambda t: t.id)]
+    ego = Polyline([(t - epoch).total_seconds() for t in run.ego.timestamps], run.ego.positions)
+    panels = []
+    for choices in FIG4_TRACKERS:
+        name = next((n for n in choices if n in plotted), None)
+        if name is not None:
+            panels.append((TRACKERS[name].label,
+                           [Polyline(times, xy) for times, xy, _ in plotted[name]]))
+    if len(panels) == len(FIG4_TRACKERS):
+        path = folder / "tracks_mixed-range_fig4.png"
+        plot_track_panels(path, f"Scenario 1 (seed {seed}), as the paper's Fig. 4", panels,
+                          truths, ego, float(run.ego.headings[-1]),
+                          static_positions=run.static_positions)
+        written[path.stem] = path
+    present = [name for name in MECHANISM_TRACKERS if name in plotted]
+    if len(present) >= 2:
+        ego_xy = np.asarray(run.ego.positions)
+        far = max(truths, key=lambda t: float(np.median(np.hypot(*(t.xy - ego_xy[-1]).T))))
+        seconds = [(t - epoch).total_seconds() for t in run.radar_times]
+        window = (0.0, min(MECHANISM_WINDOW, seconds[-1]))
+        series = [(TRACKERS[name].label, *mass_on_vessel(name, run, far.label, window[1]))
+                  for name in present]
+        lidar = [(t - epoch).total_seconds() for t in run.lidar_times]
+        path = folder / "mechanism_mixed-range.png"
+        plot_mechanism(path, f"Scenario 1 (seed {seed}): the PHD mass on {far.label}, the "
+                       "vessel farthest from the ego, beyond the lidar's 80 m",
+                       series, seconds, lidar, window=window)
+        written[path.stem] = path
+    return written
+
+
+#: Seconds of scenario 1 the mechanism figure shows.
+MECHANISM_WINDOW = 40.0
+
+
+def mass_on_vessel(tracker: str, run, vessel: str, until: float,
+                   distance: float = 30.0) -> tuple[list, list]:
+    """Runs ``tracker`` (a GM-PHD) on ``run`` for its first ``until`` seconds and returns
+    (times since the first radar scan, PHD mass) after each scan: the summed weight of the
+    mixture's components within ``distance`` m of ``vessel`` at that time."""
+    from .trackers import TRACKERS, build_tracker
+    epoch = run.radar_times[0]
+    truth = {state.timestamp: state for state in run.truth_by_id[vessel]}
+    times, masses = [], []
+    built = build_tracker(TRACKERS[tracker], run)
+    for time, _ in built:
+        seconds = (time - epoch).total_seconds()
+        if seconds > until:
+            break
+        state = truth.get(time)
+        mass = 0.0
+        if state is not None:
+            xy = np.array([float(state.state_vector[0]), float(state.state_vector[2])])
+            for component in built.gaussian_mixture:
+                mean = np.asarray(component.state_vector, dtype=float).ravel()
+                if math.hypot(mean[0] - xy[0], mean[2] - xy[1]) <= distance:
+                    mass += float(component.weight)
+        times.append(seconds)
+        masses.append(mass)
+    return times, masses
 
 
 def _summaries(results) -> list[tuple[str, dict]]:

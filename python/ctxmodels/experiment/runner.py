@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import dataclasses
 import functools
 import gc
 import os
@@ -62,6 +63,9 @@ class Job:
     lidar: LidarConfig | None = None
     #: Which states are scored (:mod:`~ctxmodels.experiment.extraction`).
     extract: str = "stone-soup"
+    #: Changes to the tracker's :class:`~ctxmodels.experiment.trackers.TrackerSpec` as
+    #: ``(field, value)`` pairs (a search over its settings, e.g. ``scripts/tune_jpda.py``).
+    tracker_options: tuple = ()
 
 
 @dataclass
@@ -72,7 +76,7 @@ class JobResult:
     seconds: float
     scans: int
     track_count: int
-    tracks: list = field(default_factory=list)  # [(times, xy)] when job.keep_tracks
+    tracks: list = field(default_factory=list)  # [(times, xy, weights)] when job.keep_tracks
     #: SHA-256 of every reported track state (time, mean, covariance), in track order: equal
     #: digests mean bit-identical tracks. Empty unless ``job.digest``.
     digest: str = ""
@@ -131,7 +135,7 @@ def run_job(job: Job) -> JobResult:
     from ..stonesoup.ordering import in_track_order
     from .trackers import TRACKERS, build_tracker
 
-    spec = TRACKERS[job.tracker]
+    spec = dataclasses.replace(TRACKERS[job.tracker], **dict(job.tracker_options))
     # simulation (its objects are acyclic too), tracking, scoring and the tracks' release
     with collector_paused():
         run = simulated_run(job.scenario, job.seed, job.duration, job.radar, job.lidar)
@@ -153,7 +157,8 @@ def run_job(job: Job) -> JobResult:
 
 
 def kept_paths(tracks, epoch) -> list:
-    """Each track's path for the figures: (seconds since ``epoch``, [[x, y], ...]) lists."""
+    """Each track's path for the figures: (seconds since ``epoch``, [[x, y], ...], weights)
+    lists; weights are the GM-PHD states' (None for tracks whose states have none)."""
     kept = []
     seconds: dict = {}  # the tracks share their scans' timestamps
     for track in tracks:
@@ -166,7 +171,9 @@ def kept_paths(tracks, epoch) -> list:
                 value = seconds[stamp] = (stamp - epoch).total_seconds()
             times.append(value)
         vectors = np.array([state.state_vector for state in states], dtype=np.float64)
-        kept.append((times, vectors[:, [0, 2], 0].tolist()))
+        weights = [getattr(state, "weight", None) for state in states]
+        weights = None if any(w is None for w in weights) else [float(w) for w in weights]
+        kept.append((times, vectors[:, [0, 2], 0].tolist(), weights))
     return kept
 
 

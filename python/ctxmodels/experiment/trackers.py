@@ -95,6 +95,8 @@ JPDA_PROB_GATE = 0.95
 JPDA_MIN_POINTS = 3
 JPDA_DELETE_AFTER = 30
 JPDA_EXPECTED_MISSES = 3.0
+#: Track-to-track test for duplicate JPDA tracks: χ² with 2 degrees of freedom at 99 %.
+DUPLICATE_THRESHOLD = 9.21
 #: Added to the sensors' farthest P_D reach for the GM-PHD's surveillance region (m): a target
 #: that has just left the radar's reach can return for ~50 s at ≤ 10 m/s relative speed.
 REGION_MARGIN = 500.0
@@ -129,6 +131,13 @@ class TrackerSpec:
     #: JPDA only: detections to confirm a track (M-of-N) and missed scans to delete it.
     min_points: int = JPDA_MIN_POINTS
     delete_after: int = JPDA_DELETE_AFTER
+    #: JPDA only, windows in time instead of scans (None: count scans): a holding track is
+    #: dropped after ``confirm_window`` s without a detection, a track after
+    #: ``delete_window`` s without one in its gate (Stone Soup's ``UpdateTimeDeleter``).
+    confirm_window: float | None = None
+    delete_window: float | None = None
+    #: JPDA only: delete the weaker of two duplicate tracks (``DuplicateTrackDeleter``).
+    merge_duplicates: bool = False
     #: Rough tracking seconds of a 480 s scenario on one core (measured on the reference
     #: 2-core VM): orders the experiment's jobs and weights its progress estimate only.
     cost: float = 1.0
@@ -211,13 +220,15 @@ def build_tracker(spec: TrackerSpec, run, fast: bool = True):
     navigation = NavigationTrack(timestamps=run.ego.timestamps, positions=run.ego.positions,
                                  headings=run.ego.headings)
     models = paper_sensor_models(land=run.land if spec.line_of_sight or spec.coastal else ())
-    return paper_tracker(spec.name, streams, models, navigation, primary="radar", fast=fast)
+    return paper_tracker(spec, streams, models, navigation, primary="radar", fast=fast)
 
 
-def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Mapping[str, SensorModel],
+def paper_tracker(name: str | TrackerSpec, streams: Mapping[str, Iterable],
+                  sensor_models: Mapping[str, SensorModel],
                   pose_source: PoseSource, *, primary: str | None = None, fast: bool = True,
                   region_radius: float | None = None):
-    r"""One of the study's trackers (:data:`TRACKERS`) on anyone's sensor data.
+    r"""One of the study's trackers (:data:`TRACKERS`, by name, or a :class:`TrackerSpec`)
+    on anyone's sensor data.
 
     Iterate the returned Stone Soup tracker for ``(time, tracks)`` per scan, as any tracker.
 
@@ -248,7 +259,8 @@ def paper_tracker(name: str, streams: Mapping[str, Iterable], sensor_models: Map
     time (contexts and the region ask it at each scan). One pose source serves all sensors:
     mounting offsets go in each ``SensorModel.mounting``.
     """
-    spec = TRACKERS.get(name) if isinstance(name, str) else None
+    spec = name if isinstance(name, TrackerSpec) else (
+        TRACKERS.get(name) if isinstance(name, str) else None)
     if spec is None:
         raise ValueError(f"name: unknown tracker {name!r}; choose from {list(TRACKERS)}")
     if not isinstance(streams, Mapping):
@@ -554,9 +566,11 @@ def position_std_deleter():
 
 def _jpda(spec, predictor, updater, detector, fast):
     from stonesoup.deleter.multi import CompositeDeleter
+    from stonesoup.deleter.time import UpdateTimeDeleter
 
+    from ..stonesoup import CompositeDeleter as PairwiseCompositeDeleter
     from ..stonesoup import (ArrayJPDATracker, ArrayMultiMeasurementInitiator,
-                             ExpectedMissesDeleter, FastGNNWith2DAssignment,
+                             DuplicateTrackDeleter, ExpectedMissesDeleter, FastGNNWith2DAssignment,
                              MultiMeasurementInitiator, MultiTargetMixtureTracker,
                              PDAHypothesiser, UpdateTimeStepsDeleter)
     hypothesiser_class = PDAHypothesiser if spec.uses_context else StockPDAHypothesiser
@@ -566,13 +580,21 @@ def _jpda(spec, predictor, updater, detector, fast):
         deleter = CompositeDeleter(intersect=False, deleters=[
             ExpectedMissesDeleter(expected_misses=JPDA_EXPECTED_MISSES, hypothesiser=hypothesiser),
             position_std_deleter()])
+    elif spec.delete_window is not None:
+        deleter = UpdateTimeDeleter(time_since_update=datetime.timedelta(seconds=spec.delete_window))
     else:
         deleter = UpdateTimeStepsDeleter(time_steps_since_update=spec.delete_after)
+    if spec.merge_duplicates:  # (ctxmodels' composite: Stone Soup's asks track by track)
+        deleter = PairwiseCompositeDeleter(intersect=False, deleters=[
+            deleter, DuplicateTrackDeleter(threshold=DUPLICATE_THRESHOLD, mapping=POSITION_MAPPING)])
+    holding = (UpdateTimeStepsDeleter(time_steps_since_update=JPDA_DELETE_AFTER)
+               if spec.confirm_window is None else
+               UpdateTimeDeleter(time_since_update=datetime.timedelta(seconds=spec.confirm_window)))
     prior = GaussianState(np.zeros((4, 1)), np.diag(INIT_STD ** 2))
     # The array tracker and initiator compute each scan in the Rust core; the component
     # path is the readable reference with the same results.
     initiator = (ArrayMultiMeasurementInitiator if fast else MultiMeasurementInitiator)(
-        prior_state=prior, deleter=UpdateTimeStepsDeleter(time_steps_since_update=JPDA_DELETE_AFTER),
+        prior_state=prior, deleter=holding,
         data_associator=(FastGNNWith2DAssignment if fast else GNNWith2DAssignment)(DistanceHypothesiser(
             predictor, updater, Mahalanobis(), missed_distance=GATE_MAHALANOBIS)),
         updater=updater, min_points=spec.min_points)
