@@ -155,6 +155,69 @@ def test_plot_tracks_without_truth_tracks_or_zoom(tmp_path):
     assert_png(path)
 
 
+def test_tracks_on_static_objects_are_distractors_not_clutter(scene):
+    truth = scene["truths"][0]
+    times = truth.times
+    marker = Polyline(times, np.tile([40.0, 60.0], (len(times), 1)) + 2.0)  # on a marker
+    half = Polyline(times, np.vstack([np.tile([40.0, 60.0], (10, 1)),
+                                      np.tile([900.0, 900.0], (10, 1))]))  # half on it
+    stray = Polyline(times, np.tile([700.0, -700.0], (len(times), 1)))
+    inliers, distractors, clutter = classify_tracks([marker, half, stray, truth], [truth],
+                                                    static_positions=scene["static"])
+    assert inliers == [truth] and distractors == [marker, half] and clutter == [stray]
+    # without static objects: the two-way split as before
+    assert classify_tracks([marker, stray], [truth]) == ([], [marker, stray])
+    fig = plots._figure_tracks("", [marker, stray, truth], [truth], scene["ego"], 0.0,
+                               static_positions=scene["static"])
+    texts = legend_texts(fig)
+    assert "distractor tracks (1)" in texts and "clutter tracks (1)" in texts
+    assert "1 distractor" in fig.axes[0].get_title()
+
+
+def test_track_panels_side_by_side_each_with_its_own_counts(scene, tmp_path):
+    inlier, clutter = scene["tracks"][0], scene["tracks"][1:4]
+    panels = [("JPDA (tuned)", [inlier, *clutter]), ("GM-PHD (uniform)", []),
+              ("GM-PHD (context-aware)", [inlier])]
+    fig = plots._figure_track_panels("Scenario 1", panels, scene["truths"], scene["ego"], 0.0,
+                                     static_positions=scene["static"])
+    axes = [ax for ax in fig.axes if ax.get_legend()]
+    assert len(axes) == 3
+    titles = [ax.get_title() for ax in axes]
+    assert [t.splitlines()[0] for t in titles] == [name for name, _ in panels]
+    legends = [" | ".join(t.get_text() for t in ax.get_legend().get_texts()) for ax in axes]
+    assert "clutter tracks (3)" in legends[0] and "inlier tracks (1)" in legends[0]
+    assert "clutter tracks (0)" in legends[1] and "inlier tracks (0)" in legends[1]
+    for legend in legends:
+        for word in ("truth", "distractor tracks", "static objects", "ego path"):
+            assert word in legend
+    assert axes[0].get_xlim() == axes[2].get_xlim()  # one view for all panels
+    path = tmp_path / "fig4.png"
+    plots.plot_track_panels(path, "t", panels, scene["truths"], scene["ego"], 0.0)
+    assert_png(path)
+
+
+def test_mechanism_figure_marks_both_sensors_and_says_where_a_tracker_has_no_mass(tmp_path):
+    from ctxmodels.experiment.track_plots import MASS_FLOOR, _figure_mechanism, plot_mechanism
+    times = np.arange(0.0, 10.0, 0.1)
+    series = [("GM-PHD (uniform)", times, np.zeros(len(times))),
+              ("GM-PHD (P_D-aware)", times, np.where(times > 2.0, 1.0, 1e-3))]
+    radar, lidar = np.arange(0.0, 10.0, 1.25), times + 0.043
+    fig = _figure_mechanism("mechanism", series, radar, lidar, (0.0, 8.0))
+    texts = legend_texts(fig)
+    assert "gm-phd (uniform)\n(no mass at any scan shown)" in texts
+    assert "gm-phd (p_d-aware)" in texts and "no mass" not in texts.split("p_d-aware")[1]
+    assert "radar scan" in texts and "lidar scan" in texts
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "log" and ax.get_ylim()[0] == MASS_FLOOR
+    assert ax.get_xlim() == (0.0, 8.0)
+    vertical = [x for x in (np.asarray(line.get_xdata(), dtype=float) for line in ax.lines)
+                if x.size == 2 and x[0] == x[1]]
+    assert len(vertical) == len([t for t in radar if t <= 8.0])  # one line per radar scan
+    path = tmp_path / "mechanism.png"
+    plot_mechanism(path, "m", series, radar, lidar, (0.0, 8.0))
+    assert_png(path)
+
+
 # --- plot_coverage ---------------------------------------------------------------------
 
 
