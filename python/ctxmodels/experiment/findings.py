@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import metrics
-from .paper import TABLE_II
+from .paper import PAPER_JPDA, paper_row
 from .statistics import (ALPHA, MARGINS, NO_PAPER_EFFECT, NON_INFERIORITY, SUPERIORITY,
                          Interval, OneSidedTest, holm, one_sided_test, overall_verdict,
                          size_verdict, t_interval)
@@ -62,14 +62,14 @@ FINDINGS: tuple[Finding, ...] = (
             "radar-only − uniform (S1)"),
     Finding("uniform-is-worst",
             "the uniform GM-PHD is the worst of the paper's five (margin to the closest)",
-            "paper", ("jpda", "gmphd-radar-only", "gmphd-pd-aware", "gmphd-context"),
+            "paper", (PAPER_JPDA, "gmphd-radar-only", "gmphd-pd-aware", "gmphd-context"),
             ("gmphd-uniform",), COMBINED, "closest other − uniform"),
     Finding("pd-aware-beats-radar-only", "P_D-aware GM-PHD > radar-only", "paper",
             ("gmphd-pd-aware",), ("gmphd-radar-only",), COMBINED, "P_D-aware − radar-only"),
     Finding("context-beats-pd-aware", "context-aware GM-PHD ≥ P_D-aware", "paper",
             ("gmphd-context",), ("gmphd-pd-aware",), COMBINED, "context − P_D-aware", test=NON_INFERIORITY),
     Finding("context-beats-jpda", "context-aware GM-PHD > JPDA", "paper",
-            ("gmphd-context",), ("jpda",), COMBINED, "context − JPDA"),
+            ("gmphd-context",), (PAPER_JPDA,), COMBINED, "context − JPDA"),
     Finding("context-jpda-beats-jpda", "context-aware JPDA > JPDA", "ours",
             ("jpda-context",), ("jpda",), COMBINED, "context JPDA − JPDA"),
     Finding("sight-beats-context", "line-of-sight GM-PHD > context-aware (S3)", "ours",
@@ -105,13 +105,13 @@ def paper_effect(finding: Finding) -> tuple[float, float] | None:
     row for a tracker or the scope."""
     if finding.source != "paper":
         return None
-    rows = [TABLE_II.get(t, {}).get(finding.scope) for t in finding.trackers]
-    if any(row is None for row in rows):
+    row = {t: paper_row(t).get(finding.scope) for t in finding.trackers}
+    if any(score is None for score in row.values()):
         return None
     # (Rounded off the float noise of subtracting one-decimal table entries.)
-    return (round(min(TABLE_II[b][finding.scope].hota - TABLE_II[w][finding.scope].hota
+    return (round(min(row[b].hota - row[w].hota
                       for b in finding.better for w in finding.worse), 6),
-            round(min(TABLE_II[w][finding.scope].gospa - TABLE_II[b][finding.scope].gospa
+            round(min(row[w].gospa - row[b].gospa
                       for b in finding.better for w in finding.worse), 6))
 
 

@@ -97,6 +97,9 @@ JPDA_DELETE_AFTER = 30
 JPDA_EXPECTED_MISSES = 3.0
 #: Track-to-track test for duplicate JPDA tracks: χ² with 2 degrees of freedom at 99 %.
 DUPLICATE_THRESHOLD = 9.21
+#: The tuned JPDA's windows, chosen by the declared search (``scripts/tune_jpda.py``,
+#: docs/jpda_baselines.md; its record: docs/figures/jpda_tuning.json).
+TUNED_MIN_POINTS, TUNED_CONFIRM_WINDOW, TUNED_DELETE_WINDOW = 5, 2.6, 10.0
 #: Added to the sensors' farthest P_D reach for the GM-PHD's surveillance region (m): a target
 #: that has just left the radar's reach can return for ~50 s at ≤ 10 m/s relative speed.
 REGION_MARGIN = 500.0
@@ -151,6 +154,13 @@ class TrackerSpec:
 TRACKERS: dict[str, TrackerSpec] = {spec.name: spec for spec in (
     TrackerSpec("jpda", "JPDA", "global P_D/λ, M-of-N logic (3 to confirm, 30 misses to delete)",
                 "jpda", only_scenarios=PAPER_SCENARIOS, cost=11.0),
+    TrackerSpec("jpda-tuned", "JPDA (tuned)",
+                "the JPDA with windows in time, chosen by a declared search on calibration "
+                "seeds (docs/jpda_baselines.md): 5 detections to confirm, holding tracks "
+                "dropped after 2.6 s and tracks after 10 s without a detection, duplicates "
+                "merged", "jpda", only_scenarios=PAPER_SCENARIOS, min_points=TUNED_MIN_POINTS,
+                confirm_window=TUNED_CONFIRM_WINDOW, delete_window=TUNED_DELETE_WINDOW,
+                merge_duplicates=True, cost=4.0),
     TrackerSpec("gmphd-uniform", "GM-PHD (uniform)", "global P_D 0.4, λ 1e-3 for both sensors",
                 "gmphd", cost=1.0),
     TrackerSpec("gmphd-radar-only", "GM-PHD (radar-only)", "radar scans only, global P_D/λ",
