@@ -266,7 +266,7 @@ def _figure_track_panels(title, panels, truths, ego, ego_heading, land=(),
                          distance=INLIER_DISTANCE):
     """Several trackers' output side by side (``panels``: (panel title, tracks) pairs) on
     one scene and view, as the paper's Fig. 4; each panel's legend counts its own tracks."""
-    fig = _figure(figsize=(5.2 * len(panels), 6.4), dpi=110, layout="constrained")
+    fig = _figure(figsize=(5.2 * len(panels), 7.4), dpi=110, layout="constrained")
     axes = fig.subplots(1, len(panels), squeeze=False, sharex=True, sharey=True)[0]
     for ax, (name, tracks) in zip(axes, panels):
         handles, note = _draw_tracks(ax, tracks, truths, ego, ego_heading, land,
@@ -277,6 +277,12 @@ def _figure_track_panels(title, panels, truths, ego, ego_heading, land=(),
     if title:
         fig.suptitle(title, fontsize=11)
     return fig
+
+
+def _save_whole(fig, path) -> None:
+    """Saves with the bounding box grown to every artist: the panels' legends sit below
+    their axes, outside the layout's own box."""
+    fig.savefig(path, bbox_inches="tight", pad_inches=0.15)
 
 
 def plot_tracks(path: str | Path, title: str, tracks: Sequence[Polyline],
@@ -309,8 +315,9 @@ def plot_track_panels(path: str | Path, title: str, panels, truths: Sequence[Pol
                       distance: float = INLIER_DISTANCE):
     """Several trackers' output side by side on one scene, as the paper's Fig. 4
     (``panels``: (panel title, tracks) pairs; styles as :func:`plot_tracks`)."""
-    _figure_track_panels(title, panels, truths, ego, ego_heading, land, static_positions,
-                         extent, zoom=zoom, margin=margin, distance=distance).savefig(path)
+    _save_whole(_figure_track_panels(title, panels, truths, ego, ego_heading, land,
+                                     static_positions, extent, zoom=zoom, margin=margin,
+                                     distance=distance), path)
 
 
 #: The mechanism figure's lowest PHD mass drawn (log scale; no component at all draws here).

@@ -141,8 +141,8 @@ class TrackerSpec:
     delete_window: float | None = None
     #: JPDA only: delete the weaker of two duplicate tracks (``DuplicateTrackDeleter``).
     merge_duplicates: bool = False
-    #: Rough tracking seconds of a 480 s scenario on one core (measured on the reference
-    #: 2-core VM): orders the experiment's jobs and weights its progress estimate only.
+    #: Rough tracking CPU seconds of a 480 s scenario at the calibrated truth (measured on
+    #: the 2-core VM): orders the experiment's jobs and weights its progress estimate only.
     cost: float = 1.0
 
     @property
@@ -153,51 +153,45 @@ class TrackerSpec:
 #: The study's trackers by name (``ctxmodels list``).
 TRACKERS: dict[str, TrackerSpec] = {spec.name: spec for spec in (
     TrackerSpec("jpda", "JPDA", "global P_D/λ, M-of-N logic (3 to confirm, 30 misses to delete)",
-                "jpda", only_scenarios=PAPER_SCENARIOS, cost=11.0),
+                "jpda", only_scenarios=PAPER_SCENARIOS, cost=3.2),
     TrackerSpec("jpda-tuned", "JPDA (tuned)",
                 "the JPDA with windows in time, chosen by a declared search on calibration "
                 "seeds (docs/jpda_baselines.md): 5 detections to confirm, holding tracks "
                 "dropped after 2.6 s and tracks after 10 s without a detection, duplicates "
                 "merged", "jpda", only_scenarios=PAPER_SCENARIOS, min_points=TUNED_MIN_POINTS,
                 confirm_window=TUNED_CONFIRM_WINDOW, delete_window=TUNED_DELETE_WINDOW,
-                merge_duplicates=True, cost=4.0),
+                merge_duplicates=True, cost=3.6),
     TrackerSpec("gmphd-uniform", "GM-PHD (uniform)", "global P_D 0.4, λ 1e-3 for both sensors",
                 "gmphd", cost=1.0),
     TrackerSpec("gmphd-radar-only", "GM-PHD (radar-only)", "radar scans only, global P_D/λ",
-                "gmphd", primary_only=True, cost=0.6),
+                "gmphd", primary_only=True, cost=0.2),
     TrackerSpec("gmphd-pd-aware", "GM-PHD (P_D-aware)", "P_D per eqs. pd-lidar/pd-radar, λ 1e-3",
-                "gmphd", pd="context", cost=4.5),
+                "gmphd", pd="context", cost=1.7),
     TrackerSpec("gmphd-context", "GM-PHD (context-aware)", "P_D and λ per the paper's equations",
-                "gmphd", pd="context", clutter="context", cost=2.8),
+                "gmphd", pd="context", clutter="context", cost=1.8),
     TrackerSpec("jpda-context", "JPDA (context-aware)",
                 "context P_D/λ, deletion on expected misses Σ P_D ≥ 3 or position σ > 200 m",
                 "jpda", pd="context", clutter="context", only_scenarios=PAPER_SCENARIOS,
-                cost=17.5),
-    TrackerSpec("jpda-confirm5", "JPDA (5 to confirm)",
-                "the JPDA with M-of-N confirmation after 5 detections instead of 3 (explains "
-                "the JPDA baseline; not in the default study)", "jpda",
-                only_scenarios=PAPER_SCENARIOS, min_points=5, cost=10.0),
+                cost=4.3),
     TrackerSpec("gmphd-learned-clutter", "GM-PHD (learned λ)",
                 "context-aware with the radar's λ learned online (clutter map) instead of "
-                "the paper's equation", "gmphd", pd="context", clutter="learned", cost=3.2),
+                "the paper's equation", "gmphd", pd="context", clutter="learned", cost=1.9),
     TrackerSpec("gmphd-learned", "GM-PHD (learned λ, P_D)",
                 "context-aware with the radar's λ (clutter map) and P_D (range bands) "
                 "learned online instead of the paper's equations", "gmphd", pd="learned",
-                clutter="learned", cost=3.2),
+                clutter="learned", cost=1.9),
     TrackerSpec("gmphd-sight", "GM-PHD (line-of-sight)",
                 "context-aware plus land mask and radar shadow", "gmphd", pd="context",
-                clutter="context", line_of_sight=True, only_scenarios=("islands",), cost=3.2),
+                clutter="context", line_of_sight=True, only_scenarios=("islands",), cost=2.1),
     TrackerSpec("gmphd-coastal", "GM-PHD (line-of-sight, coastal λ)",
                 "line-of-sight-aware plus a hand-written coastal band in the radar's λ",
                 "gmphd", pd="context", clutter="context", line_of_sight=True, coastal=True,
-                only_scenarios=("islands",), cost=3.2),
+                only_scenarios=("islands",), cost=1.9),
 )}
 
 
-#: Run when no trackers are named: the paper's five, the context-aware JPDA, and the
-#: line-of-sight GM-PHD where there is land (not the JPDA confirmation variant, which only
-#: explains the JPDA baseline).
-DEFAULT_TRACKERS = tuple(name for name in TRACKERS if name != "jpda-confirm5")
+#: Run when no trackers are named: all of them (each on the scenarios it is made for).
+DEFAULT_TRACKERS = tuple(TRACKERS)
 
 
 def applicable(tracker: str, scenario: str) -> bool:
