@@ -40,7 +40,8 @@ source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 # examples/ holds the gallery sources (GALLERY_HEADER.rst included); the gallery pages are
 # generated into auto_examples/.
-exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "examples"]
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "examples",
+                    "results"]  # the confirmatory run's files, read on their own
 templates_path: list[str] = []
 
 # --- autodoc -------------------------------------------------------------------------------

@@ -295,6 +295,18 @@ def test_summary_all_nan_and_shape_errors(tmp_path):
         summary_plots.plot_summary(path, **{**inputs, "verdicts": ["reproduced"]})
 
 
+def test_summary_without_findings_draws_the_scores_only(tmp_path):
+    inputs = summary_inputs()
+    fig = summary_plots._figure_summary(
+        inputs["tracker_labels"], inputs["hota"], inputs["gospa"], [], np.zeros((0, 3)),
+        np.zeros((0, 3)), [], title="Scenario 2")
+    assert len(fig.axes) == 2  # no empty difference panels
+    assert not fig.legends  # no verdict legend for no verdicts
+    texts = [t.get_text() for ax in fig.axes for t in ax.texts]
+    assert "no data" not in texts
+    assert [ax.get_xlabel() for ax in fig.axes] == ["HOTA (%)", "GOSPA (m)"]
+
+
 # --- plot_sensitivity ------------------------------------------------------------------
 
 

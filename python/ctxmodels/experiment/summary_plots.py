@@ -98,9 +98,12 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
     # end of a long run should not fail over a label.
     styles = {metric: [VERDICT_STYLES.get(v.lower(), _OTHER_VERDICT) for v in given]
               for metric, given in (("HOTA", verdicts), ("GOSPA", gospa_verdicts))}
-    heights = [max(len(trackers), 1) + 1.2, max(len(findings), 1) + 1.2]
+    # A scope without findings (scenario 2 alone) gets the score panels only, not two empty
+    # difference panels.
+    heights = [max(len(trackers), 1) + 1.2] + ([len(findings) + 1.2] if findings else [])
     fig = _figure(figsize=(12.5, 1.6 + 0.42 * sum(heights)), dpi=100, layout="constrained")
-    (ax_h, ax_g), (ax_dh, ax_dg) = fig.subplots(2, 2, gridspec_kw={"height_ratios": heights})
+    axes = fig.subplots(len(heights), 2, gridspec_kw={"height_ratios": heights}, squeeze=False)
+    (ax_h, ax_g) = axes[0]
     tracker_style = [dict(color=SCORE_COLOUR, marker="o")] * len(trackers)
     _interval_rows(ax_h, trackers, hota, tracker_style)
     ax_h.set_title("HOTA per tracker\n(higher is better →)", fontsize=10)
@@ -108,6 +111,12 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
     _interval_rows(ax_g, trackers, gospa, tracker_style)
     ax_g.set_title("GOSPA per tracker\n(← lower is better)", fontsize=10)
     ax_g.set_xlabel("GOSPA (m)")
+    ax_g.tick_params(labelleft=False)
+    if title:
+        fig.suptitle(title)
+    if not findings:
+        return fig
+    ax_dh, ax_dg = axes[1]
     # Both difference panels are signed as the findings table: positive supports the
     # claim "A better than B" (HOTA as A − B, GOSPA — lower is better — as B − A).
     for ax, stats, paper, metric, unit, order in (
@@ -123,7 +132,6 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
         lo, hi = ax.get_xlim()  # keep the zero line in view even when all are far from it
         ax.set_xlim(min(lo, -0.05 * (hi - lo)), max(hi, 0.05 * (hi - lo)))
     ax_dg.tick_params(labelleft=False)  # same findings as the panel to its left
-    ax_g.tick_params(labelleft=False)
     drawn = [v.lower() for v in verdicts + gospa_verdicts]
     seen = dict.fromkeys(list(_LEGEND_VERDICTS) + drawn)
     handles = [Line2D([], [], ls="none", ms=8, label=f"verdict: {v}",
@@ -136,8 +144,6 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
                fontsize=9, title="Each finding 'A − B' compares tracker A with tracker B; "
                                  "positive differences favour A on both metrics",
                title_fontsize=9)
-    if title:
-        fig.suptitle(title)
     return fig
 
 
@@ -154,7 +160,8 @@ def plot_summary(path: str | Path, tracker_labels: Sequence[str], hota, gospa,
     unless ``gospa_verdicts`` gives that metric's own; ``hota_paper``/``gospa_paper``
     (one value per finding, NaN: none) add the paper's effect as a hollow diamond.
     ``hota``/``gospa``: (n_trackers, 3) and ``hota_diff``/``gospa_diff``: (n_findings, 3)
-    rows of (mean, low, high); NaN rows read "n/a"."""
+    rows of (mean, low, high); NaN rows read "n/a". With no findings only the two score
+    panels are drawn."""
     _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gospa_diff,
                     verdicts, title, gospa_verdicts, hota_paper, gospa_paper).savefig(path)
 
