@@ -338,6 +338,19 @@ def test_sensitivity_marks_exactly_the_cells_whose_interval_excludes_zero():
     assert "excludes 0" in texts and "n/a" in texts
 
 
+def test_sensitivity_title_stays_inside_a_narrow_figure():
+    label = ("closest other − uniform: the uniform GM-PHD is the worst of the paper's five "
+             "(margin to the closest)")
+    fig = summary_plots._figure_sensitivity(label, "radar bearing σ (°)", [0.5, 1.0], "", [0.0],
+                                            np.array([[23.4, 14.6]]), np.array([[23.0, 13.1]]),
+                                            np.array([[23.8, 16.0]]), "ΔHOTA (pp)")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    title = fig.axes[0].title.get_window_extent(canvas.get_renderer())
+    assert title.x0 >= 0 and title.x1 <= fig.bbox.width, (title, fig.bbox)
+
+
 def test_sensitivity_lower_is_better_flips_what_favours():
     fig = summary_plots._figure_sensitivity("A − B", "clutter", [1, 2], "", [0],
                                             [-2.0, 2.0], [-3.0, 1.0], [-1.0, 3.0], "GOSPA (m)",

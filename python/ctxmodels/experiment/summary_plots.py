@@ -202,8 +202,9 @@ def _figure_sensitivity(finding_label, x_name, x_values, y_name, y_values, diff,
     # Blue always means "favours the finding": flip the map when lower is better.
     cmap = matplotlib.colormaps["RdBu" if better == "higher" else "RdBu_r"].with_extremes(
         bad="0.82")
-    fig = _figure(figsize=(max(6.0, 1.35 * shape[1] + 3.2), max(3.4, 1.0 * shape[0] + 2.6)),
-                  dpi=100, layout="constrained")
+    width = max(6.0, 1.35 * shape[1] + 3.2)
+    fig = _figure(figsize=(width, max(3.4, 1.0 * shape[0] + 2.6)), dpi=100,
+                  layout="constrained")
     ax = fig.add_subplot()
     image = ax.imshow(np.ma.masked_invalid(diff), cmap=cmap, vmin=-scale, vmax=scale,
                       origin="lower", aspect="auto", interpolation="nearest")
@@ -237,8 +238,10 @@ def _figure_sensitivity(finding_label, x_name, x_values, y_name, y_values, diff,
     for y, words in ((good, "favours\nfinding"), (bad, "against\nfinding")):
         colourbar.ax.text(0.5, y + (0.02 if y else -0.02), words, transform=colourbar.ax.transAxes,
                           ha="center", va="bottom" if y else "top", fontsize=7.5)
-    # (long claims wrapped: the title must fit over the heatmap)
-    ax.set_title("\n".join(textwrap.wrap(f"{finding_label}: {metric_label} difference", 80))
+    # (long claims wrapped to the figure's width: the title is centred over the heatmap,
+    # left of the colour bar, and must not run off the figure's left edge)
+    ax.set_title("\n".join(textwrap.wrap(f"{finding_label}: {metric_label} difference",
+                                         int(11 * width) - 10))
                  + "\nmean [95 % interval] per setting", fontsize=10)
     handles = [Patch(fill=False, ec="k", lw=2.2, label="bold, solid box: interval excludes 0,"
                                                        " favours the finding"),
