@@ -403,8 +403,8 @@ def test_a_job_measures_its_tracking_cpu_time():
 
 
 def test_progress_bar_ends_exactly_on_its_total_without_a_warning(monkeypatch):
-    """The full study's 240 jobs, finished in any order: the bar's count ends on its
-    total (it overshot by 1e-12 and tqdm warned, clamping, with a negative ETA)."""
+    """The full study's jobs, finished in any order: the bar's count ends on its total (it
+    overshot by 1e-12 and tqdm warned, clamping, with a negative ETA)."""
     from tqdm import TqdmWarning
 
     from ctxmodels.experiment import runner
@@ -420,7 +420,7 @@ def test_progress_bar_ends_exactly_on_its_total_without_a_warning(monkeypatch):
         bar._bar.refresh()
         bar.close()
     assert "100%" in stream.getvalue() and "<-" not in stream.getvalue()
-    assert "240/240 runs" in stream.getvalue()
+    assert len(jobs) > 200 and f"{len(jobs)}/{len(jobs)} runs" in stream.getvalue()
 
 
 def test_progress_bar_off_builds_no_bar():
