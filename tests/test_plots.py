@@ -295,6 +295,25 @@ def test_summary_all_nan_and_shape_errors(tmp_path):
         summary_plots.plot_summary(path, **{**inputs, "verdicts": ["reproduced"]})
 
 
+def test_summary_track_management_row_per_tracker(tmp_path):
+    inputs = summary_inputs()
+    fig = summary_plots._figure_summary(**inputs, false_tracks=[2.13, 0.37, np.nan],
+                                        tracked=[77.2, 83.8, np.nan])
+    titles = [ax.get_title() for ax in fig.axes]
+    assert any(t.startswith("False tracks per radar scan") for t in titles)
+    assert any(t.startswith("Vessel time tracked") for t in titles)
+    assert len(fig.axes) == 6  # scores, track management, differences
+    ax = next(ax for ax in fig.axes if ax.get_title().startswith("False tracks"))
+    assert [t.get_text() for t in ax.get_yticklabels()] == inputs["tracker_labels"]
+    notes = [t.get_text() for t in ax.texts]
+    assert any("n/a" in n for n in notes)  # the tracker without a value
+    with pytest.raises(ValueError, match="tracked"):
+        summary_plots._figure_summary(**inputs, tracked=[1.0, 2.0])
+    path = tmp_path / "summary.png"
+    summary_plots.plot_summary(path, **inputs, false_tracks=[1, 2, 3], tracked=[4, 5, 6])
+    assert_png(path)
+
+
 def test_summary_without_findings_draws_the_scores_only(tmp_path):
     inputs = summary_inputs()
     fig = summary_plots._figure_summary(

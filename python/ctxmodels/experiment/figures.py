@@ -26,7 +26,7 @@ def draw_experiment_figures(results, folder: Path) -> dict[str, Path]:
         plotted = [(r.job.tracker, r.tracks) for r in sorted(results.results, key=lambda r: r.job.tracker)
                    if r.job.scenario == scenario and r.job.seed == config.plot_seed]
         written.update(_draw_scenario(folder, scenario, config.plot_seed, config.duration,
-                                      plotted))
+                                      plotted, config.radar, config.lidar))
         if scenario == "mixed-range":
             written.update(_draw_paper_figures(folder, config.plot_seed, config.duration,
                                                dict(plotted), config.radar, config.lidar))
@@ -35,15 +35,17 @@ def draw_experiment_figures(results, folder: Path) -> dict[str, Path]:
     return written
 
 
-def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted) -> dict[str, Path]:
+def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted, radar=None,
+                   lidar=None) -> dict[str, Path]:
     """Every plotted tracker's tracks on ``scenario`` (``plotted``: (tracker, kept track
     paths) pairs), and the context-aware models' coverage there."""
     from .plots import Polyline, plot_coverage, plot_tracks
-    from .scenarios import make_scenario
+    from .runner import simulated_run
     from .sensors import paper_sensor_models
     from .trackers import TRACKERS
     written = {}
-    run = make_scenario(scenario, seed, duration)
+    # (the runs' own simulation: cached, so scenario 1's serves the paper figures too)
+    run = simulated_run(scenario, seed, duration, radar, lidar)
     epoch = run.radar_times[0]
     truths = [Polyline.from_states(t.states, epoch, label=t.id)
               for t in sorted(run.truths, key=lambda t: t.id)]
@@ -73,11 +75,11 @@ def _draw_paper_figures(folder: Path, seed: int, duration, plotted: dict, radar=
                         lidar=None) -> dict[str, Path]:
     """Scenario 1 as the paper shows it: trackers side by side (its Fig. 4), and the
     mechanism — the far vessel's GM-PHD weight over time under each tracker."""
-    from .scenarios import make_scenario
+    from .runner import simulated_run
     from .track_plots import Polyline, plot_mechanism, plot_track_panels
     from .trackers import TRACKERS
     written = {}
-    run = make_scenario("mixed-range", seed, duration, radar=radar, lidar=lidar)
+    run = simulated_run("mixed-range", seed, duration, radar, lidar)
     epoch = run.radar_times[0]
     truths = [Polyline.from_states(t.states, epoch, label=t.id)
               for t in sorted(run.truths, key=lambda t: t.id)]
@@ -148,6 +150,7 @@ def _summaries(results) -> list[tuple[str, dict]]:
     the findings table gives them (positive supports the claim, GOSPA too) and each
     panel's markers are that metric's verdict, not the finding's overall one."""
     rows = results.scores()
+    managed = {(row["tracker"], row["scope"]): row for row in results.management()}
     findings = [f for f in results.findings() if f.hota is not None]
     seeds = len(results.config.seeds)
     out = []
@@ -166,6 +169,10 @@ def _summaries(results) -> list[tuple[str, dict]]:
             gospa_verdicts=[f.gospa_verdict for f in here],
             hota_paper=np.array([p[0] for p in paper], dtype=float),
             gospa_paper=np.array([p[1] for p in paper], dtype=float),
+            false_tracks=np.array([managed.get((row["tracker"], scope), {}).get(
+                "false_tracks_per_scan", np.nan) for row in scored], dtype=float),
+            tracked=np.array([managed.get((row["tracker"], scope), {}).get(
+                "tracked_percent", np.nan) for row in scored], dtype=float),
             title=f"{_SCOPE_TITLES.get(scope, scope)}: mean and 95 % interval over {seeds} "
                   f"seeds")))
     return out

@@ -71,7 +71,8 @@ def _interval_rows(ax, labels, stats, styles, *, annotate=True):
     return drawn
 
 
-def _per_finding(values, rows: int, name: str) -> np.ndarray:
+def _one_per_row(values, rows: int, name: str) -> np.ndarray:
+    """One value per row (finding or tracker); None: all NaN."""
     array = np.full(rows, np.nan) if values is None else np.asarray(values, dtype=float)
     if array.shape != (rows,):
         raise ValueError(f"{name}: expected {rows} values, got {np.shape(values)}")
@@ -80,15 +81,15 @@ def _per_finding(values, rows: int, name: str) -> np.ndarray:
 
 def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gospa_diff,
                     verdicts, title="", gospa_verdicts=None, hota_paper=None,
-                    gospa_paper=None):
+                    gospa_paper=None, false_tracks=None, tracked=None):
     from matplotlib.lines import Line2D
     trackers, findings = list(tracker_labels), list(finding_labels)
     hota = _intervals(hota, len(trackers), "hota")
     gospa = _intervals(gospa, len(trackers), "gospa")
     hota_diff = _intervals(hota_diff, len(findings), "hota_diff")
     gospa_diff = _intervals(gospa_diff, len(findings), "gospa_diff")
-    hota_paper = _per_finding(hota_paper, len(findings), "hota_paper")
-    gospa_paper = _per_finding(gospa_paper, len(findings), "gospa_paper")
+    hota_paper = _one_per_row(hota_paper, len(findings), "hota_paper")
+    gospa_paper = _one_per_row(gospa_paper, len(findings), "gospa_paper")
     verdicts = [str(v) for v in verdicts]
     gospa_verdicts = verdicts if gospa_verdicts is None else [str(v) for v in gospa_verdicts]
     for name, given in (("verdicts", verdicts), ("gospa_verdicts", gospa_verdicts)):
@@ -98,9 +99,13 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
     # end of a long run should not fail over a label.
     styles = {metric: [VERDICT_STYLES.get(v.lower(), _OTHER_VERDICT) for v in given]
               for metric, given in (("HOTA", verdicts), ("GOSPA", gospa_verdicts))}
+    management = false_tracks is not None or tracked is not None
+    false_tracks = _one_per_row(false_tracks, len(trackers), "false_tracks")
+    tracked = _one_per_row(tracked, len(trackers), "tracked")
     # A scope without findings (scenario 2 alone) gets the score panels only, not two empty
     # difference panels.
-    heights = [max(len(trackers), 1) + 1.2] + ([len(findings) + 1.2] if findings else [])
+    rows = max(len(trackers), 1) + 1.2
+    heights = [rows] + ([rows] if management else []) + ([len(findings) + 1.2] if findings else [])
     fig = _figure(figsize=(12.5, 1.6 + 0.42 * sum(heights)), dpi=100, layout="constrained")
     axes = fig.subplots(len(heights), 2, gridspec_kw={"height_ratios": heights}, squeeze=False)
     (ax_h, ax_g) = axes[0]
@@ -114,9 +119,22 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
     ax_g.tick_params(labelleft=False)
     if title:
         fig.suptitle(title)
+    if management:
+        ax_f, ax_t = axes[1]
+        no_bar = np.full(len(trackers), np.nan)
+        _interval_rows(ax_f, trackers, np.column_stack([false_tracks, no_bar, no_bar]),
+                       tracker_style)
+        ax_f.set_title("False tracks per radar scan, mean over seeds\n(← fewer is better)",
+                       fontsize=10)
+        ax_f.set_xlabel("false tracks (never matched to a vessel) per scan")
+        _interval_rows(ax_t, trackers, np.column_stack([tracked, no_bar, no_bar]),
+                       tracker_style)
+        ax_t.set_title("Vessel time tracked, mean over seeds\n(more is better →)", fontsize=10)
+        ax_t.set_xlabel("vessel time tracked (%)")
+        ax_t.tick_params(labelleft=False)
     if not findings:
         return fig
-    ax_dh, ax_dg = axes[1]
+    ax_dh, ax_dg = axes[-1]
     # Both difference panels are signed as the findings table: positive supports the
     # claim "A better than B" (HOTA as A − B, GOSPA — lower is better — as B − A).
     for ax, stats, paper, metric, unit, order in (
@@ -151,7 +169,7 @@ def plot_summary(path: str | Path, tracker_labels: Sequence[str], hota, gospa,
                  finding_labels: Sequence[str], hota_diff, gospa_diff,
                  verdicts: Sequence[str], title: str = "",
                  gospa_verdicts: Sequence[str] | None = None, hota_paper=None,
-                 gospa_paper=None):
+                 gospa_paper=None, false_tracks=None, tracked=None):
     """Four panels: HOTA (%) and GOSPA (m) per tracker as means with 95 % interval bars;
     below, per finding "A − B", the paired HOTA and GOSPA differences with their intervals
     around a zero line, signed as the findings table (positive favours A: HOTA A − B,
@@ -160,10 +178,13 @@ def plot_summary(path: str | Path, tracker_labels: Sequence[str], hota, gospa,
     unless ``gospa_verdicts`` gives that metric's own; ``hota_paper``/``gospa_paper``
     (one value per finding, NaN: none) add the paper's effect as a hollow diamond.
     ``hota``/``gospa``: (n_trackers, 3) and ``hota_diff``/``gospa_diff``: (n_findings, 3)
-    rows of (mean, low, high); NaN rows read "n/a". With no findings only the two score
-    panels are drawn."""
+    rows of (mean, low, high); NaN rows read "n/a". With ``false_tracks`` / ``tracked``
+    (one mean per tracker: false tracks per radar scan, % of vessel time tracked) a row of
+    track-management panels follows the scores. With no findings the difference panels
+    are left out."""
     _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gospa_diff,
-                    verdicts, title, gospa_verdicts, hota_paper, gospa_paper).savefig(path)
+                    verdicts, title, gospa_verdicts, hota_paper, gospa_paper, false_tracks,
+                    tracked).savefig(path)
 
 
 def _tick(value) -> str:
