@@ -13,8 +13,9 @@ findings are; positive favours the learned model; 95 % paired-t interval):
     python scripts/learned_target_leak.py [FAR_CLUTTER BEARING_DEG [SEEDS [FIRST_SEED]]]
 
 FAR_CLUTTER: the radar's clutter returns per scan beyond 1 km (default 32), BEARING_DEG its
-bearing σ in degrees (default 1): a setting of the sweep; SEEDS seeds (default 10) from
-FIRST_SEED (default 0). About 4 minutes on 2 cores.
+bearing σ in degrees (default 1), on the ``stress`` truth the map was developed on (its
+defaults are that truth's); SEEDS seeds (default 10) from FIRST_SEED (default 0). About 4
+minutes on 2 cores.
 """
 import dataclasses
 import math
@@ -29,7 +30,7 @@ from ctxmodels import DetectionSet
 from ctxmodels.experiment import metrics
 from ctxmodels.experiment.runner import simulated_run, track_scans
 from ctxmodels.experiment.scoring import score_run
-from ctxmodels.experiment.simulation.radar import RadarConfig
+from ctxmodels.experiment.scenarios import TRUTHS
 import ctxmodels.experiment.trackers as trackers
 from ctxmodels.experiment.trackers import TRACKERS, build_tracker
 from ctxmodels.stonesoup.ordering import in_track_order
@@ -62,9 +63,11 @@ def job(args):
     name, changes = VARIANTS[variant]
     for setting, value in {**DEFAULTS, **changes}.items():  # every job sets them all
         setattr(trackers, setting, value)
-    radar = dataclasses.replace(RadarConfig(), clutter_per_scan_far=far,
+    # (the stress truth the learned map was developed on, far clutter and bearing changed)
+    stress = TRUTHS["stress"]
+    radar = dataclasses.replace(stress.radar, clutter_per_scan_far=far,
                                 bearing_std=math.radians(bearing))
-    run = simulated_run(scenario, seed, None, radar, None)
+    run = simulated_run(scenario, seed, None, radar, stress.lidar)
     _, _, tracks = track_scans(build_tracker(TRACKERS[name], run))
     return (variant, scenario, seed), score_run(run, [t for t in in_track_order(tracks) if len(t)])
 

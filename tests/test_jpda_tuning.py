@@ -61,3 +61,19 @@ def test_summary_averages_seeds_then_scenarios():
     assert first.per_scenario[PAPER_SCENARIOS[0]] == pytest.approx((60.0, 25.0))
     assert first.hota == pytest.approx((60.0 + 20.0) / 2)
     assert first.gospa == pytest.approx((25.0 + 40.0) / 2)
+
+
+def test_bad_search_input_is_refused_naming_the_argument():
+    from ctxmodels.experiment.runner import Job
+    with pytest.raises(ValueError, match="summary"):
+        choose([])
+    with pytest.raises(ValueError, match="results"):
+        summarise([])
+    with pytest.raises(ValueError, match="tracker_options"):
+        Job("mixed-range", 0, "jpda", tracker_options=(("bogus", 1.0),))
+    with pytest.raises(ValueError, match="delete_window"):
+        Job("mixed-range", 0, "jpda", tracker_options=(("delete_window", -1.0),))
+    with pytest.raises(ValueError, match="JPDA settings"):
+        Job("mixed-range", 0, "gmphd-context", tracker_options=(("merge_duplicates", True),))
+    with pytest.raises(ValueError, match="extract"):
+        Job("mixed-range", 0, "jpda", extract="max")

@@ -96,6 +96,17 @@ def test_sweep_grid_and_maps(tmp_path):
     assert "| stress | 0.4 |" in paths["markdown"].read_text()
 
 
+@pytest.mark.parametrize("change, argument", [
+    (dict(prob_detection=1.5), "prob_detection"), (dict(prob_detection=0.0), "prob_detection"),
+    (dict(far_clutter=-1e-3), "far_clutter"), (dict(lidar_clutter=float("nan")), "lidar_clutter"),
+    (dict(bearing_std_deg=0.0), "bearing_std_deg"), (dict(truth="calm"), "truth")])
+def test_sweep_cells_refuse_bad_settings_naming_them(change, argument):
+    from ctxmodels.experiment.sweep import Cell
+    values = dict(prob_detection=0.7, far_clutter=3e-3, bearing_std_deg=0.5, lidar_clutter=0.3)
+    with pytest.raises(ValueError, match=argument):
+        Cell(**{**values, **change})
+
+
 @pytest.mark.parametrize("argv, option", [
     (["--radar-bearing-std", "0"], "--radar-bearing-std"),
     (["--radar-far-clutter", "-1"], "--radar-far-clutter"),

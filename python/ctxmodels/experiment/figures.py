@@ -51,7 +51,7 @@ def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted, ra
               for t in sorted(run.truths, key=lambda t: t.id)]
     ego = Polyline([(t - epoch).total_seconds() for t in run.ego.timestamps], run.ego.positions)
     for tracker, paths in plotted:
-        tracks = [Polyline(times, xy) for times, xy, _ in paths]
+        tracks = [Polyline(times, xy) for times, xy in paths]
         path = folder / f"tracks_{scenario}_{tracker}.png"
         plot_tracks(path, f"{scenario}: {TRACKERS[tracker].label} (seed {seed})",
                     tracks, truths, ego, float(run.ego.headings[-1]), land=run.land,
@@ -89,7 +89,7 @@ def _draw_paper_figures(folder: Path, seed: int, duration, plotted: dict, radar=
         name = next((n for n in choices if n in plotted), None)
         if name is not None:
             panels.append((TRACKERS[name].label,
-                           [Polyline(times, xy) for times, xy, _ in plotted[name]]))
+                           [Polyline(times, xy) for times, xy in plotted[name]]))
     if len(panels) == len(FIG4_TRACKERS):
         path = folder / "tracks_mixed-range_fig4.png"
         plot_track_panels(path, f"Scenario 1 (seed {seed}), as the paper's Fig. 4", panels,
@@ -104,11 +104,11 @@ def _draw_paper_figures(folder: Path, seed: int, duration, plotted: dict, radar=
         window = (0.0, min(MECHANISM_WINDOW, seconds[-1]))
         series = [(TRACKERS[name].label, *mass_on_vessel(name, run, far.label, window[1]))
                   for name in present]
-        lidar = [(t - epoch).total_seconds() for t in run.lidar_times]
+        lidar_seconds = [(t - epoch).total_seconds() for t in run.lidar_times]
         path = folder / "mechanism_mixed-range.png"
         plot_mechanism(path, f"Scenario 1 (seed {seed}): the PHD mass on {far.label}, the "
                        "vessel farthest from the ego, beyond the lidar's 80 m",
-                       series, seconds, lidar, window=window)
+                       series, seconds, lidar_seconds, window=window)
         written[path.stem] = path
     return written
 
@@ -123,6 +123,10 @@ def mass_on_vessel(tracker: str, run, vessel: str, until: float,
     (times since the first radar scan, PHD mass) after each scan: the summed weight of the
     mixture's components within ``distance`` m of ``vessel`` at that time."""
     from .trackers import TRACKERS, build_tracker
+    if TRACKERS[tracker].family != "gmphd":
+        raise ValueError(f"tracker: {tracker} has no PHD mixture (a GM-PHD is needed)")
+    if vessel not in run.truth_by_id:
+        raise ValueError(f"vessel: {vessel!r} is not one of {list(run.truth_by_id)}")
     epoch = run.radar_times[0]
     truth = {state.timestamp: state for state in run.truth_by_id[vessel]}
     times, masses = [], []

@@ -65,7 +65,10 @@ def summarise(results: Sequence) -> list[SettingResult]:
             result.job.scenario, []).append(result)
     out = []
     for setting in settings():
-        runs = by_setting[setting.options()]
+        runs = by_setting.get(setting.options(), {})
+        if set(runs) != set(PAPER_SCENARIOS):
+            raise ValueError(f"results: setting {setting} has no runs on "
+                             f"{sorted(set(PAPER_SCENARIOS) - set(runs))}")
         per = {s: (float(np.mean([100 * r.hota.hota for r in runs[s]])),
                    float(np.mean([r.gospa.rms for r in runs[s]]))) for s in PAPER_SCENARIOS}
         out.append(SettingResult(setting, float(np.mean([h for h, _ in per.values()])),
@@ -76,6 +79,8 @@ def summarise(results: Sequence) -> list[SettingResult]:
 def choose(summary: Sequence[SettingResult]) -> SettingResult:
     """The declared choice: the highest HOTA; within :data:`TIE` of it, the smallest GOSPA,
     then the first in grid order."""
+    if not summary:
+        raise ValueError("summary: no settings to choose from")
     best = max(r.hota for r in summary)
     tied = [r for r in summary if r.hota >= best - TIE]
     return min(tied, key=lambda r: r.gospa)  # (min keeps the first of equal GOSPAs)

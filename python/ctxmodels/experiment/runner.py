@@ -67,6 +67,23 @@ class Job:
     #: ``(field, value)`` pairs (a search over its settings, e.g. ``scripts/tune_jpda.py``).
     tracker_options: tuple = ()
 
+    def __post_init__(self):
+        # checked here, where the job is made, not in a worker after its simulation
+        from .extraction import EXTRACTIONS
+        from .trackers import TRACKERS
+        if self.extract not in EXTRACTIONS:
+            raise ValueError(f"extract: unknown extraction rule {self.extract!r}; choose from "
+                             f"{list(EXTRACTIONS)}")
+        if self.tracker not in TRACKERS:
+            raise ValueError(f"tracker: unknown tracker {self.tracker!r}; choose from "
+                             f"{list(TRACKERS)}")
+        if self.tracker_options:
+            fields = {f.name for f in dataclasses.fields(TRACKERS[self.tracker])}
+            unknown = [name for name, _ in self.tracker_options if name not in fields]
+            if unknown:
+                raise ValueError(f"tracker_options: {unknown} are not TrackerSpec fields")
+            dataclasses.replace(TRACKERS[self.tracker], **dict(self.tracker_options))
+
 
 @dataclass
 class JobResult:
@@ -76,7 +93,7 @@ class JobResult:
     seconds: float
     scans: int
     track_count: int
-    tracks: list = field(default_factory=list)  # [(times, xy, weights)] when job.keep_tracks
+    tracks: list = field(default_factory=list)  # [(times, xy)] when job.keep_tracks
     #: SHA-256 of every reported track state (time, mean, covariance), in track order: equal
     #: digests mean bit-identical tracks. Empty unless ``job.digest``.
     digest: str = ""
@@ -157,8 +174,7 @@ def run_job(job: Job) -> JobResult:
 
 
 def kept_paths(tracks, epoch) -> list:
-    """Each track's path for the figures: (seconds since ``epoch``, [[x, y], ...], weights)
-    lists; weights are the GM-PHD states' (None for tracks whose states have none)."""
+    """Each track's path for the figures: (seconds since ``epoch``, [[x, y], ...]) lists."""
     kept = []
     seconds: dict = {}  # the tracks share their scans' timestamps
     for track in tracks:
@@ -171,9 +187,7 @@ def kept_paths(tracks, epoch) -> list:
                 value = seconds[stamp] = (stamp - epoch).total_seconds()
             times.append(value)
         vectors = np.array([state.state_vector for state in states], dtype=np.float64)
-        weights = [getattr(state, "weight", None) for state in states]
-        weights = None if any(w is None for w in weights) else [float(w) for w in weights]
-        kept.append((times, vectors[:, [0, 2], 0].tolist(), weights))
+        kept.append((times, vectors[:, [0, 2], 0].tolist()))
     return kept
 
 

@@ -56,6 +56,20 @@ class Cell:
     lidar_clutter: float
     truth: str = "calibrated"
 
+    def __post_init__(self):
+        if self.truth not in TRUTHS:
+            raise ValueError(f"truth: unknown truth {self.truth!r}; choose from {list(TRUTHS)}")
+        if not (0.0 < self.prob_detection <= 1.0):
+            raise ValueError(f"prob_detection: the radar's P_D must be in (0, 1], got "
+                             f"{self.prob_detection!r}")
+        for name in ("far_clutter", "lidar_clutter"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"{name}: must be finite and ≥ 0, got {value!r}")
+        if not (math.isfinite(self.bearing_std_deg) and self.bearing_std_deg > 0.0):
+            raise ValueError(f"bearing_std_deg: must be finite and > 0, got "
+                             f"{self.bearing_std_deg!r}")
+
     @classmethod
     def of_truth(cls, name: str) -> Cell:
         radar, lidar = TRUTHS[name].radar, TRUTHS[name].lidar
