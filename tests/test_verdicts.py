@@ -10,6 +10,7 @@ import math
 import random
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from ctxmodels.experiment import figures, summary_plots
@@ -283,18 +284,25 @@ def test_summary_figure_draws_the_findings_table(tmp_path):
         (REPRODUCED, NOT_REPRODUCED, NOT_REPRODUCED)
     score = {"hota": Interval(50.0, 45.0, 55.0), "gospa": Interval(30.0, 28.0, 32.0)}
     fake = SimpleNamespace(
-        scores=lambda: [{"label": "GM-PHD (radar only)", "mixed-range": score},
-                        {"label": "GM-PHD (uniform)", "mixed-range": score}],
+        scores=lambda: [{"tracker": "gmphd-radar-only", "label": "GM-PHD (radar only)",
+                         "mixed-range": score},
+                        {"tracker": "gmphd-uniform", "label": "GM-PHD (uniform)",
+                         "mixed-range": score}],
+        management=lambda: [{"tracker": "gmphd-radar-only", "scope": "mixed-range",
+                             "false_tracks_per_scan": 0.4, "tracked_percent": 95.0}],
         findings=lambda: [result], scopes=lambda: ["mixed-range"],
         config=SimpleNamespace(seeds=(0, 1, 2)))
     (scope, fields), = figures._summaries(fake)
     assert scope == "mixed-range"
+    # the track-management row per tracker: the uniform GM-PHD has no row here (NaN)
+    assert list(fields["false_tracks"][:1]) == [0.4] and np.isnan(fields["false_tracks"][1])
+    assert list(fields["tracked"][:1]) == [95.0]
     assert tuple(fields["gospa_diff"][0]) == pytest.approx(
         (result.gospa.mean, result.gospa.low, result.gospa.high))
     assert fields["gospa_diff"][0][0] == pytest.approx(-74.0)  # as the table: not +74
     assert list(fields["hota_paper"]) == pytest.approx([75.5])
     fig = summary_plots._figure_summary(**fields)
-    _, _, d_hota, d_gospa = fig.axes
+    *_, d_hota, d_gospa = fig.axes  # scores, track management, then the differences
     for ax, interval, verdict_ in ((d_hota, result.hota, REPRODUCED),
                                    (d_gospa, result.gospa, NOT_REPRODUCED)):
         (container,) = ax.containers
