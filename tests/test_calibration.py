@@ -96,7 +96,7 @@ def test_a_stage_runs_real_jobs_and_scores_them():
 
 def test_the_default_truth_is_the_calibrations_choice():
     """The scenarios' default sensors are the values docs/calibration.md's run chose (its
-    committed JSON), and the stress truth is the earlier default the docs describe."""
+    committed JSON), and the stress truth is the one the docs describe."""
     import json
     from pathlib import Path
 

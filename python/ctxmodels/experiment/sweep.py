@@ -7,7 +7,7 @@ keep their models in every cell. Around the calibrated truth (``docs/calibration
   is the value the calibration could not identify (0.6–0.95 fitted the baseline rows
   equally); far clutter 1e-3 makes the trackers' uniform λ true everywhere, 3e-3 is the
   calibrated value, 1e-2 the paper's context λ;
-* bearing line: the radar's bearing σ (0.5° calibrated, 1° the earlier default);
+* bearing line: the radar's bearing σ (0.5° calibrated, 1° the stress truth's);
 * lidar line: lidar clutter points per scan within 80 m (0.3 calibrated);
 * the ``stress`` truth (:data:`~ctxmodels.experiment.scenarios.TRUTHS`) as one more cell:
   the trackers' P_D 0.4 and far λ 1e-2 copied into the truth, bearing σ 1°, 3 lidar

@@ -468,8 +468,8 @@ def learned_detection(model: SensorModel) -> DetectionProbabilityModel:
 #: The hand-written coastal band (``gmphd-coastal``), from the simulated radar before any
 #: run: shore returns are 0.01 per metre of seen coastline per scan, measured with σ 1° in
 #: bearing (6–13 m across the line of sight at the islands' 350–760 m) and 5 m in range.
-#: Half-width 25 m: 2σ of the bearing error at 750 m (set for the earlier 1° truth; the
-#: calibrated 0.5° makes it 4σ, kept as it was chosen). Factor 100: the returns spread over
+#: Half-width 25 m: 2σ of a 1° bearing error at 750 m (4σ of the calibrated 0.5°; the
+#: band is hand-written, not tuned to either). Factor 100: the returns spread over
 #: the 50 m band are 2e-4 per m², 0.1 per rad·m at the islands' middle range (550 m) —
 #: 100 times the sea's 1e-3 there. (One factor for all ranges: at 350 m it is 1.5× too
 #: high, at 750 m 1.4× too low.)

@@ -8,7 +8,7 @@ the trackers assume.
     1000 m and 3e-3 beyond, bearing σ 0.5°, lidar clutter 0.3 points per scan.
 
 ``stress``
-    The study's earlier default, kept as a stress test: it copies two of the paper's
+    A stress test: it copies two of the paper's
     *tracker* settings into the truth — radar P_D 0.4 for every object and far clutter
     1e-2 per rad·m (the context-aware λ) — with bearing σ 1° and 3 lidar clutter points
     per scan. The paper's own baseline results rule it out as a model of its data (its
