@@ -29,13 +29,14 @@ def build(tracker: str, run, array: bool):
     """The experiment's tracker (the array path), or the same components in the component
     path (for the JPDA: ctxmodels' stock-derived tracker and initiator, fast GNN)."""
     from ctxmodels.experiment import trackers
+    from ctxmodels.trackers import TRACKERS
     from ctxmodels.stonesoup import MultiMeasurementInitiator, MultiTargetMixtureTracker
-    spec = trackers.TRACKERS[tracker]
-    built = trackers.build_tracker(spec, run)
+    spec = TRACKERS[tracker]
+    built = trackers.build_tracker(spec, run).tracker
     if array:
         return built
     if spec.family != "jpda":
-        return trackers.build_tracker(spec, run, fast=False)
+        return trackers.build_tracker(spec, run, fast=False).tracker
     held = built.initiator
     initiator = MultiMeasurementInitiator(
         prior_state=held.prior_state, deleter=held.deleter,
@@ -67,7 +68,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     from ctxmodels.experiment.scenarios import make_scenario
-    from ctxmodels.experiment.trackers import TRACKERS
+    from ctxmodels.trackers import TRACKERS
     if args.tracker not in TRACKERS:
         parser.error(f"--tracker: unknown tracker {args.tracker!r}; choose from {sorted(TRACKERS)}")
     if args.repeats < 1:

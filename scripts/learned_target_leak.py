@@ -31,14 +31,15 @@ from ctxmodels.experiment import metrics
 from ctxmodels.experiment.runner import simulated_run, track_scans
 from ctxmodels.experiment.scoring import score_run
 from ctxmodels.experiment.scenarios import TRUTHS
-import ctxmodels.experiment.trackers as trackers
-from ctxmodels.experiment.trackers import TRACKERS, build_tracker
+import ctxmodels.trackers.models as learned_settings
+from ctxmodels.experiment.trackers import build_tracker
+from ctxmodels.trackers import TRACKERS
 from ctxmodels.stonesoup.ordering import in_track_order
 
 SCENARIOS = ("mixed-range", "formation")
 LEARN = learning.ClutterMapLearner.learn
 SETTINGS = ("MAP_WEIGHTING", "MAP_POOLING_SCANS")
-DEFAULTS = {name: getattr(trackers, name) for name in SETTINGS}
+DEFAULTS = {name: getattr(learned_settings, name) for name in SETTINGS}
 SECOND = {"MAP_WEIGHTING": "gates", "MAP_POOLING_SCANS": 10.0}
 VARIANTS = {"context": ("gmphd-context", {}),
             "learned λ": ("gmphd-learned-clutter", {}),
@@ -62,7 +63,7 @@ def job(args):
     learning.ClutterMapLearner.learn = learn_from_clutter_only if "oracle" in variant else LEARN
     name, changes = VARIANTS[variant]
     for setting, value in {**DEFAULTS, **changes}.items():  # every job sets them all
-        setattr(trackers, setting, value)
+        setattr(learned_settings, setting, value)
     # (the stress truth the learned map was developed on, far clutter and bearing changed)
     stress = TRUTHS["stress"]
     radar = dataclasses.replace(stress.radar, clutter_per_scan_far=far,

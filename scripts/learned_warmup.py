@@ -18,13 +18,15 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 import ctxmodels.experiment.trackers as trackers
+import ctxmodels.trackers.models as learned_settings
+from ctxmodels.trackers import TRACKERS
 from ctxmodels.experiment.runner import simulated_run, track_scans
 from ctxmodels.experiment.scoring import score_run
 from ctxmodels.stonesoup.ordering import in_track_order
 
 SETTINGS = ("MAP_PRIOR_SCANS", "MAP_POOLING", "MAP_POOLING_SCANS", "MAP_WEIGHTING",
             "_seen_bearings")
-DEFAULTS = {name: getattr(trackers, name) for name in SETTINGS}
+DEFAULTS = {name: getattr(learned_settings, name) for name in SETTINGS}
 STUDY = {"gmphd-learned-clutter": ("gmphd-learned-clutter", {}),
          "gmphd-learned": ("gmphd-learned", {})}
 VARIED = {
@@ -50,13 +52,13 @@ VARIANTS = {"context": ("gmphd-context", {}), **STUDY, **VARIED}
 def job(label):
     tracker, changes = VARIANTS[label]
     for name, value in {**DEFAULTS, **changes}.items():
-        setattr(trackers, name, value)
+        setattr(learned_settings, name, value)
     rms = {}
     for scenario in SCENARIOS:
         for seed in SEEDS:
             run = simulated_run(scenario, seed, None, None, None)
             t = np.array([(x - run.radar_times[0]).total_seconds() for x in run.radar_times])
-            _, _, tracks = track_scans(trackers.build_tracker(trackers.TRACKERS[tracker], run))
+            _, _, tracks = track_scans(trackers.build_tracker(TRACKERS[tracker], run))
             d = np.asarray(score_run(run, [x for x in in_track_order(tracks) if len(x)]).gospa.distance)
             rms[(scenario, seed)] = (np.sqrt(np.mean(d[t < 120] ** 2)),
                                      np.sqrt(np.mean(d[t >= 120] ** 2)))

@@ -10,7 +10,8 @@ from ctxmodels.experiment.runner import ExperimentConfig, Job, run_experiment, r
 from ctxmodels.experiment.scenarios import make_scenario
 from ctxmodels.experiment.scoring import score_run
 from ctxmodels.experiment.sensors import paper_sensor_models
-from ctxmodels.experiment.trackers import TRACKERS, applicable, build_tracker
+from ctxmodels.experiment.trackers import applicable, build_tracker
+from ctxmodels.trackers import TRACKERS
 from ctxmodels.stonesoup.ordering import in_track_order
 
 

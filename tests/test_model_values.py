@@ -23,7 +23,7 @@ from stonesoup.types.state import State
 from ctxmodels import NavigationTrack, SensorModel
 from ctxmodels.experiment.scenarios import make_scenario
 from ctxmodels.experiment.sensors import paper_sensor_models
-from ctxmodels.experiment.trackers import paper_tracker
+from ctxmodels.trackers import paper_tracker
 from ctxmodels.model_key import measurement_model_key
 from ctxmodels.stonesoup import (AnalyticCartesianToBearingRange, ArrayJPDATracker,
                                  ArrayPointProcessTracker, ComponentPathWarning,

@@ -18,8 +18,9 @@ from ctxmodels.experiment.runner import Job, run_job
 from ctxmodels.experiment.scenarios import make_scenario
 from ctxmodels.experiment.scoring import score_run, tracks_digest
 from ctxmodels.experiment.sensors import paper_sensor_models
-from ctxmodels.experiment.trackers import (TRACKERS, applicable, learned_clutter_map,
-                                          paper_tracker)
+from ctxmodels.experiment.trackers import applicable
+from ctxmodels.trackers import TRACKERS, PaperTracker, paper_tracker
+from ctxmodels.trackers.models import learned_clutter_map
 from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, ClutterMapLearner,
                                  DetectionLearner, LearningTracker, PoseCentredRegion,
                                  PointProcessMultiTargetTracker, in_track_order)
@@ -116,10 +117,9 @@ def test_what_each_tracker_reads():
         built = paper_tracker(name, streams, models, pose, primary="b")
         learners = ([ClutterMapLearner] if spec.clutter == "learned" else []) \
             + ([DetectionLearner] if spec.pd == "learned" else [])
-        if learners:
-            assert isinstance(built, LearningTracker)
-            assert [type(x) for x in built.learners] == learners
-            built = built.tracker
+        assert isinstance(built, PaperTracker) and built.spec is spec
+        assert [type(x) for x in built.learners] == learners
+        built = built.tracker
         feeders = built.detector.feeders
         expected = ["b"] if spec.primary_only else ["a", "b"]
         if not spec.uses_context:
@@ -143,6 +143,81 @@ def test_what_each_tracker_reads():
                        else models[sensor].clutter)
             assert feeder.sensor_model.clutter == clutter
             assert feeder.sensor_model.name == models[sensor].name
+
+
+def _scenario_streams(duration=20.0):
+    run = make_scenario("mixed-range", SEED, duration)
+    streams = {"radar": [(scan.timestamp, set(scan.detections)) for scan in run.radar_scans],
+               "lidar": [(scan.timestamp, set(scan.detections)) for scan in run.lidar_scans]}
+    navigation = NavigationTrack(timestamps=run.ego.timestamps, positions=run.ego.positions,
+                                 headings=run.ego.headings)
+    return streams, navigation
+
+
+def _digest(built) -> str:
+    tracks = set()
+    for _, current in built:
+        tracks |= current
+    return tracks_digest([track for track in in_track_order(tracks) if len(track)])
+
+
+def test_sensor_models_only_where_read():
+    """The literal and tuned JPDA read no sensor model: None gives the same tracks as the
+    paper's models. A GM-PHD reads the sensors' reach unless the region's radius is given;
+    the context-aware trackers read P_D and λ. A missing model is named where it is read."""
+    streams, navigation = _scenario_streams()
+    models = paper_sensor_models()
+    for name in ("jpda", "jpda-tuned"):
+        given = _digest(paper_tracker(name, streams, models, navigation))
+        assert _digest(paper_tracker(name, streams, None, navigation)) == given
+        assert _digest(paper_tracker(name, streams, {"radar": models["radar"]}, navigation)) == given
+    radius = 1612.0 + 500.0  # what the paper's models give
+    assert _digest(paper_tracker("gmphd-uniform", streams, None, navigation, region_radius=radius)) \
+        == _digest(paper_tracker("gmphd-uniform", streams, models, navigation))
+    with pytest.raises(ValueError, match=r"^sensor_models: gmphd-uniform reads the sensors' P_D "
+                                         r"reach .*region_radius.*\['radar', 'lidar'\]"):
+        paper_tracker("gmphd-uniform", streams, None, navigation)
+    for name in ("gmphd-context", "jpda-context", "gmphd-pd-aware"):
+        with pytest.raises(ValueError, match=rf"^sensor_models: {name} reads P_D and λ.*\['lidar'\]"):
+            paper_tracker(name, streams, {"radar": models["radar"]}, navigation, region_radius=radius)
+
+
+def test_an_exhausted_iterator_is_refused_and_a_fresh_one_runs():
+    """A generator already read would give a tracker no scans and an empty run without a
+    word: refused, naming the sensor. A fresh generator runs as the list does."""
+    streams, navigation = _scenario_streams()
+    models = paper_sensor_models()
+    spent = (scan for scan in streams["lidar"])
+    list(spent)
+    with pytest.raises(ValueError, match="^streams: sensor 'lidar' is an iterator with no scans left"):
+        paper_tracker("gmphd-context", {**streams, "lidar": spent}, models, navigation)
+    fresh = {sensor: (scan for scan in stream) for sensor, stream in streams.items()}
+    assert _digest(paper_tracker("gmphd-context", fresh, models, navigation)) \
+        == _digest(paper_tracker("gmphd-context", streams, models, navigation))
+
+
+def test_one_return_type_with_tracks_and_mixture():
+    """Every tracker comes back as a PaperTracker: its tracks are the running tracker's, its
+    mixture the GM-PHD's (None for a JPDA); the learned ones carry their learners."""
+    streams, navigation = _scenario_streams(8.0)
+    models = paper_sensor_models()
+    for name, spec in TRACKERS.items():
+        if spec.line_of_sight:
+            continue
+        built = paper_tracker(name, streams, models, navigation, primary="radar")
+        assert isinstance(built, PaperTracker) and built.spec is spec
+        for _, tracks in built:
+            assert tracks == built.tracks == built.tracker.tracks
+        if spec.family == "jpda":
+            assert built.gaussian_mixture is None
+        else:
+            assert built.gaussian_mixture is built.tracker.gaussian_mixture
+            assert len(built.gaussian_mixture) > 0
+        assert len(built.learners) == (spec.clutter == "learned") + (spec.pd == "learned")
+    with pytest.raises(TypeError, match="^spec: "):
+        PaperTracker(spec="gmphd-context", tracker=built.tracker)
+    with pytest.raises(TypeError, match="^tracker: "):
+        PaperTracker(spec=TRACKERS["jpda"], tracker=[])
 
 
 def _models():
@@ -180,14 +255,14 @@ def test_clear_errors_naming_the_argument():
 
 def test_default_region_radius_is_the_farthest_reach_plus_the_margin():
     pose = ConstantPose(pose=Pose(x=0.0, y=0.0))
-    tracker = paper_tracker("gmphd-context", {"a": [], "b": []}, _models(), pose)
+    tracker = paper_tracker("gmphd-context", {"a": [], "b": []}, _models(), pose).tracker
     assert tracker.surveillance_region.radius == 1612.0 + 500.0
     # the lever arm of a mounted sensor counts; the P_D-free uniform trackers get the same
     lidar = SensorModel(detection=DetectionProbabilityModel(factors=[RangeBands(
         edges=(3000.0,), values=(0.5, 0.0))]), clutter=ClutterDensityModel(factors=[1e-3]),
         mounting=Mounting(forward=3.0, left=4.0))
     for name in ("gmphd-context", "gmphd-uniform"):
-        tracker = paper_tracker(name, {"a": [], "b": []}, {**_models(), "b": lidar}, pose)
+        tracker = paper_tracker(name, {"a": [], "b": []}, {**_models(), "b": lidar}, pose).tracker
         assert tracker.surveillance_region.radius == 3000.0 + 5.0 + 500.0
 
 

@@ -115,7 +115,8 @@ def test_component_path_tracker_is_reproducible_within_a_process():
     order, bit for bit, after every scan (the order differed from scan 55 on, where the
     stock reducer renamed shared tags)."""
     from ctxmodels.experiment.scenarios import make_scenario
-    from ctxmodels.experiment.trackers import TRACKERS, build_tracker
+    from ctxmodels.experiment.trackers import build_tracker
+    from ctxmodels.trackers import TRACKERS
     run = make_scenario("mixed-range", 2, 15.0)
     a, b = (build_tracker(TRACKERS["gmphd-context"], run, fast=False) for _ in range(2))
     scans = 0

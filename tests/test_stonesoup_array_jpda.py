@@ -296,15 +296,15 @@ def test_jpda_context_position_bound_is_the_gmphds():
     from ctxmodels.experiment import trackers
     from ctxmodels.experiment.scenarios import make_scenario
     run = make_scenario("mixed-range", 0, 2.0)
-    deleter = trackers.build_tracker(trackers.TRACKERS["jpda-context"], run).deleter
+    deleter = trackers.build_tracker(trackers.TRACKERS["jpda-context"], run).tracker.deleter
     assert type(deleter) is Composite and deleter.intersect is False
     expected, covariance = deleter.deleters
     assert type(expected) is ExpectedMissesDeleter and type(covariance) is CovarianceBasedDeleter
-    paper = trackers.build_tracker(trackers.TRACKERS["jpda"], run).deleter
+    paper = trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker.deleter
     assert type(paper) is UpdateTimeStepsDeleter and paper.time_steps_since_update == 30
     from ctxmodels.stonesoup.pointprocess import PointProcessMultiTargetTracker
     from stonesoup.types.state import TaggedWeightedGaussianState
-    sigma = trackers.MAX_POSITION_STD
+    from ctxmodels.trackers.specs import MAX_POSITION_STD as sigma
     for variance in (sigma ** 2, np.nextafter(sigma ** 2, np.inf), 0.9 * sigma ** 2,
                      1.1 * sigma ** 2):
         covar = np.diag([variance, 1.0, sigma ** 2, 1.0])
@@ -339,9 +339,9 @@ def _scenario_pair(tracker, duration, closed_form, scenario="mixed-range"):
     _with_radar_model(run, AnalyticCartesianToBearingRange if closed_form
                       else CartesianToBearingRange)
     spec = trackers.TRACKERS[tracker]
-    ours = trackers.build_tracker(spec, run)
+    ours = trackers.build_tracker(spec, run).tracker
     assert type(ours) is ArrayJPDATracker
-    return ours, _component(trackers.build_tracker(spec, run))
+    return ours, _component(trackers.build_tracker(spec, run).tracker)
 
 
 @pytest.mark.parametrize("scenario", ["mixed-range", "formation"])
@@ -418,10 +418,10 @@ def test_array_initiator_on_the_scenarios_radar_and_lidar_scans_bit_for_bit():
     from ctxmodels.experiment import trackers
     from ctxmodels.experiment.scenarios import make_scenario
     run = make_scenario("mixed-range", 0, 12.0)
-    reference = _component(trackers.build_tracker(trackers.TRACKERS["jpda"], run)).initiator
+    reference = _component(trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker).initiator
     ours = _array_initiator(reference)
     released = 0
-    for time, detections in trackers.build_tracker(trackers.TRACKERS["jpda"], run).detector:
+    for time, detections in trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker.detector:
         a, b = ours.initiate(set(detections), time), reference.initiate(set(detections), time)
         assert [_states(t) for t in in_track_order(a)] == [_states(t) for t in in_track_order(b)]
         released += len(a)

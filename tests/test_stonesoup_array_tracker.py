@@ -24,7 +24,8 @@ from stonesoup.updater.pointprocess import LCCUpdater
 
 from ctxmodels import DetectionSet, _core
 from ctxmodels.experiment.scenarios import make_scenario
-from ctxmodels.experiment.trackers import TRACKERS, build_tracker
+from ctxmodels.experiment.trackers import build_tracker
+from ctxmodels.trackers import TRACKERS
 from ctxmodels.stonesoup import (
     ArrayPointProcessTracker,
     CircularRegion,

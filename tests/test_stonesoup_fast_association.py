@@ -626,10 +626,11 @@ def test_linear_jpda_run_matches_stock():
 
 def experiment_trackers(seed, duration):
     from ctxmodels.experiment.scenarios import make_scenario
-    from ctxmodels.experiment.trackers import TRACKERS, build_tracker
+    from ctxmodels.experiment.trackers import build_tracker
+    from ctxmodels.trackers import TRACKERS
     run = make_scenario("mixed-range", seed, duration)
-    return (sorted_tracker(build_tracker(TRACKERS["jpda"], run), False),
-            sorted_tracker(build_tracker(TRACKERS["jpda"], run), True))
+    return (sorted_tracker(build_tracker(TRACKERS["jpda"], run).tracker, False),
+            sorted_tracker(build_tracker(TRACKERS["jpda"], run).tracker, True))
 
 
 def test_paper_jpda_run_matches_stock_first_scans():

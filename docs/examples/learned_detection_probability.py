@@ -21,7 +21,8 @@ import numpy as np
 
 from ctxmodels import DetectionEstimate
 from ctxmodels.experiment.scenarios import make_scenario
-from ctxmodels.experiment.trackers import TRACKERS, build_tracker
+from ctxmodels.experiment.trackers import build_tracker
+from ctxmodels.trackers import TRACKERS
 
 run = make_scenario("mixed-range", seed=0)
 truth = run.radar.prob_detection  # the simulated radar's true P_D

@@ -135,7 +135,7 @@ class OutputFolder:
 def _output_names() -> list[str]:
     """Every file name ``ctxmodels experiment`` writes."""
     from .experiment.scenarios import SCENARIOS
-    from .experiment.trackers import TRACKERS
+    from .trackers import TRACKERS
     names = ["results.md", "results.csv", "results.json"]  # (no findings before manifests)
     for scenario in SCENARIOS:
         names += [f"coverage_{scenario}.png"] + [f"tracks_{scenario}_{t}.png" for t in TRACKERS]
@@ -197,7 +197,7 @@ def _coverage(args) -> int:
 
 def _list(args) -> int:
     from .experiment.scenarios import SCENARIOS
-    from .experiment.trackers import TRACKERS
+    from .trackers import TRACKERS
     print("scenarios:")
     for name, spec in SCENARIOS.items():
         print(f"  {name:14s} {getattr(spec, 'description', '')}".rstrip())
@@ -213,7 +213,7 @@ def study_options(sub, output: str, full_seeds: int, quick_seeds: int,
     """The options ``experiment`` and ``sweep`` share: what to run, on how many seeds, where
     the results go."""
     from .experiment.scenarios import SCENARIOS
-    from .experiment.trackers import TRACKERS
+    from .trackers import TRACKERS
     sub.add_argument("--scenarios", nargs="+", default=list(SCENARIOS), choices=list(SCENARIOS),
                      metavar="NAME", help=f"scenarios to run (default: all of {list(SCENARIOS)})")
     sub.add_argument("--trackers", nargs="+", default=None, metavar="NAME",

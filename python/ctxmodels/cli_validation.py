@@ -83,7 +83,8 @@ def check_experiment(args) -> None:
     if not getattr(args, "no_plots", False):
         require_module("matplotlib", "--no-plots", "the figures", "pass --no-plots")
     from .experiment.scenarios import SCENARIOS
-    from .experiment.trackers import TRACKERS, applicable
+    from .experiment.trackers import applicable
+    from .trackers import TRACKERS
     args.scenarios = list(dict.fromkeys(args.scenarios))
     named: list[str] = []  # trackers the user named one by one
     if args.trackers is not None and "all" in args.trackers:

@@ -932,7 +932,7 @@ _DEFAULT = object()
 
 
 def _paper(name="gmphd-context", streams=_DEFAULT, models=_DEFAULT, pose=_DEFAULT, **options):
-    from ctxmodels.experiment.trackers import paper_tracker
+    from ctxmodels.trackers import paper_tracker
     streams = {"radar": [(t, set()) for t in _times(3)],
                "lidar": [(t, {_lidar_detection(t)}) for t in _times(3)]} \
         if streams is _DEFAULT else streams
@@ -952,9 +952,14 @@ def test_paper_tracker_names_a_stream_that_is_not_scans(stream):
     assert "'radar'" in message
 
 
-@pytest.mark.parametrize("models", [[("radar", None)], None, "radar", 5], ids=repr)
+@pytest.mark.parametrize("models", [[("radar", None)], "radar", 5], ids=repr)
 def test_paper_tracker_names_sensor_models_that_are_not_a_mapping(models):
     names_argument(lambda: _paper(models=models), TypeError, "sensor_models")
+
+
+def test_paper_tracker_names_sensor_models_missing_where_read():
+    """None is accepted for trackers that read no model, and named where one is read."""
+    names_argument(lambda: _paper(models=None), ValueError, "sensor_models")
 
 
 @pytest.mark.parametrize("name", ["kalman", None, 5, "", "GMPHD-CONTEXT", ["gmphd-context"]],
@@ -980,7 +985,7 @@ def test_paper_tracker_names_a_bad_region_radius(radius):
 
 @pytest.mark.parametrize("pose", [None, 5, "nav", object()], ids=repr)
 def test_paper_tracker_names_a_bad_pose_source(pose):
-    from ctxmodels.experiment.trackers import paper_tracker
+    from ctxmodels.trackers import paper_tracker
     names_argument(lambda: paper_tracker("gmphd-context", {"radar": []}, _paper_models(), pose),
                    TypeError, "pose_source")
 

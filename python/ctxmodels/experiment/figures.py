@@ -42,7 +42,7 @@ def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted, ra
     from .plots import Polyline, plot_coverage, plot_tracks
     from .runner import simulated_run
     from .sensors import paper_sensor_models
-    from .trackers import TRACKERS
+    from ..trackers import TRACKERS
     written = {}
     # (the runs' own simulation: cached, so scenario 1's serves the paper figures too)
     run = simulated_run(scenario, seed, duration, radar, lidar)
@@ -77,7 +77,7 @@ def _draw_paper_figures(folder: Path, seed: int, duration, plotted: dict, radar=
     mechanism — the far vessel's GM-PHD weight over time under each tracker."""
     from .runner import simulated_run
     from .track_plots import Polyline, plot_mechanism, plot_track_panels
-    from .trackers import TRACKERS
+    from ..trackers import TRACKERS
     written = {}
     run = simulated_run("mixed-range", seed, duration, radar, lidar)
     epoch = run.radar_times[0]
@@ -122,7 +122,8 @@ def mass_on_vessel(tracker: str, run, vessel: str, until: float,
     """Runs ``tracker`` (a GM-PHD) on ``run`` for its first ``until`` seconds and returns
     (times since the first radar scan, PHD mass) after each scan: the summed weight of the
     mixture's components within ``distance`` m of ``vessel`` at that time."""
-    from .trackers import TRACKERS, build_tracker
+    from ..trackers import TRACKERS
+    from .trackers import build_tracker
     if TRACKERS[tracker].family != "gmphd":
         raise ValueError(f"tracker: {tracker} has no PHD mixture (a GM-PHD is needed)")
     if vessel not in run.truth_by_id:

@@ -144,7 +144,7 @@ class ExperimentResults:
         return {(r.job.tracker, r.job.scenario, r.job.seed): r for r in self.results}
 
     def trackers(self) -> list[str]:
-        from .trackers import TRACKERS
+        from ..trackers import TRACKERS
         ran = {r.job.tracker for r in self.results}
         return [t for t in (self.config.trackers or TRACKERS) if t in ran]
 
@@ -157,7 +157,7 @@ class ExperimentResults:
         """One row per tracker: per scope (``"combined"`` and each scenario) HOTA (%) and RMS
         GOSPA (m) as :class:`~.statistics.Interval` s over seeds, and the mean tracking
         seconds per run."""
-        from .trackers import TRACKERS
+        from ..trackers import TRACKERS
         by_key = self.by_key()
         rows = []
         for tracker in self.trackers():
@@ -182,7 +182,7 @@ class ExperimentResults:
         """Per tracker and scope (as in the scores): each track-management column
         (:data:`MANAGEMENT_COLUMNS`) as the mean over seeds of the seed's pooled runs, and
         the number of seeds."""
-        from .trackers import TRACKERS
+        from ..trackers import TRACKERS
         by_key = self.by_key()
         rows = []
         for tracker in self.trackers():
@@ -218,7 +218,7 @@ class ExperimentResults:
     def track_counts(self) -> list[dict]:
         """Per tracker and scenario: tracks reported per radar scan (mean over scans and
         seeds, and the largest), beside the vessels present per scan."""
-        from .trackers import TRACKERS
+        from ..trackers import TRACKERS
         rows = []
         for tracker in self.trackers():
             for scenario in self.config.scenarios:

@@ -63,14 +63,14 @@ class Job:
     lidar: LidarConfig | None = None
     #: Which states are scored (:mod:`~ctxmodels.experiment.extraction`).
     extract: str = "stone-soup"
-    #: Changes to the tracker's :class:`~ctxmodels.experiment.trackers.TrackerSpec` as
+    #: Changes to the tracker's :class:`~ctxmodels.trackers.TrackerSpec` as
     #: ``(field, value)`` pairs (a search over its settings, e.g. ``scripts/tune_jpda.py``).
     tracker_options: tuple = ()
 
     def __post_init__(self):
         # checked here, where the job is made, not in a worker after its simulation
         from .extraction import EXTRACTIONS
-        from .trackers import TRACKERS
+        from ..trackers import TRACKERS
         if self.extract not in EXTRACTIONS:
             raise ValueError(f"extract: unknown extraction rule {self.extract!r}; choose from "
                              f"{list(EXTRACTIONS)}")
@@ -150,7 +150,8 @@ def track_scans(tracker) -> tuple[float, int, set]:
 def run_job(job: Job) -> JobResult:
     """Simulates the scenario, runs the tracker over both sensors' scans, scores it."""
     from ..stonesoup.ordering import in_track_order
-    from .trackers import TRACKERS, build_tracker
+    from ..trackers import TRACKERS
+    from .trackers import build_tracker
 
     spec = dataclasses.replace(TRACKERS[job.tracker], **dict(job.tracker_options))
     # simulation (its objects are acyclic too), tracking, scoring and the tracks' release
@@ -223,7 +224,8 @@ class ExperimentConfig:
     extract: str = "stone-soup"  # which states are scored (see .extraction)
 
     def jobs(self) -> list[Job]:
-        from .trackers import DEFAULT_TRACKERS, TRACKERS, applicable
+        from ..trackers import TRACKERS
+        from .trackers import DEFAULT_TRACKERS, applicable
         trackers = list(self.trackers) if self.trackers else list(DEFAULT_TRACKERS)
         for name in trackers:
             if name not in TRACKERS:
@@ -241,7 +243,7 @@ class ExperimentConfig:
 def job_cost(job: Job) -> float:
     """Rough CPU seconds of a job (tracker cost scaled by the simulated duration, plus
     simulation and scoring): orders the jobs and weights the progress estimate."""
-    from .trackers import TRACKERS
+    from ..trackers import TRACKERS
     duration = job.duration or _default_duration(job.scenario)
     return (TRACKERS[job.tracker].cost + 1.0) * duration / 480.0
 

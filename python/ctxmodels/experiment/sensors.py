@@ -16,10 +16,7 @@ import numpy as np
 
 from .. import (AngularSector, ClutterDensityModel, DetectionProbabilityModel, LandMask,
                 LineOfSight, MetadataThreshold, RangeBands, SensorModel)
-
-#: Table I: the global P_D and λ of the JPDA and the uniform / radar-only GM-PHD.
-UNIFORM_PD = 0.4
-UNIFORM_CLUTTER = 1e-3
+from ..trackers.specs import UNIFORM_CLUTTER, UNIFORM_PD
 
 
 def radar_detection(land: Sequence[np.ndarray] = ()) -> DetectionProbabilityModel:
