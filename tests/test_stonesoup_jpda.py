@@ -58,6 +58,7 @@ from ctxmodels import (
 from ctxmodels.stonesoup import (
     ContextFeeder,
     ExpectedMissesDeleter,
+    MissesNotWeighedWarning,
     MultiSensorFeeder,
     PDAHypothesiser,
 )
@@ -589,17 +590,21 @@ def test_deleter_with_pd_one_is_the_stock_update_time_steps_deleter():
     rng = np.random.default_rng(7)
     tracks = [_random_track(rng, int(rng.integers(1, 14)), bool(rng.integers(2)))
               for _ in range(300)]
+    # (no hypothesiser, no context: each deleter says once that it counts, not weighs)
     for n in range(1, 7):
         stock = UpdateTimeStepsDeleter(time_steps_since_update=n)
         ours = ExpectedMissesDeleter(expected_misses=n)
         decisions = [stock.check_for_deletion(t) for t in tracks]
-        assert [ours.check_for_deletion(t) for t in tracks] == decisions
+        with pytest.warns(MissesNotWeighedWarning) as caught:
+            assert [ours.check_for_deletion(t) for t in tracks] == decisions
+        assert len(caught) == 1
         assert 0 < sum(decisions) < len(tracks)
     # A constant P_D = p deletes after ceil(N / p) misses.
     ours = ExpectedMissesDeleter(expected_misses=2.0, default_prob_detect=0.5)
     stock = UpdateTimeStepsDeleter(time_steps_since_update=4)
-    assert [ours.check_for_deletion(t) for t in tracks] \
-        == [stock.check_for_deletion(t) for t in tracks]
+    with pytest.warns(MissesNotWeighedWarning):
+        assert [ours.check_for_deletion(t) for t in tracks] \
+            == [stock.check_for_deletion(t) for t in tracks]
 
 
 def test_deleter_sums_the_recorded_pd_since_the_last_detection(scans):
@@ -618,9 +623,10 @@ def test_deleter_sums_the_recorded_pd_since_the_last_detection(scans):
         track.append(hypotheses[0].prediction)
     assert deleter.expected_misses_since_detection(track) == pytest.approx(0.9)
     assert not deleter.check_for_deletion(track)
-    # A state appended by someone else accrues the default.
+    # A state appended by someone else accrues the default, and the deleter says so.
     track.append(GaussianStatePrediction(track[-1].state_vector, track[-1].covar, timestamp=at(9)))
-    assert deleter.expected_misses_since_detection(track) == pytest.approx(1.15)
+    with pytest.warns(MissesNotWeighedWarning, match="default_prob_detect=0.25"):
+        assert deleter.expected_misses_since_detection(track) == pytest.approx(1.15)
     assert deleter.check_for_deletion(track)
     # A record whose time does not match the state is not used.
     time = at(10)

@@ -47,7 +47,8 @@ from .array_initiator import ArrayMultiMeasurementInitiator
 from .array_jpda import ArrayJPDATracker
 from .birth import MeasurementDrivenBirth
 from .composite_deleter import CompositeDeleter
-from .deleter import DuplicateTrackDeleter, ExpectedMissesDeleter, UpdateTimeStepsDeleter
+from .deleter import (DuplicateTrackDeleter, ExpectedMissesDeleter, MissesNotWeighedWarning,
+                      UpdateTimeStepsDeleter)
 from .fast_association import FastGNNWith2DAssignment
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .hypothesiser import PDAHypothesiser
@@ -85,6 +86,7 @@ __all__ = [
     "ContextFeeder",
     "FastGNNWith2DAssignment",
     "ExpectedMissesDeleter",
+    "MissesNotWeighedWarning",
     "MultiMeasurementInitiator",
     "MultiSensorFeeder",
     "MultiTargetMixtureTracker",

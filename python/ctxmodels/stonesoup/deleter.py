@@ -16,6 +16,8 @@ by the standard track-to-track association test.
 from __future__ import annotations
 
 import math
+import warnings
+import weakref
 from collections.abc import Sequence
 from numbers import Integral, Real
 
@@ -25,10 +27,16 @@ from stonesoup.deleter.base import Deleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 from stonesoup.types.update import Update
 
+from ..foreign import as_array_context
 from .composite_deleter import PairwiseDeleter
 from .fast import plain_track_lists
-from .hypothesiser import PDAHypothesiser, is_detection_backed
+from .hypothesiser import PDAHypothesiser, is_detection_backed, prob_detect_at
 from .ordering import track_key
+
+
+class MissesNotWeighedWarning(UserWarning):
+    """An :class:`ExpectedMissesDeleter` found a miss without :math:`P_D` and counted it
+    with its ``default_prob_detect``."""
 
 
 class ExpectedMissesDeleter(Deleter):
@@ -62,8 +70,17 @@ class ExpectedMissesDeleter(Deleter):
     hypothesiser of the tracker's data associator. This works inside the stock
     :class:`~stonesoup.tracker.simple.MultiTargetMixtureTracker` loop (associate, append one
     state per track, delete), including its Gaussian-mixture reduction to a prediction when
-    no detection outweighs the miss. States without a record (e.g. made in an initiator by
-    another hypothesiser) accrue :attr:`default_prob_detect`.
+    no detection outweighs the miss.
+
+    As an initiator's deleter (its holding tracks are predicted by a distance hypothesiser,
+    which records no :math:`P_D`), it takes the scan's context instead:
+    :meth:`delete_tracks` called with ``detector_context`` evaluates
+    :math:`P_D(\hat{x}_K; S_K)` at each track's last state when that state is a miss without
+    a record — ctxmodels' :class:`~ctxmodels.stonesoup.MultiMeasurementInitiator` passes the
+    context its tracker received. A state with neither a record nor a context accrues
+    :attr:`default_prob_detect`, and the first such state raises a
+    :class:`MissesNotWeighedWarning` (once per deleter): the misses are then counted, not
+    weighed.
     """
 
     expected_misses: float = Property(
@@ -102,7 +119,70 @@ class ExpectedMissesDeleter(Deleter):
     def _prob_detect(self, track, index: int) -> float:
         recorded = None if self.hypothesiser is None \
             else self.hypothesiser.recorded_prob_detect(track, index)
-        return float(self.default_prob_detect) if recorded is None else recorded
+        if recorded is None:
+            recorded = self._from_context(track, index)
+        if recorded is None:
+            if not self.__dict__.get("_warned"):
+                self.__dict__["_warned"] = True
+                warnings.warn(
+                    "ExpectedMissesDeleter: a miss with no P_D (no record from its hypothesiser "
+                    "and no detector_context) accrues default_prob_detect="
+                    f"{float(self.default_prob_detect)}: misses are counted, not weighed. Give "
+                    "the tracker's ctxmodels PDAHypothesiser as hypothesiser, or the scan's "
+                    "context (an initiator's deleter: use ctxmodels' "
+                    "MultiMeasurementInitiator inside ctxmodels' MultiTargetMixtureTracker)",
+                    MissesNotWeighedWarning, stacklevel=3)
+            return float(self.default_prob_detect)
+        return recorded
+
+    def delete_tracks(self, tracks, detector_context=None, **kwargs) -> set:
+        """The tracks to delete (Stone Soup's :meth:`~stonesoup.deleter.base.Deleter.delete_tracks`).
+        With the scan's ``detector_context``, each track whose last state is a miss with no
+        record from :attr:`hypothesiser` gets :math:`P_D` of that state in the context first
+        (an initiator's holding tracks)."""
+        if detector_context is not None:
+            self._weigh_last_misses(tracks, detector_context)
+        return super().delete_tracks(tracks, **kwargs)
+
+    def _weigh_last_misses(self, tracks, detector_context) -> None:
+        context = as_array_context(detector_context, "prob_detection_states",
+                                   "clutter_spatial_density_detections")
+        log = self.__dict__.get("_context_log")
+        if log is None:
+            log = self.__dict__["_context_log"] = weakref.WeakKeyDictionary()
+        for track in tracks:
+            n = len(track)
+            if n < 2 or is_detection_backed(track[-1]):
+                continue
+            if self.hypothesiser is not None \
+                    and self.hypothesiser.recorded_prob_detect(track, -1) is not None:
+                continue
+            prob_detect = prob_detect_at(context, track[-1])
+            if not 0.0 <= prob_detect <= 1.0:
+                raise ValueError(f"detector_context: P_D must lie in [0, 1], got {prob_detect} "
+                                 f"for a track at {track[-1].timestamp}")
+            entries = log.get(track)
+            if entries is None or is_detection_backed(track[-2]):
+                entries = log[track] = {}  # only the states since the last detection matter
+            entries[n - 1] = (track[-1].timestamp, prob_detect)
+
+    def _from_context(self, track, index: int):
+        log = self.__dict__.get("_context_log")
+        entry = None if log is None else log.get(track, {}).get(index % len(track))
+        return None if entry is None or entry[0] != track[index].timestamp else entry[1]
+
+    # Tracks are weakly referenced at run time; pickle the record as plain pairs.
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        if "_context_log" in state:
+            state["_context_log"] = list(state["_context_log"].items())
+        return state
+
+    def __setstate__(self, state):
+        state = dict(state)
+        if "_context_log" in state:
+            state["_context_log"] = weakref.WeakKeyDictionary(state["_context_log"])
+        self.__dict__.update(state)
 
     def expected_misses_since_detection(self, track, stop_at: float = math.inf) -> float:
         """:math:`\\sum P_D` over the states after the track's last detection-backed one
@@ -303,4 +383,5 @@ def _squared_distances(delta, covars):
     return total
 
 
-__all__ = ["DuplicateTrackDeleter", "ExpectedMissesDeleter", "UpdateTimeStepsDeleter"]
+__all__ = ["DuplicateTrackDeleter", "ExpectedMissesDeleter", "MissesNotWeighedWarning",
+           "UpdateTimeStepsDeleter"]

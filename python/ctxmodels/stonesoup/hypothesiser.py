@@ -52,7 +52,7 @@ def is_detection_backed(state) -> bool:
     return isinstance(state, Update) and bool(state.hypothesis)
 
 
-def _prob_detect_at(context, prediction) -> float:
+def prob_detect_at(context, prediction) -> float:
     """P_D of one prediction from an array context (:func:`~ctxmodels.foreign.as_array_context`)
     as the raw float the model computed: going through ``Probability`` (log space) and back
     can change the last bit of a value such as 0.35."""
@@ -118,7 +118,7 @@ class PDAHypothesiser(_StockPDAHypothesiser):
 
         detections = list(detections)
         prediction = self.predictor.predict(track, timestamp=timestamp, **kwargs)
-        prob_detect = _prob_detect_at(context, prediction)
+        prob_detect = prob_detect_at(context, prediction)
         if not 0.0 <= prob_detect <= 1.0:
             raise ValueError(f"detector_context: P_D must lie in [0, 1], got {prob_detect} "
                              f"for a track at {timestamp}")
@@ -245,4 +245,4 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         self.__dict__.update(state)
 
 
-__all__ = ["PDAHypothesiser", "is_detection_backed", "scan_context"]
+__all__ = ["PDAHypothesiser", "is_detection_backed", "prob_detect_at", "scan_context"]

@@ -35,7 +35,7 @@ from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
-from .ordering import context_kwargs, in_stable_order, in_track_order
+from .ordering import context_kwargs, declares_context, in_stable_order, in_track_order
 from .scan_checks import checked_scan, naming_scan_errors
 
 
@@ -130,7 +130,12 @@ class MultiMeasurementInitiator(_StockMultiMeasurementInitiator):
         self._points = points
         return list(points)
 
-    def initiate(self, detections, timestamp, **kwargs) -> set[Track]:
+    def initiate(self, detections, timestamp, detector_context=None, **kwargs) -> set[Track]:
+        """The holding tracks confirmed by this scan's ``detections``. The scan's
+        ``detector_context`` (the tracker passes the one it received) goes on to the
+        deleter when it declares the parameter, so an
+        :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` weighs a holding track's
+        misses by P_D as it does a track's."""
         detections = in_stable_order(detections)
         if self.skip_non_reversible:
             detections = [d for d in detections
@@ -154,7 +159,10 @@ class MultiMeasurementInitiator(_StockMultiMeasurementInitiator):
                 if points >= self.min_points:
                     sure_tracks.add(track)
                     self.holding_tracks.remove(track)
-            self.holding_tracks -= self.deleter.delete_tracks(self.holding_tracks)
+            context = ({} if detector_context is None
+                       or not declares_context(self.deleter.delete_tracks)
+                       else {"detector_context": detector_context})
+            self.holding_tracks -= self.deleter.delete_tracks(self.holding_tracks, **context)
         new = self.initiator.initiate({d for d in detections if id(d) not in associated},
                                       timestamp)
         self.holding_tracks |= new
