@@ -6,8 +6,8 @@ import matplotlib  # noqa: F401 (a test dependency: without it these tests fail,
 import numpy as np
 import pytest
 
-from ctxmodels.experiment import plots, summary_plots
-from ctxmodels.experiment.plots import Polyline, classify_tracks, inlier_mask
+from ctxmodels.experiment import coverage_plots, summary_plots, track_plots
+from ctxmodels.experiment.track_plots import Polyline, classify_tracks, inlier_mask
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -72,7 +72,7 @@ def test_classify_needs_truth_at_the_same_time_and_respects_distance():
     assert list(inlier_mask([edge], [])) == [False]
 
 
-def reference_mask(tracks, truths, distance=plots.INLIER_DISTANCE):
+def reference_mask(tracks, truths, distance=track_plots.INLIER_DISTANCE):
     """The rule as a plain loop over states, to check the vectorised one against."""
     truth_at = {}
     for truth in truths:
@@ -106,7 +106,7 @@ def test_classify_matches_the_per_state_rule_on_random_tracks():
 
 
 def test_track_figure_legend_and_labels(scene):
-    fig = plots._figure_tracks("islands: jpda", scene["tracks"], scene["truths"], scene["ego"],
+    fig = track_plots._figure_tracks("islands: jpda", scene["tracks"], scene["truths"], scene["ego"],
                                math.pi / 4, land=scene["land"], static_positions=scene["static"])
     ax = fig.axes[0]
     texts = legend_texts(fig)
@@ -127,7 +127,7 @@ def test_track_figure_legend_and_labels(scene):
 
 
 def test_static_objects_differ_from_clutter_in_marker_and_colour(scene):
-    fig = plots._figure_tracks("", scene["tracks"], scene["truths"], scene["ego"], 0.0,
+    fig = track_plots._figure_tracks("", scene["tracks"], scene["truths"], scene["ego"], 0.0,
                                static_positions=scene["static"])
     legend = fig.axes[0].get_legend()
     handles = dict(zip([t.get_text() for t in legend.get_texts()], legend.legend_handles))
@@ -139,10 +139,10 @@ def test_static_objects_differ_from_clutter_in_marker_and_colour(scene):
 
 def test_plot_tracks_writes_png_with_old_call(scene, tmp_path):
     path = tmp_path / "tracks.png"
-    plots.plot_tracks(path, "t", scene["tracks"], scene["truths"], scene["ego"], 0.3,
+    track_plots.plot_tracks(path, "t", scene["tracks"], scene["truths"], scene["ego"], 0.3,
                       scene["land"], scene["static"], 400.0)
     assert_png(path)
-    fig = plots._figure_tracks("t", scene["tracks"], scene["truths"], scene["ego"], 0.3,
+    fig = track_plots._figure_tracks("t", scene["tracks"], scene["truths"], scene["ego"], 0.3,
                                extent=400.0)
     end = scene["ego"].xy[-1]
     assert fig.axes[0].get_xlim() == pytest.approx((end[0] - 400, end[0] + 400))
@@ -151,7 +151,7 @@ def test_plot_tracks_writes_png_with_old_call(scene, tmp_path):
 def test_plot_tracks_without_truth_tracks_or_zoom(tmp_path):
     ego = Polyline([0.0, 1.0], [[0, 0], [1, 1]])
     path = tmp_path / "empty.png"
-    plots.plot_tracks(path, "nothing", [], [], ego, 0.0, zoom=False)
+    track_plots.plot_tracks(path, "nothing", [], [], ego, 0.0, zoom=False)
     assert_png(path)
 
 
@@ -167,7 +167,7 @@ def test_tracks_on_static_objects_are_distractors_not_clutter(scene):
     assert inliers == [truth] and distractors == [marker, half] and clutter == [stray]
     # without static objects: the two-way split as before
     assert classify_tracks([marker, stray], [truth]) == ([], [marker, stray])
-    fig = plots._figure_tracks("", [marker, stray, truth], [truth], scene["ego"], 0.0,
+    fig = track_plots._figure_tracks("", [marker, stray, truth], [truth], scene["ego"], 0.0,
                                static_positions=scene["static"])
     texts = legend_texts(fig)
     assert "distractor tracks (1)" in texts and "clutter tracks (1)" in texts
@@ -178,7 +178,7 @@ def test_track_panels_side_by_side_each_with_its_own_counts(scene, tmp_path):
     inlier, clutter = scene["tracks"][0], scene["tracks"][1:4]
     panels = [("JPDA (tuned)", [inlier, *clutter]), ("GM-PHD (uniform)", []),
               ("GM-PHD (context-aware)", [inlier])]
-    fig = plots._figure_track_panels("Scenario 1", panels, scene["truths"], scene["ego"], 0.0,
+    fig = track_plots._figure_track_panels("Scenario 1", panels, scene["truths"], scene["ego"], 0.0,
                                      static_positions=scene["static"])
     axes = [ax for ax in fig.axes if ax.get_legend()]
     assert len(axes) == 3
@@ -192,7 +192,7 @@ def test_track_panels_side_by_side_each_with_its_own_counts(scene, tmp_path):
             assert word in legend
     assert axes[0].get_xlim() == axes[2].get_xlim()  # one view for all panels
     path = tmp_path / "fig4.png"
-    plots.plot_track_panels(path, "t", panels, scene["truths"], scene["ego"], 0.0)
+    track_plots.plot_track_panels(path, "t", panels, scene["truths"], scene["ego"], 0.0)
     assert_png(path)
 
 
@@ -225,7 +225,7 @@ def test_mechanism_figure_marks_both_sensors_and_says_where_a_tracker_has_no_mas
 def coverage_figure():
     from ctxmodels.experiment.sensors import paper_sensor_models
     land = [np.array([[300.0, 300.0], [500.0, 300.0], [500.0, 500.0]])]
-    return plots._figure_coverage(paper_sensor_models(land=land), (0.0, 0.0, math.pi / 2),
+    return coverage_plots._figure_coverage(paper_sensor_models(land=land), (0.0, 0.0, math.pi / 2),
                                   land=land, resolution=40, title="coverage")
 
 
@@ -244,7 +244,7 @@ def test_coverage_labels_colour_bar_and_heading_legend(coverage_figure):
 def test_plot_coverage_writes_png(tmp_path):
     from ctxmodels.experiment.sensors import paper_sensor_models
     path = tmp_path / "coverage.png"
-    plots.plot_coverage(path, {"lidar": paper_sensor_models()["lidar"]}, (5.0, 5.0, 0.0),
+    coverage_plots.plot_coverage(path, {"lidar": paper_sensor_models()["lidar"]}, (5.0, 5.0, 0.0),
                         extents=(100.0,), resolution=30)
     assert_png(path)
 
@@ -388,4 +388,3 @@ def test_plot_sensitivity_writes_png_and_checks_shapes(tmp_path):
     with pytest.raises(ValueError, match="diff"):
         summary_plots.plot_sensitivity(path, "A − B", "x", [1, 2], "y", [7], grid, grid, grid,
                                        "HOTA (pp)")
-    assert plots.plot_sensitivity is summary_plots.plot_sensitivity

@@ -171,7 +171,7 @@ def _simulated_sensors(args):
 
 
 def _coverage(args) -> int:
-    from .experiment.plots import plot_coverage
+    from .experiment.coverage_plots import plot_coverage
     from .experiment.scenarios import make_scenario
     from .experiment.sensors import paper_sensor_models
     land = []

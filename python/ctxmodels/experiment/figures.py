@@ -39,7 +39,8 @@ def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted, ra
                    lidar=None) -> dict[str, Path]:
     """Every plotted tracker's tracks on ``scenario`` (``plotted``: (tracker, kept track
     paths) pairs), and the context-aware models' coverage there."""
-    from .plots import Polyline, plot_coverage, plot_tracks
+    from .coverage_plots import plot_coverage
+    from .track_plots import Polyline, plot_tracks
     from .runner import simulated_run
     from .sensors import paper_sensor_models
     from ..trackers import TRACKERS

@@ -1,9 +1,7 @@
 """Statistics figures: per-tracker scores and paired differences with their 95 % intervals
 (:func:`plot_summary`), and a paired difference over a grid of simulation settings
 (:func:`plot_sensitivity`).
-
-Like :mod:`ctxmodels.experiment.plots`, built on :class:`matplotlib.figure.Figure` without
-pyplot; each ``plot_*`` saves what its ``_figure_*`` twin returns.
+(Figures as :mod:`~ctxmodels.experiment.canvas` says.)
 """
 from __future__ import annotations
 
@@ -12,6 +10,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+
+from .canvas import new_figure
 
 #: How each verdict is drawn: colour-blind-safe colours and distinct markers, so the
 #: verdict reads in grey-scale too.
@@ -28,11 +28,6 @@ _OTHER_VERDICT = dict(color="#7570b3", marker="D")
 SCORE_COLOUR = "#1f5fa8"
 #: The paper's own effect beside a finding's simulated difference.
 PAPER_STYLE = dict(marker="D", ms=7, mfc="none", mec="k", mew=1.3, ls="none")
-
-
-def _figure(**kwargs):
-    from matplotlib.figure import Figure
-    return Figure(**kwargs)
 
 
 def _intervals(values, rows: int, name: str) -> np.ndarray:
@@ -106,7 +101,7 @@ def _figure_summary(tracker_labels, hota, gospa, finding_labels, hota_diff, gosp
     # difference panels.
     rows = max(len(trackers), 1) + 1.2
     heights = [rows] + ([rows] if management else []) + ([len(findings) + 1.2] if findings else [])
-    fig = _figure(figsize=(12.5, 1.6 + 0.42 * sum(heights)), dpi=100, layout="constrained")
+    fig = new_figure(figsize=(12.5, 1.6 + 0.42 * sum(heights)), dpi=100, layout="constrained")
     axes = fig.subplots(len(heights), 2, gridspec_kw={"height_ratios": heights}, squeeze=False)
     (ax_h, ax_g) = axes[0]
     tracker_style = [dict(color=SCORE_COLOUR, marker="o")] * len(trackers)
@@ -224,7 +219,7 @@ def _figure_sensitivity(finding_label, x_name, x_values, y_name, y_values, diff,
     cmap = matplotlib.colormaps["RdBu" if better == "higher" else "RdBu_r"].with_extremes(
         bad="0.82")
     width = max(6.0, 1.35 * shape[1] + 3.2)
-    fig = _figure(figsize=(width, max(3.4, 1.0 * shape[0] + 2.6)), dpi=100,
+    fig = new_figure(figsize=(width, max(3.4, 1.0 * shape[0] + 2.6)), dpi=100,
                   layout="constrained")
     ax = fig.add_subplot()
     image = ax.imshow(np.ma.masked_invalid(diff), cmap=cmap, vmin=-scale, vmax=scale,

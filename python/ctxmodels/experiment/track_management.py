@@ -62,7 +62,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from . import metrics
+from .metrics.frames import EvaluationFrame, frame_list
+from .metrics.gospa import GOSPA_C, GOSPA_P, check_gospa_parameters, gospa_assignment
 
 __all__ = ["TrackManagement", "track_management", "combine"]
 
@@ -141,15 +142,15 @@ def _times(times, count: int) -> np.ndarray:
     return seconds
 
 
-def track_management(frames: Iterable[metrics.EvaluationFrame], times: Sequence[float], *,
-                     c: float = metrics._DEFAULT_GOSPA_C,
-                     p: float = metrics._DEFAULT_GOSPA_P) -> TrackManagement:
+def track_management(frames: Iterable[EvaluationFrame], times: Sequence[float], *,
+                     c: float = GOSPA_C,
+                     p: float = GOSPA_P) -> TrackManagement:
     """Track-management totals of one run: ``frames`` at ``times`` (seconds, strictly
     increasing, one per frame), matched by GOSPA's assignment with cut-off ``c`` and
     exponent ``p`` (see the module docs)."""
-    frames = metrics._frame_list(frames, "frames")
+    frames = frame_list(frames, "frames")
     seconds = _times(times, len(frames))
-    c, p = metrics._check_gospa_parameters(c, p)
+    c, p = check_gospa_parameters(c, p)
 
     truth_first: dict[int, float] = {}
     truth_last: dict[int, float] = {}
@@ -163,8 +164,7 @@ def track_management(frames: Iterable[metrics.EvaluationFrame], times: Sequence[
     id_switches = fragmentations = 0
 
     for frame, t in zip(frames, seconds.tolist()):
-        rows, cols, _ = metrics._gospa_assignment(frame.truth_positions,
-                                                  frame.track_positions, c, p)
+        rows, cols, _ = gospa_assignment(frame.truth_positions, frame.track_positions, c, p)
         truth_ids, track_ids = frame.truth_ids.tolist(), frame.track_ids.tolist()
         match = {truth_ids[r]: track_ids[k] for r, k in zip(rows.tolist(), cols.tolist())}
         truth_frames += len(truth_ids)

@@ -1,10 +1,7 @@
 """Tracking output like the paper's Fig. 4: tracks over the scene, each classed as an
 inlier (on a vessel), a distractor (on a static object: scoring drops it) or clutter,
 one tracker per figure or several side by side.
-
-Figures are built on :class:`matplotlib.figure.Figure` directly, not through pyplot; each
-``plot_*`` saves the figure that a ``_figure_*`` twin returns, so tests can inspect
-legends and labels without reading pixels.
+(Figures as :mod:`~ctxmodels.experiment.canvas` says.)
 """
 from __future__ import annotations
 
@@ -13,6 +10,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+
+from .canvas import new_figure
 
 #: A track is an *inlier* when at least half of its states lie within this distance (m) of
 #: some ground-truth vessel at the same time (a *distractor* when of a static object).
@@ -24,11 +23,6 @@ CLUTTER_COLOUR = "#e0301e"
 DISTRACTOR_COLOUR = "#f39c12"  # orange: apart from clutter red and inlier blue
 STATIC_COLOUR = "0.1"
 EGO_COLOUR = "#7b2fbe"  # purple: not confusable with the grey truth or the blue inliers
-
-
-def _figure(**kwargs):
-    from matplotlib.figure import Figure
-    return Figure(**kwargs)
 
 
 class Polyline:
@@ -251,7 +245,7 @@ def _draw_tracks(ax, tracks, truths, ego, ego_heading, land, static_positions, e
 
 def _figure_tracks(title, tracks, truths, ego, ego_heading, land=(), static_positions=None,
                    extent=None, *, zoom=True, margin=None, distance=INLIER_DISTANCE):
-    fig = _figure(figsize=(10.5, 7.6), dpi=110, layout="constrained")
+    fig = new_figure(figsize=(10.5, 7.6), dpi=110, layout="constrained")
     ax = fig.add_subplot()
     handles, note = _draw_tracks(ax, tracks, truths, ego, ego_heading, land, static_positions,
                                  extent, zoom, margin, distance)
@@ -266,7 +260,7 @@ def _figure_track_panels(title, panels, truths, ego, ego_heading, land=(),
                          distance=INLIER_DISTANCE):
     """Several trackers' output side by side (``panels``: (panel title, tracks) pairs) on
     one scene and view, as the paper's Fig. 4; each panel's legend counts its own tracks."""
-    fig = _figure(figsize=(5.2 * len(panels), 7.4), dpi=110, layout="constrained")
+    fig = new_figure(figsize=(5.2 * len(panels), 7.4), dpi=110, layout="constrained")
     axes = fig.subplots(1, len(panels), squeeze=False, sharex=True, sharey=True)[0]
     for ax, (name, tracks) in zip(axes, panels):
         handles, note = _draw_tracks(ax, tracks, truths, ego, ego_heading, land,
@@ -328,7 +322,7 @@ def _figure_mechanism(title, series, radar_times, lidar_times, window):
     """The PHD mass on one vessel over time for several trackers (``series``:
     (label, times, masses)), radar scans as vertical lines, lidar scans as a rug."""
     from matplotlib.lines import Line2D
-    fig = _figure(figsize=(11.0, 4.6), dpi=110, layout="constrained")
+    fig = new_figure(figsize=(11.0, 4.6), dpi=110, layout="constrained")
     ax = fig.add_subplot()
     lo, hi = window
     for t in (t for t in radar_times if lo <= t <= hi):

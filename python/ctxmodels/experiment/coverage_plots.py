@@ -1,13 +1,7 @@
-"""Figures: P_D coverage maps. Tracking output like the paper's Fig. 4 is in
-:mod:`ctxmodels.experiment.track_plots`, statistics figures (per-tracker scores, paired
-differences, sensitivity grids) in :mod:`ctxmodels.experiment.summary_plots`; both are
-re-exported here.
-
-Figures are built on :class:`matplotlib.figure.Figure` directly, not through pyplot: no
-global figure registry, no backend switch for the caller, and headless machines work.
-Each ``plot_*`` saves the figure that a ``_figure_*`` twin returns, so tests can inspect
-legends and labels without reading pixels.
-"""
+"""Figures: the sensors' P_D coverage maps around a pose (``ctxmodels coverage`` and the
+study's ``coverage_*.png``). Tracks are drawn by :mod:`~ctxmodels.experiment.track_plots`,
+scores and differences by :mod:`~ctxmodels.experiment.summary_plots`; all build their figures
+as :mod:`~ctxmodels.experiment.canvas` says."""
 from __future__ import annotations
 
 import math
@@ -16,17 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .summary_plots import plot_sensitivity, plot_summary  # noqa: F401 (re-exported)
-from .track_plots import (INLIER_DISTANCE, Polyline, classify_tracks,  # noqa: F401 (re-exported)
-                          inlier_mask, plot_track_panels, plot_tracks)
-from .track_plots import _figure_track_panels, _figure_tracks  # noqa: F401 (tests draw these)
-
-LAND_COLOUR = "#d9c8a0"
-
-
-def _figure(**kwargs):
-    from matplotlib.figure import Figure
-    return Figure(**kwargs)
+from .canvas import new_figure
 
 
 def coverage_grid(sensor_models: Mapping, pose, extent: float, resolution: int = 400):
@@ -55,7 +39,7 @@ def _figure_coverage(sensor_models, pose, extents=(1800.0, 100.0), land=(), reso
     from matplotlib.lines import Line2D
     names = list(sensor_models)
     panels = names + (["any sensor"] if len(names) > 1 else [])
-    fig = _figure(figsize=(3.6 * len(panels) + 1.1, 3.45 * len(extents) + 1.0), dpi=100,
+    fig = new_figure(figsize=(3.6 * len(panels) + 1.1, 3.45 * len(extents) + 1.0), dpi=100,
                   layout="constrained")
     axes = fig.subplots(len(extents), len(panels), squeeze=False)
     px, py, heading = (pose.x, pose.y, pose.heading) if hasattr(pose, "x") else pose
