@@ -5,10 +5,10 @@ findings are; positive favours the learned model; 95 % paired-t interval):
 * the learned-λ tracker as in the study, and with learned P_D too;
 * the study's map with every cell held at its ring's level (no departures: a diagnostic,
   blind to coasts);
-* its second edition (gated feed: a target's returns before its track is extracted count
-  as clutter; a fixed pool weight of 10 scans), that edition with the weight estimated, and
-  an *oracle* variant of it whose map is fed only the detections that are not a vessel's
-  (the simulator's ``metadata['source']``; a diagnostic no real tracker could be).
+* a gated feed (a target's returns before its track is extracted count as clutter) with a
+  fixed pool weight of 10 scans, the same with the weight estimated, and an *oracle*
+  variant whose map is fed only the detections that are not a vessel's (the simulator's
+  ``metadata['source']``; a diagnostic no real tracker could be).
 
     python scripts/learned_target_leak.py [FAR_CLUTTER BEARING_DEG [SEEDS [FIRST_SEED]]]
 
@@ -31,24 +31,22 @@ from ctxmodels.experiment import metrics
 from ctxmodels.experiment.runner import simulated_run, track_scans
 from ctxmodels.experiment.scoring import score_run
 from ctxmodels.experiment.scenarios import TRUTHS
-import ctxmodels.trackers.models as learned_settings
 from ctxmodels.experiment.trackers import build_tracker
 from ctxmodels.trackers import TRACKERS
 from ctxmodels.stonesoup.ordering import in_track_order
 
 SCENARIOS = ("mixed-range", "formation")
 LEARN = learning.ClutterMapLearner.learn
-SETTINGS = ("MAP_WEIGHTING", "MAP_POOLING_SCANS")
-DEFAULTS = {name: getattr(learned_settings, name) for name in SETTINGS}
-SECOND = {"MAP_WEIGHTING": "gates", "MAP_POOLING_SCANS": 10.0}
+GATED = {"weighting": "gates", "pooling_scans": 10.0}
+#: Variants: changes to the spec's ClutterMapSettings.
 VARIANTS = {"context": ("gmphd-context", {}),
             "learned λ": ("gmphd-learned-clutter", {}),
             "learned λ, P_D": ("gmphd-learned", {}),
             # cells held at their ring's level (a weight of a million scans)
-            "learned λ, ring only": ("gmphd-learned-clutter", {"MAP_POOLING_SCANS": 1e6}),
-            "2nd edition": ("gmphd-learned-clutter", SECOND),
-            "2nd, weight estimated": ("gmphd-learned-clutter", {"MAP_WEIGHTING": "gates"}),
-            "2nd, oracle feed": ("gmphd-learned-clutter", SECOND)}
+            "learned λ, ring only": ("gmphd-learned-clutter", {"pooling_scans": 1e6}),
+            "gated feed, pool weight 10": ("gmphd-learned-clutter", GATED),
+            "gated feed, weight estimated": ("gmphd-learned-clutter", {"weighting": "gates"}),
+            "gated feed, pool weight 10, oracle feed": ("gmphd-learned-clutter", GATED)}
 
 
 def learn_from_clutter_only(self, time, detections, tracks):
@@ -62,14 +60,14 @@ def job(args):
     variant, scenario, seed, far, bearing = args
     learning.ClutterMapLearner.learn = learn_from_clutter_only if "oracle" in variant else LEARN
     name, changes = VARIANTS[variant]
-    for setting, value in {**DEFAULTS, **changes}.items():  # every job sets them all
-        setattr(learned_settings, setting, value)
+    spec = TRACKERS[name]
+    spec = dataclasses.replace(spec, clutter_map=dataclasses.replace(spec.clutter_map, **changes))
     # (the stress truth the learned map was developed on, far clutter and bearing changed)
     stress = TRUTHS["stress"]
     radar = dataclasses.replace(stress.radar, clutter_per_scan_far=far,
                                 bearing_std=math.radians(bearing))
     run = simulated_run(scenario, seed, None, radar, stress.lidar)
-    _, _, tracks = track_scans(build_tracker(TRACKERS[name], run))
+    _, _, tracks = track_scans(build_tracker(spec, run))
     return (variant, scenario, seed), score_run(run, [t for t in in_track_order(tracks) if len(t)])
 
 

@@ -7,40 +7,35 @@ scenarios 1 and 2, seeds 0-9, paired by scenario and seed with the context-aware
     python scripts/learned_warmup.py             # the study's learned trackers (~1.5 min)
     python scripts/learned_warmup.py --settings  # and the map's settings varied (~4 min)
 
-A variant changes module constants of ``ctxmodels.experiment.trackers`` (``MAP_*``, and
-for "full circle" the bearings the grid spans) in the worker process that runs it; every
-job sets all of them, so no setting leaks into the next job.
+A variant is the study's spec with its ``clutter_map`` settings replaced
+(:class:`~ctxmodels.trackers.models.ClutterMapSettings`).
 """
 import argparse
-import math
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
+import dataclasses
+
 import ctxmodels.experiment.trackers as trackers
-import ctxmodels.trackers.models as learned_settings
 from ctxmodels.trackers import TRACKERS
 from ctxmodels.experiment.runner import simulated_run, track_scans
 from ctxmodels.experiment.scoring import score_run
 from ctxmodels.stonesoup.ordering import in_track_order
 
-SETTINGS = ("MAP_PRIOR_SCANS", "MAP_POOLING", "MAP_POOLING_SCANS", "MAP_WEIGHTING",
-            "_seen_bearings")
-DEFAULTS = {name: getattr(learned_settings, name) for name in SETTINGS}
 STUDY = {"gmphd-learned-clutter": ("gmphd-learned-clutter", {}),
          "gmphd-learned": ("gmphd-learned", {})}
+#: Variants of the learned map: changes to the spec's ClutterMapSettings.
 VARIED = {
-    "learned, ring prior 10 scans": ("gmphd-learned", {"MAP_PRIOR_SCANS": 10.0}),
-    "learned, pool weight 10 scans": ("gmphd-learned", {"MAP_POOLING_SCANS": 10.0}),
-    "learned, pool weight 100 scans": ("gmphd-learned", {"MAP_POOLING_SCANS": 100.0}),
-    "learned, gated feed": ("gmphd-learned", {"MAP_WEIGHTING": "gates"}),
-    # the second edition's map: gated feed, pool weight 10 scans
+    "learned, ring prior 10 scans": ("gmphd-learned", {"prior_scans": 10.0}),
+    "learned, pool weight 10 scans": ("gmphd-learned", {"pooling_scans": 10.0}),
+    "learned, pool weight 100 scans": ("gmphd-learned", {"pooling_scans": 100.0}),
+    "learned, gated feed": ("gmphd-learned", {"weighting": "gates"}),
     "learned, gated feed, pool weight 10 scans": ("gmphd-learned", {
-        "MAP_WEIGHTING": "gates", "MAP_POOLING_SCANS": 10.0}),
-    # the first edition's map: no pooling, its grid also spanned the blind sector
+        "weighting": "gates", "pooling_scans": 10.0}),
+    # no pooling, and a grid that also spans the blind sector
     "learned, gated feed, no pooling, full circle": ("gmphd-learned", {
-        "MAP_WEIGHTING": "gates", "MAP_POOLING": "none", "MAP_PRIOR_SCANS": 10.0,
-        "_seen_bearings": lambda model: (-math.pi, math.pi)}),
+        "weighting": "gates", "pooling": "none", "prior_scans": 10.0, "full_circle": True}),
 }
 SCENARIOS, SEEDS = ("mixed-range", "formation"), range(10)
 T19 = 2.093  # the t quantile for a 95 % interval over 20 pairs
@@ -51,14 +46,14 @@ VARIANTS = {"context": ("gmphd-context", {}), **STUDY, **VARIED}
 
 def job(label):
     tracker, changes = VARIANTS[label]
-    for name, value in {**DEFAULTS, **changes}.items():
-        setattr(learned_settings, name, value)
+    spec = TRACKERS[tracker]
+    spec = dataclasses.replace(spec, clutter_map=dataclasses.replace(spec.clutter_map, **changes))
     rms = {}
     for scenario in SCENARIOS:
         for seed in SEEDS:
             run = simulated_run(scenario, seed, None, None, None)
             t = np.array([(x - run.radar_times[0]).total_seconds() for x in run.radar_times])
-            _, _, tracks = track_scans(trackers.build_tracker(TRACKERS[tracker], run))
+            _, _, tracks = track_scans(trackers.build_tracker(spec, run))
             d = np.asarray(score_run(run, [x for x in in_track_order(tracks) if len(x)]).gospa.distance)
             rms[(scenario, seed)] = (np.sqrt(np.mean(d[t < 120] ** 2)),
                                      np.sqrt(np.mean(d[t >= 120] ** 2)))

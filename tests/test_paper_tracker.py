@@ -22,7 +22,7 @@ from ctxmodels.experiment.trackers import applicable
 from ctxmodels.trackers import TRACKERS, PaperTracker, paper_tracker
 from ctxmodels.trackers.models import learned_clutter_map
 from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, ClutterMapLearner,
-                                 DetectionLearner, LearningTracker, PoseCentredRegion,
+                                 DetectionLearner, PoseCentredRegion,
                                  PointProcessMultiTargetTracker, in_track_order)
 
 DURATION, SEED = 40.0, 2
@@ -411,3 +411,36 @@ def test_the_learned_map_spans_the_bearings_the_radar_sees():
                         clutter=paper_sensor_models()["radar"].clutter, name="radar")
     np.testing.assert_allclose(np.asarray(learned_clutter_map(split).edges[0])[[0, -1]],
                                [-math.pi, math.pi])
+
+
+def test_learned_settings_ride_on_the_spec():
+    """A variant of a learned tracker is a spec with replaced settings; building it leaves
+    the registry's spec, and what it builds, as they were (no module state)."""
+    from ctxmodels.trackers.models import ClutterMapSettings, DetectionEstimateSettings
+    pose = ConstantPose(pose=Pose(x=0.0, y=0.0))
+    spec = TRACKERS["gmphd-learned"]
+    variant = dataclasses.replace(
+        spec, clutter_map=dataclasses.replace(spec.clutter_map, pooling_scans=10.0,
+                                              full_circle=True, weighting="gates"),
+        detection_estimate=dataclasses.replace(spec.detection_estimate, band=400.0))
+
+    def primary(built):
+        feeder = built.tracker.detector.feeders[0]  # the radar's: the primary
+        (learned_map,) = feeder.sensor_model.clutter.factors
+        estimate = next(f for f in feeder.sensor_model.detection.factors
+                        if isinstance(f, DetectionEstimate))
+        return learned_map, estimate, built.learners[0]
+
+    models = paper_sensor_models()
+    learned, estimate, learner = primary(paper_tracker(variant, {"radar": [], "lidar": []},
+                                                       models, pose, primary="radar"))
+    assert learned.pooling_scans == 10.0 and learner.weighting == "gates"
+    np.testing.assert_allclose(np.asarray(learned.edges[0])[[0, -1]], [-math.pi, math.pi])
+    assert len(estimate.edges) - 1 == round((1612.0 - 50.0) / 400.0)
+    learned, estimate, learner = primary(paper_tracker("gmphd-learned", {"radar": [], "lidar": []},
+                                                       models, pose, primary="radar"))
+    assert spec.clutter_map == ClutterMapSettings()
+    assert spec.detection_estimate == DetectionEstimateSettings()
+    assert learned.pooling_scans is None and learner.weighting == "posterior"
+    assert np.asarray(learned.edges[0])[0] > -math.pi  # the blind sector left out
+    assert len(estimate.edges) - 1 == round((1612.0 - 50.0) / 200.0)

@@ -126,11 +126,12 @@ def paper_tracker(name: str | TrackerSpec, streams: Mapping[str, Iterable],
     region = PoseCentredRegion(pose_source=pose_source, radius=radius)
     tracker = gmphd_tracker(spec, region, predictor, updater, detector, fast)
     from ..stonesoup.learning import ClutterMapLearner, DetectionLearner
-    from .models import LEARNING_GATE, MAP_WEIGHTING
+    from .models import LEARNING_GATE
     learners = []
     if spec.clutter == "learned":
+        weighting = spec.clutter_map.weighting
         learners.append(ClutterMapLearner(
-            weighting=MAP_WEIGHTING, gate_radius=LEARNING_GATE if MAP_WEIGHTING == "gates" else None))
+            weighting=weighting, gate_radius=LEARNING_GATE if weighting == "gates" else None))
     if spec.pd == "learned":
         learners.append(DetectionLearner(gate_radius=LEARNING_GATE))
     return PaperTracker(spec=spec, tracker=tracker, learners=learners)
@@ -165,9 +166,9 @@ def _models_read(spec: TrackerSpec, streams, sensor_models, primary) -> dict:
         raise ValueError(f"primary: {spec.name} learns the primary sensor's model; name it "
                          f"(one of {list(streams)})")
     if spec.clutter == "learned":
-        models[primary] = with_learned_clutter(models[primary])
+        models[primary] = with_learned_clutter(models[primary], spec.clutter_map)
     if spec.pd == "learned":
-        models[primary] = with_learned_detection(models[primary])
+        models[primary] = with_learned_detection(models[primary], spec.detection_estimate)
     return models
 
 

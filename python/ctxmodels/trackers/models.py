@@ -5,58 +5,89 @@ with the settings of each."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import (AngularSector, ClutterDensityModel, DetectionEstimate, DetectionProbabilityModel,
                LandMask, LineOfSight, RangeBands, SensorModel)
 
-#: The learned radar clutter map (``gmphd-learned-clutter``, ``gmphd-learned``): cells of
-#: 5° × 50 m in the radar's bearing–range space — 5σ of its bearing noise and 10σ of its range
-#: noise, so a point source's returns stay in one cell, and fine enough to follow the sea
-#: clutter's step at 1 km and a coastline — over the bearings the radar sees (its blind
-#: sector is not in the grid: no clutter is reported there, so its cells would only learn
-#: λ ≈ 0 and pull their rings down). Cells are pooled by range ring (``pooling='range'``):
-#: sea clutter depends on the grazing angle, i.e. on range, and only slowly on bearing, so a
-#: ring's 59 cells share one level that is learned in a few scans, where a cell alone needs
-#: ~100 (one far cell sees ~0.04 clutter points a scan). How far a cell departs from its ring
-#: is estimated from the ring's spread (``pooling_scans=None``: a Gamma–Poisson hierarchy,
-#: :class:`~ctxmodels.ClutterMap`): a ring whose cells agree gives them its level, a ring
-#: with a coast (~0.5 points a scan in one cell) lets that cell go. A cell its ring's level
-#: cannot explain — a coast, or a static object's returns every scan — leaves the ring by
-#: the map's Poisson tail test: such a source is not sea clutter. The ring's prior, λ 1e-3
-#: per rad·m (the uniform trackers' value), is a guess worth one scan of the ring (59
-#: cell-scans). Forgetting 0.99 per scan (a memory of 100 scans, 2 minutes at 0.8 Hz: the
-#: scenes' clutter does not change faster). Each detection counts as its posterior clutter
-#: probability in the GM-PHD update (``weighting='posterior'``,
-#: :class:`~ctxmodels.stonesoup.ClutterMapLearner`): the expected clutter count under the
-#: tracker's own model, so a target's returns count as clutter only in proportion to how
-#: little the filter already believes in it. ``docs/study.md`` shows what depends on these
-#: choices and which were revised after results (``scripts/learned_warmup.py --settings``,
-#: ``scripts/learned_target_leak.py``).
-MAP_BEARING_CELL, MAP_RANGE_CELL = math.radians(5.0), 50.0
-MAP_PRIOR, MAP_PRIOR_SCANS, MAP_FORGETTING = 1e-3, 1.0, 0.99
-MAP_POOLING, MAP_POOLING_SCANS = "range", None
-MAP_WEIGHTING = "posterior"
-#: Gates of 50 m around the tracks (:class:`~ctxmodels.stonesoup.DetectionLearner`'s
-#: association): 3σ of the bearing error at 1 km hold a track's returns.
+@dataclass(frozen=True)
+class ClutterMapSettings:
+    """The learned radar clutter map (``gmphd-learned-clutter``, ``gmphd-learned``); a
+    :class:`~ctxmodels.trackers.TrackerSpec` carries one, and a variant is a replaced copy.
+
+    Cells of 5° × 50 m in the radar's bearing–range space — 5σ of its bearing noise and 10σ
+    of its range noise, so a point source's returns stay in one cell, and fine enough to
+    follow the sea clutter's step at 1 km and a coastline — over the bearings the radar sees
+    (its blind sector is not in the grid: no clutter is reported there, so its cells would
+    only learn λ ≈ 0 and pull their rings down). Cells are pooled by range ring
+    (``pooling='range'``): sea clutter depends on the grazing angle, i.e. on range, and only
+    slowly on bearing, so a ring's 59 cells share one level that is learned in a few scans,
+    where a cell alone needs ~100 (one far cell sees ~0.04 clutter points a scan). How far a
+    cell departs from its ring is estimated from the ring's spread (``pooling_scans=None``: a
+    Gamma–Poisson hierarchy, :class:`~ctxmodels.ClutterMap`): a ring whose cells agree gives
+    them its level, a ring with a coast (~0.5 points a scan in one cell) lets that cell go. A
+    cell its ring's level cannot explain — a coast, or a static object's returns every scan —
+    leaves the ring by the map's Poisson tail test: such a source is not sea clutter. The
+    ring's prior, λ 1e-3 per rad·m (the uniform trackers' value), is a guess worth one scan
+    of the ring (59 cell-scans). Forgetting 0.99 per scan (a memory of 100 scans, 2 minutes
+    at 0.8 Hz: the scenes' clutter does not change faster). Each detection counts as its
+    posterior clutter probability in the GM-PHD update (``weighting='posterior'``,
+    :class:`~ctxmodels.stonesoup.ClutterMapLearner`): the expected clutter count under the
+    tracker's own model, so a target's returns count as clutter only in proportion to how
+    little the filter already believes in it. ``docs/study.md`` shows what depends on these
+    choices and which were revised after results (``scripts/learned_warmup.py --settings``,
+    ``scripts/learned_target_leak.py``)."""
+
+    bearing_cell: float = math.radians(5.0)
+    range_cell: float = 50.0
+    prior: float = 1e-3
+    prior_scans: float = 1.0
+    forgetting: float = 0.99
+    pooling: str = "range"
+    pooling_scans: float | None = None
+    #: ``"posterior"`` or ``"gates"`` (:class:`~ctxmodels.stonesoup.ClutterMapLearner`).
+    weighting: str = "posterior"
+    #: The grid spans every bearing, the blind sector too (a variant, not the study's).
+    full_circle: bool = False
+
+
+@dataclass(frozen=True)
+class DetectionEstimateSettings:
+    """The learned radar P_D (``gmphd-learned``): the hand-written model's range bands where
+    it is > 0 (the radar's range limits are specification) split into bands of about 200 m
+    — a radar's P_D falls with range (SNR ∝ R⁻⁴), and 8 bands still see a few targets each —
+    each a Beta posterior with prior mean 0.5 (nothing known but that the radar detects
+    something: a coin) worth 5 trials (four scans of one track overrule it), forgetting 0.99
+    per scan like the clutter map; the blind sector, land and line of sight stay as given."""
+
+    band: float = 200.0
+    prior: float = 0.5
+    prior_trials: float = 5.0
+    forgetting: float = 0.99
+
+
+#: Gates of 50 m around the tracks (the learners' association): 3σ of the bearing error at
+#: 1 km hold a track's returns.
 LEARNING_GATE = 50.0
 
 
-def learned_clutter_map(model: SensorModel):
+def learned_clutter_map(model: SensorModel, settings: ClutterMapSettings = ClutterMapSettings()):
     """A fresh bearing–range clutter map over ``model``'s P_D reach and the bearings it sees
-    (see :data:`MAP_PRIOR` and the constants beside it)."""
+    (:class:`ClutterMapSettings`)."""
     from ..clutter_map import ClutterMap
     reach = sensor_reach(model)
     if not math.isfinite(reach) or reach <= 0:
         raise ValueError("sensor_models: the learned clutter map covers the primary sensor's "
                          "reach, but its P_D has no outer range band with P_D = 0")
-    low, high = _seen_bearings(model)
-    bearings = np.linspace(low, high, max(1, round((high - low) / MAP_BEARING_CELL)) + 1)
-    ranges = MAP_RANGE_CELL * np.arange(math.ceil(reach / MAP_RANGE_CELL) + 1)
-    return ClutterMap(space="bearing-range", edges=(bearings, ranges), prior_intensity=MAP_PRIOR,
-                      prior_scans=MAP_PRIOR_SCANS, forgetting=MAP_FORGETTING,
-                      pooling=MAP_POOLING, pooling_scans=MAP_POOLING_SCANS)
+    low, high = (-math.pi, math.pi) if settings.full_circle else _seen_bearings(model)
+    bearings = np.linspace(low, high, max(1, round((high - low) / settings.bearing_cell)) + 1)
+    ranges = settings.range_cell * np.arange(math.ceil(reach / settings.range_cell) + 1)
+    return ClutterMap(space="bearing-range", edges=(bearings, ranges),
+                      prior_intensity=settings.prior, prior_scans=settings.prior_scans,
+                      forgetting=settings.forgetting, pooling=settings.pooling,
+                      pooling_scans=settings.pooling_scans)
 
 
 def _seen_bearings(model: SensorModel) -> tuple[float, float]:
@@ -74,18 +105,11 @@ def _seen_bearings(model: SensorModel) -> tuple[float, float]:
     return (low, high) if low < high else (-math.pi, math.pi)
 
 
-#: The learned radar P_D (``gmphd-learned``): the hand-written model's range bands where it
-#: is > 0 (the radar's range limits are specification) split into bands of about 200 m — a
-#: radar's P_D falls with range (SNR ∝ R⁻⁴), and 8 bands still see a few targets each —
-#: each a Beta posterior with prior mean 0.5 (nothing known but that the radar detects
-#: something: a coin) worth 5 trials (four scans of one track overrule it), forgetting 0.99
-#: per scan like the clutter map; the blind sector, land and line of sight stay as given.
-PD_BAND, PD_PRIOR, PD_PRIOR_TRIALS, PD_FORGETTING = 200.0, 0.5, 5.0, 0.99
-
-
-def learned_detection(model: SensorModel) -> DetectionProbabilityModel:
+def learned_detection(model: SensorModel,
+                      settings: DetectionEstimateSettings = DetectionEstimateSettings(),
+                      ) -> DetectionProbabilityModel:
     """``model``'s P_D with its range bands replaced by one :class:`~ctxmodels.DetectionEstimate`
-    over their support (see :data:`PD_BAND` and the constants beside it)."""
+    over their support (:class:`DetectionEstimateSettings`)."""
     bands = [f for f in model.detection.factors if isinstance(f, RangeBands)]
     if len(bands) != 1:
         raise ValueError("sensor_models: the learned P_D replaces the primary sensor's range "
@@ -96,9 +120,10 @@ def learned_detection(model: SensorModel) -> DetectionProbabilityModel:
         raise ValueError("sensor_models: the learned P_D needs the primary's range bands to be "
                          "> 0 on one bounded interval of range")
     low, high = (float(edges[seen[0] - 1]) if seen[0] else 0.0), float(edges[seen[-1]])
-    count = max(1, round((high - low) / PD_BAND))
-    estimate = DetectionEstimate(edges=np.linspace(low, high, count + 1), prior_probability=PD_PRIOR,
-                                 prior_trials=PD_PRIOR_TRIALS, forgetting=PD_FORGETTING)
+    count = max(1, round((high - low) / settings.band))
+    estimate = DetectionEstimate(edges=np.linspace(low, high, count + 1),
+                                 prior_probability=settings.prior,
+                                 prior_trials=settings.prior_trials, forgetting=settings.forgetting)
     return DetectionProbabilityModel(factors=[estimate if f is bands[0] else f
                                               for f in model.detection.factors])
 
@@ -131,14 +156,15 @@ def with_uniform_clutter(model: SensorModel, density: float) -> SensorModel:
     return _with(model, clutter=ClutterDensityModel(factors=[density]))
 
 
-def with_learned_clutter(model: SensorModel) -> SensorModel:
+def with_learned_clutter(model: SensorModel, settings: ClutterMapSettings) -> SensorModel:
     """``model`` with λ a fresh :func:`learned_clutter_map` (learned as the tracker runs)."""
-    return _with(model, clutter=ClutterDensityModel(factors=[learned_clutter_map(model)]))
+    return _with(model, clutter=ClutterDensityModel(
+        factors=[learned_clutter_map(model, settings)]))
 
 
-def with_learned_detection(model: SensorModel) -> SensorModel:
+def with_learned_detection(model: SensorModel, settings: DetectionEstimateSettings) -> SensorModel:
     """``model`` with its range bands' P_D a fresh :func:`learned_detection`."""
-    return _with(model, detection=learned_detection(model))
+    return _with(model, detection=learned_detection(model, settings))
 
 
 def _with(model: SensorModel, **changes) -> SensorModel:

@@ -52,10 +52,10 @@ line-of-sight-aware (context-aware plus land mask and radar shadow in the radar'
 GM-PHD (learned λ, ours): the context-aware GM-PHD whose radar λ is not the paper's equation
 but a :class:`~ctxmodels.ClutterMap` learned online from the tracker's own output
 (:class:`~ctxmodels.stonesoup.ClutterMapLearner` after each scan; settings below,
-:data:`~ctxmodels.trackers.models.MAP_PRIOR`); the lidar keeps the paper's ``area`` rule. GM-PHD (learned λ, P_D,
+:class:`~ctxmodels.trackers.models.ClutterMapSettings`); the lidar keeps the paper's ``area`` rule. GM-PHD (learned λ, P_D,
 ours): the same with the radar's range-band P_D learned as well
 (:class:`~ctxmodels.DetectionEstimate`, :class:`~ctxmodels.stonesoup.DetectionLearner`;
-:data:`~ctxmodels.trackers.models.PD_BAND`); its blind sector stays as specified.
+:class:`~ctxmodels.trackers.models.DetectionEstimateSettings`); its blind sector stays as specified.
 
 Reported tracks are Stone Soup's: a GM-PHD track is created when a component's weight
 exceeds the extraction threshold and continues, one state per scan, while its tagged
@@ -67,6 +67,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from .models import ClutterMapSettings, DetectionEstimateSettings
 
 #: Table I: the global P_D and λ (per rad·m or m², as the sensor measures) of the JPDA and
 #: the uniform / radar-only GM-PHD.
@@ -129,6 +131,10 @@ class TrackerSpec:
     delete_window: float | None = None
     #: JPDA only: delete the weaker of two duplicate tracks (``DuplicateTrackDeleter``).
     merge_duplicates: bool = False
+    #: The learned trackers' clutter map and P_D estimate (read where ``clutter`` / ``pd``
+    #: is ``"learned"``); a variant is a spec with a replaced copy.
+    clutter_map: ClutterMapSettings = ClutterMapSettings()
+    detection_estimate: DetectionEstimateSettings = DetectionEstimateSettings()
     #: Rough tracking CPU seconds of a 480 s scenario at the calibrated truth (measured on
     #: the 2-core VM): orders the experiment's jobs and weights its progress estimate only.
     cost: float = 1.0
