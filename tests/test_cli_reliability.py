@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from ctxmodels import cli
+from ctxmodels.cli import experiment as experiment_command
+from ctxmodels.cli.output import OutputFolder
 from ctxmodels.cli import main
 
 #: A run that takes a second: one short GM-PHD run, no figures.
@@ -110,7 +111,7 @@ def _record_instead_of_running(monkeypatch) -> dict:
     def record(args):
         seen["args"] = args
         return 0
-    monkeypatch.setattr(cli, "_experiment", record)
+    monkeypatch.setattr(experiment_command, "_experiment", record)
     return seen
 
 
@@ -275,9 +276,9 @@ def test_second_run_replaces_the_previous_outputs_only(tmp_path, capsys):
     # The first run's figures are gone; the user's files, even ctxmodels-like names, stay.
     assert after == {"results.md", "results.csv", "results.json", "findings.md",
                      "findings.json", "notes.txt", "coverage_custom.png",
-                     cli.OutputFolder.MANIFEST}
+                     OutputFolder.MANIFEST}
     assert (out / "notes.txt").read_text() == "mine"
-    manifest = json.loads((out / cli.OutputFolder.MANIFEST).read_text())
+    manifest = json.loads((out / OutputFolder.MANIFEST).read_text())
     assert manifest["files"] == ["findings.json", "findings.md", "results.csv", "results.json",
                                  "results.md"]
     capsys.readouterr()
@@ -289,15 +290,15 @@ def test_folder_from_before_manifests_and_a_hostile_manifest(tmp_path):
     for name in ("results.json", "tracks_formation_jpda.png", "coverage_islands.png",
                  "holiday.png"):
         (folder / name).write_text("x")
-    assert cli.OutputFolder(folder).previous() == {
+    assert OutputFolder(folder).previous() == {
         "results.json", "tracks_formation_jpda.png", "coverage_islands.png"}
     outside = tmp_path / "outside.txt"
     outside.write_text("keep")
-    (folder / cli.OutputFolder.MANIFEST).write_text(json.dumps(
+    (folder / OutputFolder.MANIFEST).write_text(json.dumps(
         {"files": ["../outside.txt", str(outside), "holiday.png", "/etc/passwd", ".."]}))
-    assert cli.OutputFolder(folder).previous() == {"holiday.png"}
-    (folder / cli.OutputFolder.MANIFEST).write_text("{not json")
-    assert cli.OutputFolder(folder).previous() == set()
+    assert OutputFolder(folder).previous() == {"holiday.png"}
+    (folder / OutputFolder.MANIFEST).write_text("{not json")
+    assert OutputFolder(folder).previous() == set()
 
 
 def _default_sigint():
@@ -319,9 +320,9 @@ def test_ctrl_c_while_outputs_move_in_leaves_one_complete_run(tmp_path, monkeypa
     out.mkdir()
     for name in ("results.md", "tracks_formation_jpda.png"):
         (out / name).write_text("old")
-    (out / cli.OutputFolder.MANIFEST).write_text(json.dumps(
+    (out / OutputFolder.MANIFEST).write_text(json.dumps(
         {"files": ["results.md", "tracks_formation_jpda.png"]}))
-    folder = cli.OutputFolder(out)
+    folder = OutputFolder(out)
     real_replace = os.replace
 
     def replace_with_ctrl_c(source, target):
@@ -336,9 +337,9 @@ def test_ctrl_c_while_outputs_move_in_leaves_one_complete_run(tmp_path, monkeypa
             folder.commit(stage)
     assert folder.committed
     assert {p.name for p in out.iterdir()} == {"results.md", "results.csv",
-                                              cli.OutputFolder.MANIFEST}
+                                              OutputFolder.MANIFEST}
     assert (out / "results.md").read_text() == "new"
-    assert json.loads((out / cli.OutputFolder.MANIFEST).read_text())["files"] == [
+    assert json.loads((out / OutputFolder.MANIFEST).read_text())["files"] == [
         "results.csv", "results.md"]
 
 
@@ -395,7 +396,7 @@ def test_ctrl_c_stops_the_run(target, workers, previous, tmp_path):
     if previous:  # a previous run's results must survive an interrupted run
         out.mkdir()
         (out / "results.md").write_text("previous")
-        (out / cli.OutputFolder.MANIFEST).write_text(json.dumps({"files": ["results.md"]}))
+        (out / OutputFolder.MANIFEST).write_text(json.dumps({"files": ["results.md"]}))
     # Eight 120 s runs: about a minute of work on two cores, one run alone takes seconds.
     argv = [sys.executable, "-m", "ctxmodels.cli", "experiment", "--scenarios", "mixed-range",
             "--trackers", "gmphd-context", "--seeds", "8", "--duration", "120", "--workers",
@@ -434,7 +435,7 @@ def test_ctrl_c_stops_the_run(target, workers, previous, tmp_path):
     assert "| Method" not in stdout  # the queued runs did not go on to make a table
     _wait_for(lambda: not _process_group(process.pid), 5, "no processes left in the group")
     if previous:
-        assert {p.name for p in out.iterdir()} == {"results.md", cli.OutputFolder.MANIFEST}
+        assert {p.name for p in out.iterdir()} == {"results.md", OutputFolder.MANIFEST}
         assert (out / "results.md").read_text() == "previous"
     else:
         assert not out.exists()  # made for this run, left empty, so removed

@@ -465,8 +465,10 @@ def test_study_without_matplotlib_exits_2_naming_what_to_install(command, tmp_pa
 
 def test_study_without_matplotlib_runs_with_no_plots(tmp_path, monkeypatch, without_matplotlib):
     from ctxmodels import cli
+    from ctxmodels.cli import experiment as experiment_command
     seen = {}
-    monkeypatch.setattr(cli, "_experiment", lambda args: seen.setdefault("args", args) and 0)
+    monkeypatch.setattr(experiment_command, "_experiment",
+                        lambda args: seen.setdefault("args", args) and 0)
     assert cli.main(["experiment", *TINY, "--no-plots", "--output", str(tmp_path / "o")]) == 0
     assert seen["args"].no_plots
 

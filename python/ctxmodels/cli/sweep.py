@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import sys
 
-from .cli_validation import (MAX_BEARING_STD_DEG, MAX_LIDAR_CLUTTER, MAX_RADAR_CLUTTER,
-                             check_experiment, number)
+from .options import study_options
+from .output import OutputFolder
+from .validation import MAX_BEARING_STD_DEG, MAX_LIDAR_CLUTTER, check_experiment, number
 
 #: The largest far clutter density (per rad·m): the calibrated near clutter plus this much
 #: beyond 1000 m stays within MAX_RADAR_CLUTTER returns a scan (scans are drawn up front).
@@ -16,8 +17,7 @@ QUICK_SEEDS, QUICK_DURATION = 2, 30.0
 
 
 def add_sweep_command(commands) -> None:
-    from .cli import study_options
-    from .experiment.sweep import (DEFAULT_BEARING_STD_DEG, DEFAULT_FAR_CLUTTER,
+    from ..experiment.sweep import (DEFAULT_BEARING_STD_DEG, DEFAULT_FAR_CLUTTER,
                                    DEFAULT_LIDAR_CLUTTER, DEFAULT_RADAR_PD, SWEEP_SEEDS)
     sweep = commands.add_parser(
         "sweep", help="the findings over a grid of simulated radar and lidar settings",
@@ -52,14 +52,13 @@ def add_sweep_command(commands) -> None:
 
 
 def _check_sweep(args) -> None:
-    from .cli import OutputFolder
     check_experiment(args)
     args.folder = OutputFolder(args.output)  # last: no folder is created for a bad command
 
 
 def _sweep(args) -> int:
-    from .experiment.runner import ExperimentConfig
-    from .experiment.sweep import SweepConfig, run_sweep
+    from ..experiment.runner import ExperimentConfig
+    from ..experiment.sweep import SweepConfig, run_sweep
     folder = args.folder
     base = ExperimentConfig(scenarios=args.scenarios, trackers=args.trackers,
                             seeds=list(range(args.seed_start, args.seed_start + args.seeds)),

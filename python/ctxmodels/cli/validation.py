@@ -82,9 +82,9 @@ def check_experiment(args) -> None:
     and sets ``args.skipped``: the (tracker, scenario) pairs that will not run."""
     if not getattr(args, "no_plots", False):
         require_module("matplotlib", "--no-plots", "the figures", "pass --no-plots")
-    from .experiment.scenarios import SCENARIOS
-    from .experiment.trackers import applicable
-    from .trackers import TRACKERS
+    from ..experiment.scenarios import SCENARIOS
+    from ..experiment.trackers import applicable
+    from ..trackers import TRACKERS
     args.scenarios = list(dict.fromkeys(args.scenarios))
     named: list[str] = []  # trackers the user named one by one
     if args.trackers is not None and "all" in args.trackers:
@@ -180,7 +180,7 @@ def load_models(files) -> dict:
     read or does not hold a ctxmodels SensorModel."""
     from stonesoup.serialise import YAML
 
-    from .sensor import SensorModel
+    from ..sensor import SensorModel
     models = {}
     for file in files:
         try:
