@@ -39,8 +39,6 @@ measurement space.
 from __future__ import annotations
 
 import datetime
-import math
-import sys
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -51,104 +49,29 @@ from stonesoup.feeder.base import DetectionFeeder
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.array import StateVector
 
-from .._component import as_float, as_position_mapping
-from ..clutter import ClutterDensityModel
 from ..context import DetectionSet
-from ..detection import DetectionProbabilityModel
 from ..pose import Pose, PoseSource
-from ..range_bands import RangeBands
-from ..sector import AngularSector
 from ..sensor import SensorModel
 from .radar_context import SensorContext
-
-#: The Stone Soup sensor classes read here (by name, so the module imports without them).
-SUPPORTED = ("RadarBearingRange", "RadarRotatingBearingRange", "RadarBearing",
-             "RadarRotatingBearing", "RadarElevationBearingRange")
-
-
-def _kind(sensor) -> str:
-    """The sensor's class name, which must be one of :data:`SUPPORTED` exactly: a subclass
-    (``RadarRotatingElevationBearingRange``, a range-rate radar, a user's own) may add
-    coverage rules these models would silently drop."""
-    cls = type(sensor)
-    if cls.__name__ in SUPPORTED and cls.__module__.startswith("stonesoup."):
-        if getattr(sensor, "obstacles", None):
-            raise ValueError("sensor: has obstacles, whose occlusion is not read here; use a "
-                             "ctxmodels LandMask/LineOfSight for what blocks the view")
-        return cls.__name__
-    raise TypeError(f"sensor: {cls.__name__} is not a Stone Soup sensor read here; "
-                    f"supported: {', '.join(SUPPORTED)}")
-
-
-#: The supported sensors whose field of view turns with the antenna's dwell centre.
-ROTATING = ("RadarRotatingBearingRange", "RadarRotatingBearing")
-
-
-def _planar_yaw(orientation, argument: str) -> float:
-    roll, pitch, yaw = (float(v) for v in np.asarray(orientation, dtype=float).ravel()[:3])
-    if roll != 0.0 or pitch != 0.0:
-        raise ValueError(f"{argument}: roll {roll} and pitch {pitch} rad tilt the coverage "
-                         f"out of the x/y plane; only a yaw is read")
-    return yaw
-
+from .sensor_coverage import ROTATING, SUPPORTED, planar_yaw, sensor_kind, sensor_number
 
 def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: float,
                                 *, name: str = "") -> SensorModel:
     """The :class:`~ctxmodels.SensorModel` of a Stone Soup radar: P_D ``prob_detection``
     within its ``max_range`` (and rotating field of view), 0 outside; λ the constant
-    ``clutter_density``. Use it with :func:`sensor_pose` at each scan."""
-    kind = _kind(sensor)
-    p = as_float(prob_detection, "prob_detection", finite=False)
-    if not 0.0 <= p <= 1.0:
-        raise ValueError(f"prob_detection: must lie in [0, 1], got {prob_detection!r}")
-    density = as_float(clutter_density, "clutter_density", finite=False)
-    if not (math.isfinite(density) and density >= sys.float_info.min):
-        raise ValueError(f"clutter_density: must be a finite density > 0, at least "
-                         f"{sys.float_info.min} (per unit of the detections' measurement "
-                         f"space; trackers divide by it), got {clutter_density!r}")
-    if not isinstance(name, str):
-        raise TypeError(f"name: expected a string label, got {type(name).__name__} {name!r}")
-    factors: list = [p]
-    max_range = _sensor_number(sensor, "max_range")
-    if math.isnan(max_range) or max_range < 0:
-        raise ValueError(f"sensor: max_range must be >= 0, got {sensor.max_range!r}")
-    if math.isfinite(max_range):
-        # r <= max_range is detectable: the edge belongs to the band below.
-        factors.append(RangeBands(edges=(max_range,), values=(1.0, 0.0), upper_owns=(False,)))
-    if kind in ROTATING:
-        fov = _sensor_number(sensor, "fov_angle")
-        if not fov > 0:
-            raise ValueError(f"sensor: fov_angle must be > 0, got {sensor.fov_angle!r}")
-        if fov < 2 * math.pi:
-            factors.append(AngularSector.field_of_view(0.0, fov))
-    try:
-        mapping = as_position_mapping(tuple(sensor.position_mapping)[:2], "sensor")
-    except (TypeError, ValueError) as err:
-        raise type(err)(f"sensor: position_mapping {sensor.position_mapping!r} is not two "
-                        f"state indices of x and y ({str(err)[len('sensor: '):]})") from None
-    return SensorModel(detection=DetectionProbabilityModel(factors=factors),
-                       clutter=ClutterDensityModel(factors=[density]),
-                       position_mapping=mapping, name=name)
-
-
-def _sensor_number(sensor, attribute: str) -> float:
-    """A number the sensor holds (``max_range``, ``fov_angle``), named if it is none."""
-    value = getattr(sensor, attribute, None)
-    try:
-        return as_float(value, "sensor", finite=False)
-    except TypeError:
-        raise TypeError(f"sensor: {attribute} must be a number, got {type(value).__name__} "
-                        f"{value!r}") from None
+    ``clutter_density``. Use it with :func:`sensor_pose` at each scan. (The same as
+    :meth:`ctxmodels.SensorModel.from_stonesoup`.)"""
+    return SensorModel.from_stonesoup(sensor, prob_detection, clutter_density, name=name)
 
 
 def sensor_pose(sensor) -> Pose:
     """The pose of a Stone Soup sensor now: x/y of its position and the heading of its
     boresight (the antenna's, for a rotating radar), counter-clockwise from +x."""
-    kind = _kind(sensor)
+    kind = sensor_kind(sensor)
     if sensor.position is None or sensor.orientation is None:
         raise ValueError("sensor: has no position or orientation; mount it on a platform")
     position = np.asarray(sensor.position, dtype=float).ravel()
-    heading = _planar_yaw(sensor.orientation, "sensor orientation")
+    heading = planar_yaw(sensor.orientation, "sensor orientation")
     if kind in ROTATING:
         heading += float(np.asarray(sensor.dwell_centre, dtype=float).ravel()[0])
     return Pose(x=float(position[0]), y=float(position[1]), heading=heading)
@@ -166,7 +89,7 @@ class SensorPose(PoseSource):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        _kind(self.sensor)
+        sensor_kind(self.sensor)
 
     def pose_at(self, timestamp=None) -> Pose:
         platform_time = _platform_time(self.sensor)
@@ -205,7 +128,7 @@ def sensor_context(sensor, sensor_model: SensorModel,
     (e.g. ``SensorModel.from_stonesoup(sensor, p, λ)``, without a ``mounting``) at the
     sensor's pose now (:func:`sensor_pose`), deciding the range edge as the radar's
     ``is_detectable`` does (:class:`SensorContext`). ``timestamp`` labels the scan."""
-    kind = _kind(sensor)
+    kind = sensor_kind(sensor)
     if not isinstance(sensor_model, SensorModel):
         raise TypeError(f"sensor_model: expected a SensorModel, got "
                         f"{type(sensor_model).__name__}")
@@ -228,11 +151,11 @@ def _check_mapping(sensor, sensor_model: SensorModel, argument: str) -> None:
 
 def _sensor_context(sensor, sensor_model: SensorModel, timestamp, kind: str | None = None
                     ) -> SensorContext:
-    kind = kind or _kind(sensor)
+    kind = kind or sensor_kind(sensor)
     range_model, range_row = _range_model(sensor, kind)
     return SensorContext(sensor_model=sensor_model, pose=sensor_pose(sensor),
                          timestamp=timestamp, range_model=range_model, range_row=range_row,
-                         max_range=_sensor_number(sensor, "max_range"))
+                         max_range=sensor_number(sensor, "max_range"))
 
 
 class PlatformContextFeeder(DetectionFeeder):
@@ -270,7 +193,7 @@ class PlatformContextFeeder(DetectionFeeder):
                              "offsets; give models without a mounting")
         for (where, sensor) in zip(self._places(), sensors):
             try:
-                _kind(sensor)
+                sensor_kind(sensor)
             except (TypeError, ValueError) as err:
                 raise type(err)(f"reader: {where}: {err}") from None
         for i, (where, sensor, model) in enumerate(zip(self._places(), sensors, models)):
