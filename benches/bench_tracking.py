@@ -17,6 +17,11 @@ several runs of each (a shared machine only ever makes a run slower).
     python benches/bench_tracking.py --tracker gmphd-context --array-only --repeats 3
     python benches/bench_tracking.py --duration 30                # a quick look
     python benches/bench_tracking.py --tracker jpda-context --json out.json
+    python benches/bench_tracking.py --tracker gmphd-context --models  # per scan vs per detection
+
+``--models``: the array path twice, on the simulated scans as they are (one measurement-model
+object per sensor and scan) and with each detection given its own copy of its model (equal
+values, as readers and Stone Soup's sensors make them); the ratio is of those two.
 """
 from __future__ import annotations
 
@@ -48,6 +53,14 @@ def build(tracker: str, run, array: bool):
                                      data_associator=built.data_associator, updater=built.updater)
 
 
+def own_models(run) -> None:
+    """Gives every detection of ``run`` its own copy of its measurement model (equal values)."""
+    import copy
+    for scan in (*run.radar_scans, *run.lidar_scans):
+        for detection in scan.detections:
+            detection.measurement_model = copy.deepcopy(detection.measurement_model)
+
+
 def track(tracker) -> dict:
     """Runs the tracker over all scans as a job does; tracking seconds, scans, tracks."""
     from ctxmodels.experiment.runner import track_scans
@@ -64,6 +77,8 @@ def main(argv=None) -> int:
                         help="an experiment tracker (ctxmodels experiment --help lists them)")
     parser.add_argument("--repeats", type=int, default=1, help="runs per path (minimum kept)")
     parser.add_argument("--array-only", action="store_true", help="skip the component run")
+    parser.add_argument("--models", action="store_true",
+                        help="array path only: one model object per scan vs one per detection")
     parser.add_argument("--json", help="write the results to this file")
     args = parser.parse_args(argv)
 
@@ -75,12 +90,16 @@ def main(argv=None) -> int:
         parser.error("--repeats: must be at least 1")
     results = {"scenario": args.scenario, "seed": args.seed, "duration": args.duration,
                "tracker": args.tracker}
-    for name, array in (("array", True), ("component", False)):
+    variants = ((("array", True, False), ("per-detection models", True, True)) if args.models
+                else (("array", True, False), ("component", False, False)))
+    for name, array, per_detection in variants:
         if not array and args.array_only:
             continue
         outcome = None
         for _ in range(args.repeats):
             run = make_scenario(args.scenario, args.seed, args.duration)  # fresh detections
+            if per_detection:
+                own_models(run)
             tracker = build(args.tracker, run, array)
             measured = track(tracker)
             if outcome is not None and measured["tracks"] != outcome["tracks"]:
@@ -91,8 +110,12 @@ def main(argv=None) -> int:
                 outcome["array_scans"] = tracker.array_scans
                 outcome["component_scans"] = tracker.component_scans
         results[name] = outcome
-        print(f"{name:>9}: {outcome['seconds']:8.2f} s tracking (min of {args.repeats}), {outcome['scans']} scans, "
+        print(f"{name:>20}: {outcome['seconds']:8.2f} s tracking (min of {args.repeats}), {outcome['scans']} scans, "
               f"{outcome['tracks']} tracks", flush=True)
+    if "per-detection models" in results:
+        ratio = results["per-detection models"]["seconds"] / results["array"]["seconds"]
+        results["models_ratio"] = ratio
+        print(f"per-detection / per-scan models: {ratio:.2f}x (measured in this run)")
     if "component" in results:
         ratio = results["component"]["seconds"] / results["array"]["seconds"]
         results["speed_up"] = ratio
