@@ -107,3 +107,12 @@ def test_tracking_benchmark_times_a_gmphd_tracker_on_both_paths(tmp_path):
     with pytest.raises(SystemExit) as exit_info:
         module.main(["--tracker", "no-such-tracker"])
     assert exit_info.value.code == 2
+    # --models: per-scan vs per-detection model objects, both on the array path, same tracks
+    out = tmp_path / "models.json"
+    assert module.main(["--tracker", "gmphd-context", "--duration", "5", "--models",
+                        "--json", str(out)]) == 0
+    results = json.loads(out.read_text())
+    shared, own = results["array"], results["per-detection models"]
+    assert shared["scans"] == own["scans"] > 40 and shared["tracks"] == own["tracks"]
+    assert own["component_scans"] == 0  # still the array path
+    assert results["models_ratio"] > 0
