@@ -27,6 +27,7 @@ use std::sync::Arc;
 
 mod clutter_map;
 mod detection_estimate;
+mod initiation;
 mod jpda;
 mod mixture;
 mod particles;
@@ -553,5 +554,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simd_backend, m)?)?;
     mixture::register(m)?;
     jpda::register(m)?;
+    initiation::register(m)?;
     Ok(())
 }

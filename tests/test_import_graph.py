@@ -125,7 +125,6 @@ def test_the_cycle_finder_finds_a_cycle():
 #: SensorModel.context() makes one.
 KNOWN_CIRCLES = [
     ["ctxmodels.context", "ctxmodels.sensor"],
-    ["ctxmodels.stonesoup.array_initiator", "ctxmodels.stonesoup.array_jpda"],
 ]
 
 

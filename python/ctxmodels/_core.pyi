@@ -32,8 +32,7 @@ __all__ = [
     "jpda_marginals",
     "jpda_predict",
     "jpda_scan",
-    "jpda_screen",
-    "jpda_screen_states",
+    "initiator_scan",
     "mount",
     "rule_points",
     "simd_backend",
@@ -468,29 +467,33 @@ def jpda_marginals(weights: _Floats, gated: _Bools) -> _Floats:
     """Exact joint association marginals of (T, M+1) weights (column 0: missed detection)
     and the (T, M) gated hypotheses."""
 
-def jpda_screen(
+def initiator_scan(
+    models: Sequence[JPDAMeasurementModel],
     means: _Floats,
     covars: _Floats,
+    transition_index: NDArray[np.int64],
+    transition_matrices: _Floats,
+    transition_covars: _Floats,
     detections: _Floats,
-    wrap: _Bools,
-    threshold: float,
-    margin: float,
-) -> _Bools:
-    """(N, K) mask of the pairs of predicted measurements `means` (N, m) / innovation
-    covariances `covars` (N, m, m) and `detections` (K, m) that may pass the gate
-    `threshold` on the squared Mahalanobis distance (relative `margin`; `wrap` (K, m): the
-    bearing elements)."""
-
-def jpda_screen_states(
-    model: JPDAMeasurementModel,
-    means: _Floats,
-    covars: _Floats,
-    detections: _Floats,
-    wrap: _Bools,
-    threshold: float,
-    margin: float,
-) -> _Bools:
-    """`jpda_screen` of predicted states `means` (N, D) / `covars` (N, D, D) under `model`
-    (the core forms their predicted measurements and innovation covariances)."""
+    model_index: NDArray[np.int64],
+    missed_distance: float,
+    points: NDArray[np.int64],
+    since: NDArray[np.int64],
+    new_time: _Bools,
+    *,
+    squared: bool = False,
+    include_all: bool = False,
+    force_symmetric: bool = False,
+    updates_only: bool = False,
+    min_points: int = 2,
+    max_since: int | None = None,
+) -> dict[str, NDArray[Any]]:
+    """One scan of the M-of-N initiator's holding rows: prediction of the last states
+    `means` (H, D) / `covars` (H, D, D) (row h with transition `transition_index[h]`),
+    Mahalanobis gate against `detections` (M, m) (detection j measured by
+    `models[model_index[j]]`), GNN 2-D assignment (missed cost `missed_distance`), Kalman
+    update of the assigned rows and the M-of-N counts. Keys pred_means, pred_covars, means,
+    covars, assigned (−1: missed), distances, meas_means, meas_covars, cross_covars (per
+    updated row, in row order), points, since, released, expired."""
 
 # --- end of whole-scan JPDA -------------------------------------------------------------------

@@ -30,15 +30,17 @@
 //!
 //! All loops run in index order on one thread: the same inputs give the same bits.
 
+mod assignment;
+mod initiation;
 mod marginals;
 mod measurement;
-mod screen;
 #[cfg(test)]
 mod tests;
 
 pub use marginals::{brute_force_marginals, joint_marginals, MAX_TREE_EDGES, MAX_TREE_NODES};
 pub use measurement::{mod_bearing, Jacobian, MeasurementModel};
-pub use screen::{screen_pairs, screen_states, ScreenInput};
+pub use assignment::assign;
+pub use initiation::{initiator_scan, InitiatorInput, InitiatorOutput};
 
 use crate::error::{ModelError, Result};
 use crate::memory;

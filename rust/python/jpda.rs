@@ -1,16 +1,16 @@
 //! Python binding of the whole-scan JPDA core ([`crate::jpda`]): `JPDAMeasurementModel`,
-//! `jpda_predict`, `jpda_scan`, `jpda_marginals`, `jpda_screen` and `jpda_screen_states`. Arguments are converted as in the parent
+//! `jpda_predict`, `jpda_scan` and `jpda_marginals` (the initiator's scan: `super::initiation`). Arguments are converted as in the parent
 //! module (C-contiguous float64, fallible borrows, errors naming the argument); the work runs
 //! with the GIL released and a panic becomes a RuntimeError.
 
 use super::{borrow, detached, slice, to_py, value_error};
-use crate::jpda::{self, Jacobian, MeasurementModel, ScanInput, ScreenInput};
+use crate::jpda::{self, Jacobian, MeasurementModel, ScanInput};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 #[pyclass(name = "JPDAMeasurementModel", module = "ctxmodels._core", frozen)]
-pub struct PyJPDAMeasurementModel(MeasurementModel);
+pub struct PyJPDAMeasurementModel(pub(super) MeasurementModel);
 
 fn matrix_of(array: &Bound<'_, PyArray2<f64>>, argument: &str) -> PyResult<(Vec<f64>, usize, usize)> {
     let (rows, cols) = (array.shape()[0], array.shape()[1]);
@@ -70,15 +70,15 @@ impl PyJPDAMeasurementModel {
     }
 }
 
-fn array2<'py>(py: Python<'py>, data: Vec<f64>, rows: usize, cols: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+pub(super) fn array2<'py>(py: Python<'py>, data: Vec<f64>, rows: usize, cols: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
     PyArray1::from_vec(py, data).reshape([rows, cols])
 }
 
-fn array3<'py>(py: Python<'py>, data: Vec<f64>, n: usize, rows: usize, cols: usize) -> PyResult<Bound<'py, PyArray3<f64>>> {
+pub(super) fn array3<'py>(py: Python<'py>, data: Vec<f64>, n: usize, rows: usize, cols: usize) -> PyResult<Bound<'py, PyArray3<f64>>> {
     PyArray1::from_vec(py, data).reshape([n, rows, cols])
 }
 
-fn check_covars(means: &Bound<'_, PyArray2<f64>>, covars: &Bound<'_, PyArray3<f64>>) -> PyResult<(usize, usize)> {
+pub(super) fn check_covars(means: &Bound<'_, PyArray2<f64>>, covars: &Bound<'_, PyArray3<f64>>) -> PyResult<(usize, usize)> {
     let (n, dim) = (means.shape()[0], means.shape()[1]);
     let shape = covars.shape();
     if shape != [n, dim, dim] {
@@ -208,96 +208,10 @@ fn jpda_marginals<'py>(py: Python<'py>, weights: Bound<'py, PyArray2<f64>>, gate
     array2(py, out, t, k + 1)
 }
 
-/// Which track × detection pairs may pass a Mahalanobis gate (see `crate::jpda::screen_pairs`):
-/// predicted measurements `means` (N, m), innovation covariances `covars` (N, m, m),
-/// `detections` (K, m), `wrap` (K, m) the bearing elements, the gate on the squared
-/// distance and the relative margin. (N, K) bool.
-#[pyfunction]
-fn jpda_screen<'py>(
-    py: Python<'py>,
-    means: Bound<'py, PyArray2<f64>>,
-    covars: Bound<'py, PyArray3<f64>>,
-    detections: Bound<'py, PyArray2<f64>>,
-    wrap: Bound<'py, PyArray2<bool>>,
-    threshold: f64,
-    margin: f64,
-) -> PyResult<Bound<'py, PyArray2<bool>>> {
-    let (n, m) = check_covars(&means, &covars)?;
-    let k = detections.shape()[0];
-    if detections.shape()[1] != m {
-        return Err(value_error("detections", format_args!("must have {m} columns to match means, got {}", detections.shape()[1])));
-    }
-    if wrap.shape() != [k, m] {
-        return Err(value_error("wrap", format_args!("must have shape ({k}, {m}) to match detections, got {:?}", wrap.shape())));
-    }
-    if !wrap.is_c_contiguous() {
-        return Err(value_error("wrap", "must be C-contiguous"));
-    }
-    if !margin.is_finite() || margin < 0.0 {
-        return Err(value_error("margin", format_args!("must be finite and >= 0, got {margin}")));
-    }
-    let wrap = wrap.try_readonly().map_err(|_| value_error("wrap", "is being written by another call"))?;
-    let wrap = wrap.as_slice().map_err(|_| value_error("wrap", "must be C-contiguous and aligned"))?;
-    let means = borrow(&means, "means")?;
-    let zhat = slice(&means, "means")?;
-    let covars = borrow(&covars, "covars")?;
-    let s = slice(&covars, "covars")?;
-    let detections = borrow(&detections, "detections")?;
-    let z = slice(&detections, "detections")?;
-    let input = ScreenInput { ndim_meas: m, means: zhat, covars: s, detections: z, wrap, threshold, margin };
-    let out = detached(py, || jpda::screen_pairs(&input))?;
-    PyArray1::from_vec(py, out).reshape([n, k])
-}
-
-/// `jpda_screen` of predicted states `means` (N, D) / `covars` (N, D, D) under `model` (the
-/// core forms each state's predicted measurement and innovation covariance).
-#[pyfunction]
-#[allow(clippy::too_many_arguments)]
-fn jpda_screen_states<'py>(
-    py: Python<'py>,
-    model: &PyJPDAMeasurementModel,
-    means: Bound<'py, PyArray2<f64>>,
-    covars: Bound<'py, PyArray3<f64>>,
-    detections: Bound<'py, PyArray2<f64>>,
-    wrap: Bound<'py, PyArray2<bool>>,
-    threshold: f64,
-    margin: f64,
-) -> PyResult<Bound<'py, PyArray2<bool>>> {
-    let (n, dim) = check_covars(&means, &covars)?;
-    let m = model.0.ndim_meas();
-    let k = detections.shape()[0];
-    if detections.shape()[1] != m {
-        return Err(value_error("detections", format_args!("must have {m} columns (the model's measurement size), got {}", detections.shape()[1])));
-    }
-    if wrap.shape() != [k, m] {
-        return Err(value_error("wrap", format_args!("must have shape ({k}, {m}) to match detections, got {:?}", wrap.shape())));
-    }
-    if !wrap.is_c_contiguous() {
-        return Err(value_error("wrap", "must be C-contiguous"));
-    }
-    if !margin.is_finite() || margin < 0.0 {
-        return Err(value_error("margin", format_args!("must be finite and >= 0, got {margin}")));
-    }
-    let wrap = wrap.try_readonly().map_err(|_| value_error("wrap", "is being written by another call"))?;
-    let wrap = wrap.as_slice().map_err(|_| value_error("wrap", "must be C-contiguous and aligned"))?;
-    let means = borrow(&means, "means")?;
-    let x = slice(&means, "means")?;
-    let covars = borrow(&covars, "covars")?;
-    let p = slice(&covars, "covars")?;
-    let detections = borrow(&detections, "detections")?;
-    let z = slice(&detections, "detections")?;
-    let input = ScreenInput { ndim_meas: m, means: &[], covars: &[], detections: z, wrap, threshold, margin };
-    let core = &model.0;
-    let out = detached(py, || jpda::screen_states(core, dim, x, p, &input))?;
-    PyArray1::from_vec(py, out).reshape([n, k])
-}
-
 pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyJPDAMeasurementModel>()?;
     m.add_function(wrap_pyfunction!(jpda_predict, m)?)?;
     m.add_function(wrap_pyfunction!(jpda_scan, m)?)?;
     m.add_function(wrap_pyfunction!(jpda_marginals, m)?)?;
-    m.add_function(wrap_pyfunction!(jpda_screen, m)?)?;
-    m.add_function(wrap_pyfunction!(jpda_screen_states, m)?)?;
     Ok(())
 }

@@ -85,8 +85,6 @@ from __future__ import annotations
 import numpy as np
 from stonesoup.dataassociator.probability import JPDA, JPDAwithEHM, JPDAwithEHM2
 from stonesoup.hypothesiser.probability import PDAHypothesiser as _StockPDAHypothesiser
-from stonesoup.models.measurement.linear import LinearGaussian
-from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.array import CovarianceMatrix, Matrix, StateVector
 from stonesoup.types.detection import Detection, MissedDetection
 from stonesoup.types.hypothesis import SingleHypothesis, SingleProbabilityHypothesis
@@ -95,19 +93,18 @@ from stonesoup.types.numeric import Probability
 from stonesoup.types.prediction import GaussianMeasurementPrediction, GaussianStatePrediction
 from stonesoup.types.state import GaussianState
 from stonesoup.types.update import GaussianStateUpdate
-from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from .. import _core
 from ..context import DetectorContext
 from ..model_key import measurement_model_key, scan_model_groups
 from .array_deletion import ArrayDeletion
 from .array_initiator import ArrayMultiMeasurementInitiator
-from .initiator_arrays import ControlTerms
-from .initiator_blocks import PRIOR_PREDICTION as _PRIOR_PREDICTION
+from .transition import ControlTerms
+from .initiator_history import PRIOR_PREDICTION as _PRIOR_PREDICTION
 from .fast import KALMAN_UPDATERS, ObjectFactory, plain_track_lists, supports_predictor
 from .fast_association import _copied_properties
 from .hypothesiser import PDAHypothesiser, is_detection_backed, scan_context
-from .measurement import AnalyticCartesianToBearingRange
+from .measurement import jpda_core_model
 from .mixture_tracker import MultiTargetMixtureTracker
 from .paths import PathCounts
 from .ordering import OrderedDetections, context_kwargs, in_track_order
@@ -121,11 +118,6 @@ _PRIOR_DTYPES = frozenset(np.dtype(kind) for kind in (
     np.float64, np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32,
     np.uint64))
 _HYPOTHESISERS = (_StockPDAHypothesiser, PDAHypothesiser)
-
-
-def _is_analytic(kind: type) -> bool:
-    """Whether models of ``kind`` are linearised in closed form."""
-    return kind is AnalyticCartesianToBearingRange
 
 
 # --- Stone Soup objects, built as their constructors build them ---------------------------
@@ -224,31 +216,6 @@ def _lazy_hypothesis(scan: _Scan, t: int, prior) -> _ScanHypotheses:
 
 
 # --- measurement models -----------------------------------------------------------------------
-def _core_model(updater_kind, model):
-    """The core's model for a Stone Soup measurement model, or None if not supported."""
-    kind = type(model)
-    if kind is LinearGaussian:
-        return _core.JPDAMeasurementModel.linear(
-            np.ascontiguousarray(model.matrix(), dtype=np.float64),
-            np.ascontiguousarray(model.covar(), dtype=np.float64)), None
-    if updater_kind is not ExtendedKalmanUpdater or len(getattr(model, "mapping", ())) != 2:
-        return None, None
-    if kind is CartesianToBearingRange:
-        jacobian = "finite-difference"
-    elif _is_analytic(kind):
-        jacobian = "analytic"
-    else:
-        return None, None
-    offset = np.asarray(model.translation_offset, dtype=np.float64).ravel()
-    rotation = np.ascontiguousarray(model.rotation_matrix, dtype=np.float64)
-    if offset.size < 2 or rotation.shape != (3, 3):
-        return None, None
-    core = _core.JPDAMeasurementModel.bearing_range(
-        (int(model.mapping[0]), int(model.mapping[1])), (float(offset[0]), float(offset[1])),
-        rotation, np.ascontiguousarray(model.covar(), dtype=np.float64), jacobian)
-    return core, 0
-
-
 def _updater_supported(updater) -> bool:
     return (type(updater) in KALMAN_UPDATERS
             and not updater.force_positive_definite_covariance and not updater.use_joseph_cov)
@@ -337,7 +304,7 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
         # cached by value: equal models (a moving radar's recurring ones) share an entry
         cached = self._models.get(key)
         if cached is None:
-            core, bearing_row = _core_model(type(self.updater), model)
+            core, bearing_row = jpda_core_model(type(self.updater), model)
             cached = self._models[key] = (model, core, bearing_row)
             if len(self._models) > 64:  # per-scan models (a moving radar): keep a few
                 self._models = {k: value for k, value in self._models.items()

@@ -122,8 +122,20 @@ class Births:
         self._track = _TrackFactory()
 
     def __call__(self, inner, detections, timestamp) -> set:
+        tracks, births = self.arrays(inner, detections, timestamp)
+        tracks.update(self.track(*birth) for birth in births)
+        return tracks
+
+    def arrays(self, inner, detections, timestamp) -> tuple[set, list]:
+        """What :meth:`__call__` returns, with the new tracks of the detections this class
+        computes itself not yet built: ``(tracks the inner initiator built, births)``, a
+        birth being the arguments of :meth:`track` (the detection, the state's mean
+        ``(D, 1)`` and covariance, the prior state)."""
+        births: list = []
         if type(inner) is not SimpleMeasurementInitiator:
-            return inner.initiate(set(detections), timestamp)
+            return inner.initiate(set(detections), timestamp), births
+        if not detections:
+            return set(), births
         groups: dict = {}
         other = []
         for det in detections:
@@ -162,8 +174,9 @@ class Births:
                 stacked = (inverses @ np.asarray(noise)[np.newaxis]) @ inverses.transpose(0, 2, 1)
                 # (C + P₀) + L matrix by matrix, as the stock sum of the three
                 covars = list((stacked + np.asarray(prior_covar)) + np.asarray(load))
-            self._states(tracks, prior, prior_vector, dets, vectors, covars)
-        return tracks
+            births.extend((det, prior_vector + vector, covar, prior)
+                          for det, vector, covar in zip(dets, vectors, covars))
+        return tracks, births
 
     def _linear(self, model, noise, prior_covar, load):
         """The pseudo-inverse and covariance of a linear model, while its numbers are the same."""
@@ -180,19 +193,14 @@ class Births:
                 self._linear_cache = {id(model): cached}
         return cached[2], cached[3]
 
-    def _states(self, tracks, prior, prior_vector, dets, vectors, covars):
-        make_track = self._track
-        if type(prior) is GaussianState:  # what Update.from_state builds from it
-            for det, vector, covar in zip(dets, vectors, covars):
-                state = UPDATE_STATE(
-                    state_vector=(prior_vector + vector).view(StateVector),
-                    covar=covar.view(CovarianceMatrix),
-                    hypothesis=_HYPOTHESIS(prediction=None, measurement=det),
-                    timestamp=det.timestamp)
-                tracks.add(make_track(state))
-            return
-        for det, vector, covar in zip(dets, vectors, covars):
-            state = Update.from_state(
-                prior, state_vector=prior_vector + vector, covar=covar,
-                hypothesis=SingleHypothesis(None, det), timestamp=det.timestamp)
-            tracks.add(make_track(state))
+    def track(self, detection, mean, covar, prior):
+        """The inner initiator's track of one birth (see :meth:`arrays`): its one state,
+        what ``Update.from_state`` builds from ``prior``."""
+        if type(prior) is GaussianState:
+            return self._track(UPDATE_STATE(
+                state_vector=mean.view(StateVector), covar=covar.view(CovarianceMatrix),
+                hypothesis=_HYPOTHESIS(prediction=None, measurement=detection),
+                timestamp=detection.timestamp))
+        return self._track(Update.from_state(
+            prior, state_vector=mean, covar=covar,
+            hypothesis=SingleHypothesis(None, detection), timestamp=detection.timestamp))

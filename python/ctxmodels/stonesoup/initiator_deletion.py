@@ -67,11 +67,12 @@ class HoldingCounts:
             keep = np.flatnonzero(keep).tolist()
         self.backed = [self.backed[k] for k in keep]
 
-    def advance(self, updated, appended_new_time, timestamp) -> None:
-        """A scan at ``timestamp``: rows ``updated`` (mask) got a detection; the rows
-        ``appended_new_time`` (mask) got a state at a time they had not seen."""
-        self.since = np.where(updated, 1, self.since + appended_new_time)
-        for k in np.flatnonzero(updated).tolist():
+    def advance(self, since, updated, timestamp) -> None:
+        """A scan at ``timestamp``: ``since`` from the core (see
+        :func:`ctxmodels._core.initiator_scan`); the rows ``updated`` (indices) got a
+        detection."""
+        self.since = since
+        for k in updated.tolist():
             if self.backed[k] is None or timestamp > self.backed[k]:
                 self.backed[k] = timestamp
 

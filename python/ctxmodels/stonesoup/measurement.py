@@ -17,7 +17,11 @@ from __future__ import annotations
 import operator
 
 import numpy as np
+from stonesoup.models.measurement.linear import LinearGaussian
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
+from stonesoup.updater.kalman import ExtendedKalmanUpdater
+
+from .. import _core
 
 from ..model_key import compared_by_value
 
@@ -158,3 +162,29 @@ class AnalyticCartesianToBearingRange(CartesianToBearingRange):
         if at_sensor[0]:
             return np.asarray(super().jacobian(state, **kwargs), dtype=np.float64)
         return jac[0]
+
+
+def jpda_core_model(updater_kind, model):
+    """The JPDA core's model for a Stone Soup measurement model (and the row of its bearing,
+    or None), or (None, None) if the core does not take it."""
+    kind = type(model)
+    if kind is LinearGaussian:
+        return _core.JPDAMeasurementModel.linear(
+            np.ascontiguousarray(model.matrix(), dtype=np.float64),
+            np.ascontiguousarray(model.covar(), dtype=np.float64)), None
+    if updater_kind is not ExtendedKalmanUpdater or len(getattr(model, "mapping", ())) != 2:
+        return None, None
+    if kind is CartesianToBearingRange:
+        jacobian = "finite-difference"
+    elif kind is AnalyticCartesianToBearingRange:
+        jacobian = "analytic"
+    else:
+        return None, None
+    offset = np.asarray(model.translation_offset, dtype=np.float64).ravel()
+    rotation = np.ascontiguousarray(model.rotation_matrix, dtype=np.float64)
+    if offset.size < 2 or rotation.shape != (3, 3):
+        return None, None
+    core = _core.JPDAMeasurementModel.bearing_range(
+        (int(model.mapping[0]), int(model.mapping[1])), (float(offset[0]), float(offset[1])),
+        rotation, np.ascontiguousarray(model.covar(), dtype=np.float64), jacobian)
+    return core, 0

@@ -4,10 +4,12 @@ Stone Soup rebuilds the transition matrix and noise covariance of a combined mod
 ``scipy.linalg.block_diag`` per call) for every prediction of every track and component.
 Asynchronous sensors produce only a handful of distinct scan intervals, so caching per
 Δt removes that cost without changing a single number: the cached arrays are the ones the
-stock model returns for that interval.
+stock model returns for that interval. :class:`ControlTerms` does the same for a Kalman
+prediction's control terms (the array JPDA and initiator ask it whether there are any).
 """
 from __future__ import annotations
 
+from stonesoup.models.control.linear import LinearControlModel
 from stonesoup.models.transition.linear import CombinedLinearGaussianTransitionModel
 
 
@@ -45,3 +47,30 @@ class CachedCombinedLinearGaussianTransitionModel(CombinedLinearGaussianTransiti
         state = dict(self.__dict__)
         state.pop("_cached_arrays", None)
         return state
+
+
+class ControlTerms:
+    """The control model's contribution to a Kalman prediction (the offset
+    ``control.function(None, …)`` and the noise ``B Q_u Bᵀ``), as the predictor computes
+    them, memoised per time interval for the stock :class:`LinearControlModel` (whose
+    matrix and noise do not depend on the prior; the models are immutable, as the cached
+    transition model assumes); any other control model is called every time."""
+
+    def __init__(self):
+        self._cache: dict = {}
+
+    def __call__(self, control, prior, interval):
+        cacheable = type(control) is LinearControlModel
+        if cacheable:
+            key = (id(control), id(control.control_matrix), id(control.control_noise), interval)
+            found = self._cache.get(key)
+            if found is not None and found[0] is control:
+                return found[1], found[2]
+        offset = control.function(None, prior=prior, time_interval=interval)
+        ctrl = control.matrix(control_input=None, prior=prior, time_interval=interval)
+        noise = ctrl @ control.control_noise @ ctrl.T
+        if cacheable:
+            if len(self._cache) >= 256:
+                self._cache.clear()
+            self._cache[key] = (control, offset, noise)
+        return offset, noise

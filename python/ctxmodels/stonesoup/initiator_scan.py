@@ -1,0 +1,168 @@
+"""The core call of a scan of :class:`~ctxmodels.stonesoup.array_initiator.ArrayMultiMeasurementInitiator`:
+what :func:`ctxmodels._core.initiator_scan` takes, read from the initiator's components and
+the scan's detections — the core's measurement models (one per model *value*, see
+:func:`~ctxmodels.model_key.scan_model_groups`), the detections' values, each holding row's
+transition ``F(Δt)``, ``Q(Δt)`` — or that the core cannot take the scan (then it runs the
+component path).
+"""
+from __future__ import annotations
+
+from typing import Callable, NamedTuple
+
+import numpy as np
+from stonesoup.measures import SquaredMahalanobis
+from stonesoup.models.control.linear import LinearControlModel
+from stonesoup.types.angle import Bearing
+
+from .. import _core
+from ..model_key import measurement_model_key, scan_model_groups
+from .measurement import jpda_core_model
+from .transition import ControlTerms
+
+
+class Rows(NamedTuple):
+    """The holding rows as the core takes them: last means (H, D) and covariances
+    (H, D, D), points, distinct times since the last detection, last times, and ``prior(k)``,
+    row k's last state as a Stone Soup state (asked of the control model)."""
+    means: np.ndarray
+    covars: np.ndarray
+    counted: np.ndarray
+    since: np.ndarray
+    last_times: list
+    prior: Callable
+
+
+class ScanCore:
+    """Runs a scan's holding rows through the core (:meth:`__call__`), keeping the core's
+    models per model value and the control model's answer per interval."""
+
+    def __init__(self):
+        self._control_terms = ControlTerms()
+        self._control_seen: dict = {}  # (control model, its matrices, interval) -> adds anything
+        self._core_models: dict = {}
+
+    def __call__(self, initiator, rows, detections, timestamp):
+        """The core's results for the holding ``rows`` (:class:`Rows`) and this scan's
+        ``detections`` (a dict of arrays, with the models' bearing flags under ``"bearing"``
+        and the model index under ``"model_index"``), or None when the scan must run the
+        component path."""
+        hypothesiser = initiator.data_associator.hypothesiser
+        predictor = hypothesiser.predictor
+        transition = predictor.transition_model
+        found = self._scan_models(hypothesiser.updater, detections)
+        if found is None:
+            return None
+        models, model_index, z, bearing = found
+        last_times = rows.last_times
+        distinct = dict.fromkeys(last_times)
+        matrices, noises = [], []
+        for k, last in enumerate(distinct):
+            interval = timestamp - last
+            distinct[last] = k
+            if self._control_input(predictor.control_model, rows, last_times.index(last),
+                                   interval):
+                return None  # (the core predicts without a control input)
+            matrices.append(np.asarray(transition.matrix(time_interval=interval), dtype=np.float64))
+            noises.append(np.asarray(transition.covar(time_interval=interval), dtype=np.float64))
+        n = len(last_times)
+        if len(distinct) == 1:
+            index = np.zeros(n, dtype=np.int64)
+            new_time = np.full(n, last_times[0] != timestamp)
+        else:
+            index = np.array([distinct[t] for t in last_times], dtype=np.int64)
+            new_time = np.array([t != timestamp for t in last_times])
+        steps = getattr(initiator.deleter, "time_steps_since_update", None)  # (steps deleter)
+        try:
+            out = _core.initiator_scan(
+                models, rows.means, rows.covars, index,
+                matrices[0][np.newaxis] if len(matrices) == 1 else np.stack(matrices),
+                noises[0][np.newaxis] if len(noises) == 1 else np.stack(noises),
+                z, model_index, float(hypothesiser.missed_distance), rows.counted,
+                rows.since, new_time,
+                squared=type(hypothesiser.measure) is SquaredMahalanobis,
+                include_all=bool(hypothesiser.include_all),
+                force_symmetric=bool(initiator.updater.force_symmetric_covariance),
+                updates_only=bool(initiator.updates_only), min_points=int(initiator.min_points),
+                max_since=None if steps is None else int(steps))
+        except ValueError as error:
+            if str(error).startswith("missed_distance: the assignment is not feasible"):
+                raise RuntimeError("Assignment was not feasible") from None
+            return None  # (a singular innovation covariance: the component path decides)
+        out["bearing"] = bearing
+        out["model_index"] = model_index
+        return out
+
+    def _scan_models(self, updater, detections):
+        """(the core's models, each detection's model index, the detections' values (M, m),
+        per model whether it measures a bearing first), or None when the core cannot take
+        the scan's detections."""
+        models, bearing, index = [], [], np.empty(len(detections), dtype=np.int64)
+        # by model value: equal models in different objects are one group (its first)
+        for raw_model, members in scan_model_groups(detections).values():
+            core = self._core_model(updater, updater._check_measurement_model(raw_model))
+            if core is None:
+                return None
+            index[members] = len(models)
+            models.append(core[0])
+            bearing.append(core[1])
+        if len({model.ndim_meas for model in models}) > 1:
+            return None
+        m = models[0].ndim_meas if models else 0
+        vectors = [d.state_vector for d in detections]
+        try:
+            z = np.array(vectors, dtype=np.float64).reshape(len(detections), m)
+        except (TypeError, ValueError):
+            return None
+        for vector, g in zip(vectors, index.tolist()):
+            # the stock z − ẑ wraps the model's bearing (a Bearing or float detection);
+            # another angle type in a detection would wrap its own way
+            if vector.dtype != np.float64 and not _typed_as(vector, bearing[g]):
+                return None
+        return models, index, z, bearing
+
+    def _core_model(self, updater, model):
+        """(the core's model, whether it measures a bearing first) for detections measured by
+        ``model`` (the updater's resolution of a detection's model), or None."""
+        key = (measurement_model_key(model), type(updater))  # equal models share an entry
+        cached = self._core_models.get(key)
+        if cached is None:
+            core, bearing_row = jpda_core_model(type(updater), model)
+            cached = self._core_models[key] = (model, None if core is None
+                                               else (core, bearing_row is not None))
+            if len(self._core_models) > 64:
+                self._core_models = {key: cached}
+        return cached[1]
+
+    def _control_input(self, control, rows, row, interval) -> bool:
+        """Whether the control model adds anything to a prediction over ``interval`` (its
+        offset or noise non-zero), asked with row ``row``'s last state as the prior. The
+        stock :class:`LinearControlModel`'s terms do not depend on the prior (see
+        :class:`ControlTerms`): its answer is kept per model, matrices and interval."""
+        cacheable = type(control) is LinearControlModel
+        key = (control, id(control.control_matrix), id(control.control_noise), interval) \
+            if cacheable else None
+        known = self._control_seen.get(key) if cacheable else None
+        if known is not None:
+            return known
+        offset, noise = self._control_terms(control, rows.prior(row), interval)
+        nonzero = bool(np.any(offset) or np.any(noise))
+        if cacheable:
+            if len(self._control_seen) >= 256:
+                self._control_seen.clear()
+            self._control_seen[key] = nonzero
+        return nonzero
+
+
+def _typed_as(vector, bearing: bool) -> bool:
+    """Whether an object-typed detection vector holds floats, and a :class:`Bearing` first
+    if ``bearing`` (the rows the core wraps)."""
+    values = vector.ravel().tolist()
+    for row, value in enumerate(values):
+        if row == 0 and bearing and type(value) is Bearing:
+            continue
+        if type(value) not in (float, np.float64):
+            return False
+    return True
+
+
+__all__ = ["Rows", "ScanCore"]
