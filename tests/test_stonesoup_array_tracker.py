@@ -410,3 +410,47 @@ def test_mixture_arrays_pickle_round_trip():
         arrays.extend(np.zeros((1, 2)), np.eye(2)[np.newaxis], np.ones(1), [10 ** 6], [0])
     with pytest.raises(ValueError, match="covars"):
         arrays.extend(np.zeros((1, 2)), np.eye(3)[np.newaxis], np.ones(1), [0], [0])
+
+
+def test_mixture_p_d_in_the_core_is_the_contexts_array_call():
+    """P_D on the mixture's means in the core (the array tracker's route for a ctxmodels
+    context reading P_D at the mean) gives the bits of the context's array call on the means
+    copied out; a mapping beyond the state is None (the general route names the error)."""
+    from ctxmodels import DetectionProbabilityModel, Pose, RangeBands, SensorModel, ClutterDensityModel
+    model = SensorModel(detection=DetectionProbabilityModel(factors=[RangeBands(
+        edges=(50.0, 400.0, 900.0), values=(0.0, 0.9, 0.5, 0.0))]),
+        clutter=ClutterDensityModel(factors=[1e-3]))
+    context = model.context(Pose(x=10.0, y=-5.0, heading=0.3))
+    rng = np.random.default_rng(3)
+    arrays = _core.GaussianMixtureArrays(4)
+    means = rng.normal(0.0, 500.0, (40, 4))
+    arrays.extend(means, np.broadcast_to(np.eye(4), (40, 4, 4)).copy(), np.full(40, 0.1),
+                  [0] * 40, [0] * 40)
+    pd = arrays.prob_detection(context._mean_detection())
+    assert pd.tobytes() == context.prob_detection_array(arrays.means()).tobytes()
+    far = SensorModel(detection=model.detection, clutter=model.clutter, position_mapping=(0, 7))
+    assert arrays.prob_detection(far.context(Pose(x=0.0, y=0.0))._mean_detection()) is None
+    cubature = SensorModel(detection=model.detection, clutter=model.clutter,
+                           pd_evaluation="cubature")
+    assert cubature.context(Pose(x=0.0, y=0.0))._mean_detection() is None
+
+
+def test_births_queue_in_one_core_call_as_in_steps():
+    """``extend_births`` keeps the births inside the circle and appends them, as extending a
+    fresh mixture, keeping it inside the circle and taking it all does."""
+    rng = np.random.default_rng(4)
+    means, covar = rng.normal(0.0, 10.0, (12, 4)), np.diag([4.0, 1.0, 4.0, 1.0])
+    for circle in (None, ((0, 2), (1.0, -2.0), 9.0)):
+        one, steps = _core.GaussianMixtureArrays(4), _core.GaussianMixtureArrays(4)
+        one.extend_births(means, covar, 0.1, 5, circle)
+        fresh = _core.GaussianMixtureArrays(4)
+        fresh.extend(means, np.broadcast_to(covar, (12, 4, 4)).copy(), np.full(12, 0.1),
+                     [0] * 12, [5] * 12)
+        if circle is not None:
+            fresh.retain_inside_circle(*circle)
+        steps.take_from(fresh, [True] * len(fresh))
+        for name in ("means", "covars", "weights", "tags", "times"):
+            assert getattr(one, name)().tobytes() == getattr(steps, name)().tobytes()
+        assert 0 < len(one) <= 12
+    with pytest.raises(ValueError, match="covar"):
+        one.extend_births(means, np.eye(3), 0.1, 5)

@@ -81,7 +81,8 @@ class LearnedComponent(Base):
         self.__dict__["_core"] = self._build(*(fresh for _, fresh in self.STATE))
 
     def __getstate__(self):
-        state = {k: v for k, v in self.__dict__.items() if k != "_core"}
+        state = {k: v for k, v in self.__dict__.items()
+                 if k != "_core" and not k.startswith(_CACHE_PREFIX)}
         state.update({f"_property_{name}": getattr(self, name) for name, _ in self.STATE})
         return state
 

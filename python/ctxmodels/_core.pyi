@@ -352,6 +352,16 @@ class GaussianMixtureArrays:
     ) -> None:
         """Appends components: `means` (N, D), `covars` (N, D, D), `weights` (N,), `tags`
         (0 = birth, others reserved), `times` (integer clock)."""
+    def extend_births(
+        self,
+        means: _Floats,
+        covar: _Floats,
+        weight: float,
+        time: int,
+        circle: tuple[tuple[int, int], tuple[float, float], float] | None = None,
+    ) -> None:
+        """Births at the `means` rows (N, D), each with `covar` (D, D), `weight`, tag 0 and
+        `time`; with `circle` = `(position_mapping, centre, radius)` only those inside it."""
     def distinct_times(self) -> list[int]:
         """The distinct component times, ascending."""
     def predict(
@@ -378,6 +388,9 @@ class GaussianMixtureArrays:
         """The GM-PHD update with one scan's `detections` (M, m), `prob_detection` per
         component and `clutter` (λ) per detection; returns each detection's posterior
         clutter probability (M,)."""
+    def prob_detection(self, at_pose: DetectionAtPose) -> _Floats | None:
+        """P_D at each component's mean from `at_pose`, read in place (the same bits as
+        `at_pose.evaluate(self.means())`); None when the core cannot evaluate them."""
     def retain(self, keep: Sequence[bool]) -> None:
         """Keeps the components whose flag is true."""
     def retain_inside_circle(

@@ -73,18 +73,27 @@ class ClutterDensityModel(ModelComponent):
         self._replace("factors", as_sequence(self.factors, "factors", "factors"))
         self._compiled()
 
+    # (read every scan; the factors are fixed, so these are computed once per model)
     @property
     def metadata_keys(self) -> tuple[str, ...]:
         """The metadata keys the model reads, in column order."""
-        keys: list[str] = []
-        for f in self.factors:
-            if isinstance(f, MetadataThreshold) and f.key not in keys:
-                keys.append(f.key)
-        return tuple(keys)
+        def build():
+            keys: list[str] = []
+            for f in self.factors:
+                if isinstance(f, MetadataThreshold) and f.key not in keys:
+                    keys.append(f.key)
+            return tuple(keys)
+        return self._cached("metadata_keys", build)
 
     @property
     def uses_position(self) -> bool:
-        return any(isinstance(f, (RangeBands, ClutterMap, CoastalClutter)) for f in self.factors)
+        return self._cached("uses_position", lambda: any(
+            isinstance(f, (RangeBands, ClutterMap, CoastalClutter)) for f in self.factors))
+
+    def _required_keys(self) -> frozenset[str]:
+        """The metadata keys whose rule has no ``missing`` density."""
+        return self._cached("required_keys", lambda: frozenset(
+            f.key for f in self.factors if isinstance(f, MetadataThreshold) and f.missing is None))
 
     def _compiled(self) -> _core.ClutterModel:
         def build():
@@ -126,27 +135,32 @@ class ClutterDensityModel(ModelComponent):
             i = mappings.index(False)
             raise TypeError(f"metadata: entry {i} is a {type(metadata[i]).__name__}; give every "
                             f"detection a mapping, or every detection a row")
-        required = {f.key for f in self.factors
-                    if isinstance(f, MetadataThreshold) and f.missing is None}
-        rows = np.full((n, len(keys)), np.nan)
+        required = self._required_keys()
+        rows = []  # (Python floats, one array at the end: a scan's rows are few and short)
         for i, entry in enumerate(metadata):
-            for k, key in enumerate(keys):
-                if key not in entry and key in required:
-                    raise ValueError(f"metadata: detection {i} has no {key!r}, and the clutter "
-                                     f"rule on {key!r} has no `missing` density; give every "
-                                     f"detection {key!r}, or set the rule's `missing`")
-                if key in entry:
-                    value = entry[key]
-                    if isinstance(value, (bool, np.bool_)) or not isinstance(
-                            value, (int, float, np.integer, np.floating)):
-                        raise TypeError(f"metadata: detection {i} {key!r} must be a number, "
-                                        f"got {type(value).__name__}")
-                    try:
-                        rows[i, k] = float(value)
-                    except OverflowError:  # an int beyond float range
-                        raise ValueError(f"metadata: detection {i} {key!r} is beyond the float "
-                                         f"range") from None
-        return rows
+            row = []
+            for key in keys:
+                if key not in entry:
+                    if key in required:
+                        raise ValueError(f"metadata: detection {i} has no {key!r}, and the "
+                                         f"clutter rule on {key!r} has no `missing` density; "
+                                         f"give every detection {key!r}, or set the rule's "
+                                         f"`missing`")
+                    row.append(np.nan)
+                    continue
+                value = entry[key]
+                if type(value) is not float and (isinstance(value, (bool, np.bool_)) or not
+                                                 isinstance(value, (int, float, np.integer,
+                                                                    np.floating))):
+                    raise TypeError(f"metadata: detection {i} {key!r} must be a number, "
+                                    f"got {type(value).__name__}")
+                try:
+                    row.append(float(value))
+                except OverflowError:  # an int beyond float range
+                    raise ValueError(f"metadata: detection {i} {key!r} is beyond the float "
+                                     f"range") from None
+            rows.append(row)
+        return np.array(rows, dtype=np.float64).reshape(n, len(keys))
 
     def evaluate(self, pose: Pose, positions, metadata=None, *, ranges=None,
                  out=None) -> np.ndarray:

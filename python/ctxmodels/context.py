@@ -13,12 +13,11 @@ from typing import Any
 
 import numpy as np
 from stonesoup.base import Base, Property
-from stonesoup.models.measurement.linear import LinearGaussian
-from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.numeric import Probability
 
-from .model_key import scan_model_groups
 from .pose import Pose
+# (the detections' positions and ranges lived here: still importable from here)
+from .positions import detection_positions, measured_ranges, ranges_for_bands  # noqa: F401
 from .scan_calls import ScanCalls
 from .sensor import SensorModel
 
@@ -63,186 +62,6 @@ class DetectionSet(_UpstreamSet):
 def _state_of(hypothesis_or_state: Any):
     """The predicted state of a hypothesis, or the state itself."""
     return getattr(hypothesis_or_state, "prediction", hypothesis_or_state)
-
-
-def _position_indices(model, position_mapping, i) -> list[int]:
-    """The x/y indices of ``model``'s state space: ``position_mapping``, which the model must
-    map (measure) both of; anything else would read some other state entry as a position."""
-    mapping = [int(m) for m in getattr(model, "mapping", ())]
-    wanted = [int(m) for m in position_mapping]
-    if all(m in mapping for m in wanted):
-        return wanted
-    raise ValueError(f"detections: detection {i}'s measurement model {type(model).__name__} "
-                     f"maps state indices {tuple(mapping)}, which do not include the sensor's "
-                     f"position_mapping {tuple(wanted)}; give the SensorModel the x/y indices "
-                     "of the state its detections' models measure")
-
-
-def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.ndarray:
-    """World (x, y) of each detection, (M, 2), from each detection's *own* measurement
-    model: through its ``inverse_function`` (bearing–range and other non-linear models) or
-    the pseudo-inverse of a linear model's matrix, read at the ``position_mapping`` indices
-    of that model's state space. A model that does not map both of those indices (a 6-D
-    model with ``mapping=(0, 3)`` against ``(0, 2)``, a 1-D model), or a detection whose
-    vector does not have the model's ``ndim_meas`` rows, raises ValueError: the state space
-    of the detections must be the one the sensor's ``position_mapping`` describes. Linear
-    detections sharing a model are converted in one matrix product."""
-    positions = np.empty((len(detections), 2))
-    for model, indices, vectors in _model_groups(detections, "position (needed for λ)"):
-        if isinstance(model, LinearGaussian):
-            xy = _position_indices(model, position_mapping, indices[0])
-            positions[indices] = (_pseudo_inverse(model.matrix()) @ vectors().T)[xy].T
-        elif _batched_bearing_range(model):
-            xy = _position_indices(model, position_mapping, indices[0])
-            positions[indices] = _bearing_range_inverse(model, vectors())[:, xy]
-        elif hasattr(model, "inverse_function"):
-            for i in indices:
-                state = np.asarray(model.inverse_function(detections[i]),
-                                   dtype=np.float64).ravel()
-                positions[i] = state[_position_indices(model, position_mapping, i)]
-        else:
-            raise ValueError(f"detections: detection {indices[0]}'s measurement model "
-                             f"{type(model).__name__} has no inverse_function")
-    return positions
-
-
-def _model_groups(detections: Sequence, needed_for: str):
-    """The detections grouped by measurement model *value*
-    (:func:`~ctxmodels.model_key.measurement_model_key`: equal models in different objects
-    form one group, its first model the representative), in first-appearance order: ``(model,
-    indices, vectors)`` with ``vectors()`` their measurement vectors as float rows (checked
-    against the model's ``ndim_meas``; taken from the collection's stacked ``vectors`` when
-    it carries them, as :class:`~ctxmodels.stonesoup.ordering.OrderedDetections` does)."""
-    n = len(detections)
-    stacked = getattr(detections, "vectors", None)
-    for model, indices in scan_model_groups(detections).values():
-        if model is None:
-            raise ValueError(f"detections: detection {indices[0]} has no measurement model, "
-                             f"so its {needed_for} is unknown")
-        ndim_meas = getattr(model, "ndim_meas", None)
-
-        def vectors(indices=indices, ndim_meas=ndim_meas):
-            if stacked is not None and stacked.shape == (n, ndim_meas):
-                return stacked if len(indices) == n else stacked[indices]
-            return _measurement_vectors(detections, indices, ndim_meas)
-        yield model, indices, vectors
-
-
-def _measurement_vectors(detections: Sequence, indices: list, ndim_meas) -> np.ndarray:
-    """The measurement vectors of ``detections[indices]`` as float rows (K, m); ValueError
-    naming the first detection whose vector is not ``ndim_meas`` long (if given)."""
-    vectors = [detections[i].state_vector for i in indices]
-    try:
-        stacked = np.array(vectors, dtype=np.float64)
-    except (TypeError, ValueError):
-        stacked = None
-    if stacked is not None and stacked.ndim == 3 and stacked.shape[2] == 1:
-        stacked = stacked[..., 0]
-    if stacked is not None and stacked.ndim == 2 \
-            and (ndim_meas is None or stacked.shape[1] == ndim_meas):
-        return stacked
-    for i, vector in zip(indices, vectors):
-        shape = np.shape(vector)
-        if ndim_meas is not None and shape not in ((ndim_meas, 1), (ndim_meas,)):
-            raise ValueError(f"detections: detection {i} has a state vector of shape {shape}, "
-                             f"but its measurement model {type(detections[i].measurement_model).__name__} "
-                             f"measures {ndim_meas} values")
-    raise ValueError(f"detections: detections {indices} have state vectors of different "
-                     "shapes or non-numeric values")
-
-
-_PSEUDO_INVERSES: dict = {}
-
-
-def _pseudo_inverse(matrix) -> np.ndarray:
-    """``pinv`` of a linear model's matrix."""
-    return _inverted_by_value(_PSEUDO_INVERSES, matrix, np.linalg.pinv)
-
-
-def _inverted_by_value(cache: dict, matrix, invert, limit: int = 64) -> np.ndarray:
-    """``invert(matrix)``, cached in ``cache`` by the matrix's value: scans often bring a new
-    model object with the same matrix (a moving sensor's few recurring headings)."""
-    matrix = np.ascontiguousarray(matrix, dtype=np.float64)
-    key = (matrix.shape, matrix.tobytes())
-    inverse = cache.get(key)
-    if inverse is None:
-        if len(cache) >= limit:
-            cache.clear()
-        inverse = cache[key] = invert(matrix)
-    return inverse
-
-
-def _batched_bearing_range(model) -> bool:
-    """A 2-D bearing–range model whose inverse :func:`_bearing_range_inverse` computes."""
-    return (isinstance(model, CartesianToBearingRange)
-            and type(model).inverse_function is CartesianToBearingRange.inverse_function
-            and len(model.mapping) == 2
-            and model.rotation_offset[0] == 0 and model.rotation_offset[1] == 0)
-
-
-def _bearing_range_inverse(model, polar: np.ndarray) -> np.ndarray:
-    """``model.inverse_function`` of K (bearing, range) rows at once, (K, ndim_state): the
-    polar-to-Cartesian point rotated back to the world and shifted by the offset."""
-    bearing, rng = polar[:, 0], polar[:, 1]
-    xyz = np.array([rng * np.cos(bearing), rng * np.sin(bearing), np.zeros(len(polar))])
-    xy = (_inverse_rotation(model.rotation_matrix) @ xyz)[0:2]
-    states = np.zeros((len(polar), model.ndim_state))
-    offset = np.asarray(model.translation_offset, dtype=np.float64)[:2, 0]
-    states[:, list(model.mapping[:2])] = (xy + offset[:, np.newaxis]).T
-    return states
-
-
-_INVERSE_ROTATIONS: dict = {}
-
-
-def _inverse_rotation(rotation) -> np.ndarray:
-    """``inv`` of a model's rotation matrix."""
-    return _inverted_by_value(_INVERSE_ROTATIONS, rotation, np.linalg.inv, limit=256)
-
-
-def measured_ranges(detections: Sequence) -> np.ndarray:
-    """Each detection's measured range from its sensor, (M,): the range element of a 2-D
-    bearing–range measurement (Stone Soup's :class:`CartesianToBearingRange`, measured from
-    its ``translation_offset``), NaN for any other detection."""
-    n = len(detections)
-    groups = scan_model_groups(detections)
-    stacked = getattr(detections, "vectors", None)
-    if stacked is not None and stacked.shape == (n, 2) and len(groups) == 1 \
-            and _measures_range(next(iter(groups.values()))[0]):
-        return stacked[:, 1].copy()  # one bearing–range model (value) per scan: the usual case
-    ranges = np.full(n, np.nan)
-    for model, indices in groups.values():
-        if _measures_range(model):
-            for i in indices:
-                ranges[i] = float(np.asarray(detections[i].state_vector,
-                                             dtype=np.float64).ravel()[1])
-    return ranges
-
-
-def _measures_range(model) -> bool:
-    return isinstance(model, CartesianToBearingRange) and len(model.mapping) == 2
-
-
-#: How far (relative) a measured range may lie from the range of the detection's position
-#: from the context's pose and still be read as the same range: far above the round trip's
-#: ulps, far below any physical lever arm.
-_RANGE_AGREEMENT = 1e-9
-
-
-def ranges_for_bands(detections: Sequence, positions: np.ndarray, pose: Pose) -> np.ndarray:
-    """The ranges λ's range bands read, (M,): a detection's measured range
-    (:func:`measured_ranges`) where it agrees with the range of its position from ``pose``
-    to within a relative :data:`_RANGE_AGREEMENT` and is ≥ 0, NaN (use the position)
-    elsewhere. So a detection measured exactly on a band edge falls in the band that owns
-    the edge, instead of wherever the polar → Cartesian → range round trip (an ulp either
-    way) puts it; a detection measured from elsewhere (another lever arm) keeps the range
-    from the context's pose."""
-    measured = measured_ranges(detections)
-    from_pose = np.hypot(positions[:, 0] - pose.x, positions[:, 1] - pose.y)
-    with np.errstate(invalid="ignore"):
-        agree = (measured >= 0) & (np.abs(measured - from_pose)
-                                   <= _RANGE_AGREEMENT * np.maximum(1.0, from_pose))
-    return np.where(agree, measured, np.nan)
 
 
 def _particle_weights(weights, n: int) -> np.ndarray:
@@ -314,6 +133,20 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
             raise TypeError(f"timestamp: expected a datetime.datetime or None, got "
                             f"{type(self.timestamp).__name__} {self.timestamp!r}")
 
+    @classmethod
+    def _of(cls, sensor_model: SensorModel, pose: Pose, timestamp=None) -> "DetectorContext":
+        """``DetectorContext(sensor_model=..., pose=..., timestamp=...)``; when the values
+        pass its checks as they stand (a feeder's every scan), the same object without
+        Stone Soup's per-Property setting, which costs more than the scan's P_D calls."""
+        if cls is DetectorContext and isinstance(sensor_model, SensorModel) \
+                and isinstance(pose, Pose) \
+                and (timestamp is None or isinstance(timestamp, datetime.datetime)):
+            context = object.__new__(cls)
+            context.__dict__.update(_property_sensor_model=sensor_model, _property_pose=pose,
+                                    _property_timestamp=timestamp)
+            return context
+        return cls(sensor_model=sensor_model, pose=pose, timestamp=timestamp)
+
     def __eq__(self, other):
         return self is other
 
@@ -333,6 +166,15 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
             snapshot = self.__dict__["_snapshot"] = self.sensor_model.detection.frozen()
         calls = self.__dict__["_scan_calls"] = ScanCalls(self.sensor_model, snapshot, self.pose)
         return calls
+
+    def _mean_detection(self):
+        """The scan's P_D at a state's mean in the core (``DetectionAtPose``) when the sensor
+        model reads P_D at the mean, else None: what the array trackers evaluate on memory
+        the core holds (``GaussianMixtureArrays.prob_detection``), the same bits as
+        :meth:`prob_detection_array` of those means. Counts as a P_D call (it fixes the
+        snapshot)."""
+        calls = self._scan_calls or self._calls()
+        return calls.at_pose if calls.mean_only else None
 
     # --- detection probability -----------------------------------------------------------
     def prob_detection_array(self, means, covars=None, *, out=None) -> np.ndarray:
@@ -475,6 +317,8 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         else:
             positions = np.zeros((len(detections), 2))
         metadata = [d.metadata for d in detections] if clutter.metadata_keys else None
+        if ranges is None and metadata is None:  # (the scan's prepared call: the same bits)
+            return self.clutter_spatial_density_array(positions)
         return clutter.evaluate(self.pose, positions, metadata, ranges=ranges)
 
     def clutter_spatial_density(self, detection) -> float:

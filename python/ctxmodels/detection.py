@@ -70,11 +70,22 @@ class DetectionProbabilityModel(ModelComponent):
         :meth:`~DetectionEstimate.bands` as they stand now (itself when it has none): the
         snapshot a :class:`~ctxmodels.DetectorContext` evaluates for its whole scan, on
         every path, whatever updates the estimates get meanwhile."""
-        if not any(isinstance(factor, DetectionEstimate) for factor in self.factors):
+        # (asked every scan; which factors are estimates is fixed with the model)
+        estimates = self._cached("estimates", lambda: tuple(
+            i for i, factor in enumerate(self.factors) if isinstance(factor, DetectionEstimate)))
+        if not estimates:
             return self
-        return DetectionProbabilityModel(factors=[
-            factor.bands() if isinstance(factor, DetectionEstimate) else factor
-            for factor in self.factors])
+        factors = list(self.factors)
+        for i in estimates:
+            factors[i] = factors[i].bands()
+        # The same bands (an estimate not updated since) give the same immutable snapshot:
+        # the last one, already compiled, is kept.
+        last = self.__dict__.get("_cached_frozen")
+        if last is not None and all(a is b for a, b in zip(last.factors, factors, strict=True)):
+            return last
+        frozen = DetectionProbabilityModel(factors=factors)
+        self.__dict__["_cached_frozen"] = frozen
+        return frozen
 
     def evaluate(self, pose: Pose, states, position_mapping=(0, 2), *, out=None) -> np.ndarray:
         """P_D at each row of ``states`` (N, D) for a sensor at ``pose``."""

@@ -106,9 +106,18 @@ class DetectionEstimate(LearnedComponent):
         """The estimate as it stands, as fixed :class:`~ctxmodels.RangeBands`: ``outside``
         below the first edge and from the last on, :meth:`probabilities` between, each edge
         in the band above it. What a scan's P_D reads (the same bits)."""
-        return RangeBands(edges=self.edges,
-                          values=(self.outside, *self.probabilities().tolist(), self.outside),
-                          upper_owns=True)
+        probabilities = self.probabilities()
+        # Every scan asks; between updates the estimate is the same, bit for bit, and so is
+        # the (immutable) RangeBands it gives, kept with the bytes it was built from.
+        key = probabilities.tobytes()
+        last = self.__dict__.get("_cached_bands")
+        if last is not None and last[0] == key:
+            return last[1]
+        bands = RangeBands(edges=self.edges,
+                           values=(self.outside, *probabilities.tolist(), self.outside),
+                           upper_owns=True)
+        self.__dict__["_cached_bands"] = (key, bands)
+        return bands
 
 
 

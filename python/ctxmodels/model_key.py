@@ -63,7 +63,7 @@ def _value(value):
     if isinstance(value, np.generic) and not isinstance(value, np.object_):
         return type(value), value.tobytes()
     if type(value) in (tuple, list):
-        return type(value), tuple(_value(v) for v in value)
+        return type(value), tuple([_value(v) for v in value])
     raise _NotAValue
 
 
@@ -80,7 +80,7 @@ def measurement_model_key(model):
     kind = type(model)
     if kind in _BY_VALUE:
         try:
-            return (kind,) + tuple(_value(getattr(model, name)) for name in kind.properties)
+            return (kind, *[_value(getattr(model, name)) for name in kind.properties])
         except _NotAValue:
             pass
     return _Identity(model)

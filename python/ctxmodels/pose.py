@@ -7,6 +7,7 @@ bearing of π is astern.
 """
 from __future__ import annotations
 
+import bisect
 import datetime
 import math
 from collections.abc import Sequence
@@ -158,27 +159,53 @@ class NavigationTrack(PoseSource):
         seconds = _seconds(self.timestamps, self.timestamps[0])
         if np.any(np.diff(seconds) <= 0):
             raise ValueError("timestamps: must be strictly increasing")
-        self.__dict__["_cached_seconds"] = seconds
 
     def pose_at(self, timestamp: datetime.datetime) -> Pose:
         if not isinstance(timestamp, datetime.datetime):
             raise TypeError(f"timestamp: expected a datetime, got {type(timestamp).__name__}")
-        if time_kind(timestamp) != time_kind(self.timestamps[0]):
+        log = self._cached("log", self._log)
+        last = log.last
+        # A scan asks twice (its context, the tracker's region); the track is immutable, so
+        # an equal plain datetime (same offset from the first entry) has the same pose.
+        if last is not None and type(timestamp) is datetime.datetime and timestamp == last[0]:
+            return last[1]
+        if time_kind(timestamp) != log.kind:
             raise TypeError(f"timestamp: {timestamp} is {time_kind(timestamp)} but the "
-                            f"navigation track's timestamps are {time_kind(self.timestamps[0])}")
-        seconds = self._cached("seconds", lambda: _seconds(self.timestamps, self.timestamps[0]))
+                            f"navigation track's timestamps are {log.kind}")
+        seconds = log.seconds
         t = (timestamp - self.timestamps[0]).total_seconds()
         if t < 0 or t > seconds[-1]:
             raise ValueError(
                 f"timestamp: {timestamp} is outside the navigation track "
                 f"[{self.timestamps[0]}, {self.timestamps[-1]}]")
-        k = int(np.searchsorted(seconds, t, side="right")) - 1
+        k = bisect.bisect_right(seconds, t) - 1
         if k >= len(seconds) - 1:
-            x, y = self.positions[-1]
-            return _computed_pose(float(x), float(y), float(self.headings[-1]))
-        f = (t - seconds[k]) / (seconds[k + 1] - seconds[k])
-        x, y = (1 - f) * self.positions[k] + f * self.positions[k + 1]
-        h0, h1 = self.headings[k], self.headings[k + 1]
-        turn = math.remainder(h1 - h0, 2 * math.pi)
-        heading = math.remainder(h0 + f * turn, 2 * math.pi)
-        return _computed_pose(float(x), float(y), heading)
+            x, y = log.positions[-1]
+            pose = _computed_pose(x, y, log.headings[-1])
+        else:
+            # Python floats: the same IEEE operations, one rounding each, as on the arrays
+            f = (t - seconds[k]) / (seconds[k + 1] - seconds[k])
+            (x0, y0), (x1, y1) = log.positions[k], log.positions[k + 1]
+            h0, h1 = log.headings[k], log.headings[k + 1]
+            turn = math.remainder(h1 - h0, 2 * math.pi)
+            heading = math.remainder(h0 + f * turn, 2 * math.pi)
+            pose = _computed_pose((1 - f) * x0 + f * x1, (1 - f) * y0 + f * y1, heading)
+        if type(timestamp) is datetime.datetime:
+            log.last = (timestamp, pose)
+        return pose
+
+    def _log(self) -> "_NavigationLog":
+        return _NavigationLog(_seconds(self.timestamps, self.timestamps[0]).tolist(),
+                              self.positions.tolist(), self.headings.tolist(),
+                              time_kind(self.timestamps[0]))
+
+
+class _NavigationLog:
+    """A navigation track's log as Python floats (a pose costs a few float operations, not
+    a dozen NumPy calls), and the last pose asked for."""
+
+    __slots__ = ("seconds", "positions", "headings", "kind", "last")
+
+    def __init__(self, seconds: list, positions: list, headings: list, kind):
+        self.seconds, self.positions, self.headings, self.kind = seconds, positions, headings, kind
+        self.last = None

@@ -22,7 +22,8 @@ class ScanCalls:
     """The ``detection`` snapshot and the clutter model of ``sensor_model`` fixed at ``pose``
     for the thin calls; the values are the general path's, bit for bit (tested)."""
 
-    __slots__ = ("detection", "at_pose", "clutter_at_pose", "mean_only", "_probabilities")
+    __slots__ = ("detection", "at_pose", "mean_only", "_probabilities", "_clutter",
+                 "_clutter_at_pose")
 
     #: Distinct P_D values whose Probability is kept (a scan has a handful).
     max_probabilities = 256
@@ -35,11 +36,22 @@ class ScanCalls:
                                              pose.as_tuple(),
                                              tuple(sensor_model.position_mapping),
                                              sensor_model.pd_evaluation, sensor_model.pd_order)
-        self.clutter_at_pose = _core.ClutterAtPose(sensor_model.clutter._compiled(),
-                                                   pose.as_tuple())
+        self._clutter = (sensor_model.clutter, pose)
+        self._clutter_at_pose = None
         #: P_D is read at the mean of a Gaussian (no integration over its covariance).
         self.mean_only = sensor_model.pd_evaluation == "mean"
         self._probabilities: dict[float, Probability] = {}
+
+    @property
+    def clutter_at_pose(self) -> _core.ClutterAtPose:
+        """The clutter model at the pose, built on the first λ call that uses it (the
+        trackers' λ calls on detections take the general path)."""
+        at_pose = self._clutter_at_pose
+        if at_pose is None:
+            clutter, pose = self._clutter
+            at_pose = self._clutter_at_pose = _core.ClutterAtPose(clutter._compiled(),
+                                                                  pose.as_tuple())
+        return at_pose
 
     def probability(self, value: float) -> Probability:
         """``Probability(value)``, built once per distinct value (Probabilities are

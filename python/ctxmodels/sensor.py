@@ -88,5 +88,4 @@ class SensorModel(ModelComponent):
         """The :class:`~ctxmodels.DetectorContext` of a scan taken with the *platform* at
         ``pose`` (a :class:`Pose` or an (x, y, heading) triple)."""
         from .context import DetectorContext
-        return DetectorContext(sensor_model=self, pose=self.sensor_pose(as_pose(pose)),
-                               timestamp=timestamp)
+        return DetectorContext._of(self, self.sensor_pose(as_pose(pose)), timestamp)

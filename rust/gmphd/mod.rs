@@ -104,6 +104,28 @@ impl Mixture {
         Ok(())
     }
 
+    /// Births at the `means` rows (N×D), each with `covar` (D×D), `weight`, the [`BIRTH`] tag
+    /// and `time`, appended in order; with `circle` (x/y position indices, centre, radius)
+    /// only those inside it. The same as [`Self::extend`]ing a fresh mixture, keeping its
+    /// components inside the circle ([`Self::retain_inside_circle`]) and taking them all
+    /// ([`Self::take_from`]), in one call.
+    pub fn extend_births(&mut self, means: &[f64], covar: &[f64], weight: f64, time: i64, circle: Option<([usize; 2], [f64; 2], f64)>) -> Result<()> {
+        let d = self.ndim;
+        if covar.len() != d * d || means.len() % d != 0 {
+            return Err(ModelError::shape("births", format!("expected means of dimension {d} and one {d}×{d} covariance")));
+        }
+        let n = means.len() / d;
+        let mut fresh = Mixture::new(d);
+        let covars = memory::collected("covars", (0..n).flat_map(|_| covar.iter().copied()))?;
+        let (weights, tags, times) = (memory::filled("weights", n, weight)?, memory::filled("tags", n, BIRTH)?, memory::filled("times", n, time)?);
+        fresh.extend(means, &covars, &weights, &tags, &times)?;
+        if let Some((position, centre, radius)) = circle.filter(|_| !fresh.is_empty()) {
+            fresh.retain_inside_circle(position, centre, radius)?;
+        }
+        let take = memory::filled("take", fresh.len(), true)?;
+        self.take_from(&mut fresh, &take)
+    }
+
     /// Room for `n` more components, fallibly, before anything changes.
     pub(crate) fn reserve(&mut self, n: usize) -> Result<()> {
         let d = self.ndim;

@@ -183,3 +183,29 @@ fn listed_first_candidates_merge_as_the_index_does() {
     }
     assert!(merges > 1000, "the set-up should merge often, merged {merges}");
 }
+
+#[test]
+fn births_extend_as_a_fresh_mixture_kept_in_the_circle_and_taken() {
+    let means = [0.0, 1.0, 0.0, 1.0, 30.0, 0.0, 40.0, 0.0, 3.0, 0.0, 4.0, 0.0, f64::NAN, 0.0, 0.0, 0.0];
+    let covar = diagonal([4.0, 1.0, 4.0, 1.0]);
+    for circle in [None, Some(([0, 2], [0.0, 0.0], 5.0))] {
+        let (mut one_call, mut steps) = (Mixture::new(4), Mixture::new(4));
+        for mixture in [&mut one_call, &mut steps] {
+            mixture.extend(&[9.0; 4], &covar, &[0.25], &[BIRTH], &[1]).unwrap();
+        }
+        // (the NaN mean is refused by both, before anything changes)
+        assert!(one_call.extend_births(&means, &covar, 0.1, 7, circle).is_err());
+        let finite = &means[..12];
+        one_call.extend_births(finite, &covar, 0.1, 7, circle).unwrap();
+        let mut fresh = Mixture::new(4);
+        fresh.extend(finite, &covar.repeat(3), &[0.1; 3], &[BIRTH; 3], &[7; 3]).unwrap();
+        if let Some((position, centre, radius)) = circle {
+            fresh.retain_inside_circle(position, centre, radius).unwrap();
+        }
+        let take = vec![true; fresh.len()];
+        steps.take_from(&mut fresh, &take).unwrap();
+        assert_eq!((&one_call.means, &one_call.covars, &one_call.weights), (&steps.means, &steps.covars, &steps.weights));
+        assert_eq!((&one_call.tags, &one_call.times), (&steps.tags, &steps.times));
+        assert_eq!(one_call.len(), if circle.is_some() { 3 } else { 4 });
+    }
+}

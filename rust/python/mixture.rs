@@ -1,7 +1,8 @@
 //! Binding of the GM-PHD scan core ([`crate::gmphd`]): a mutable Gaussian mixture kept as
 //! arrays between scans, and the measurement models it updates with.
 
-use super::{borrow, detached, slice, value_error};
+use super::scan::{PyDetectionAtPose, DETACH_ROWS};
+use super::{borrow, detached, guarded, slice, value_error};
 use crate::gmphd::{Jacobian, MeasurementModel, Mixture, ReduceParams, UpdateParams};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -104,6 +105,25 @@ impl PyGaussianMixtureArrays {
         self.0.extend(slice(&m, "means")?, slice(&c, "covars")?, slice(&w, "weights")?, &tags, &times).map_err(super::to_py)
     }
 
+    /// Births at the `means` rows (N, D), each with `covar` (D, D), `weight`, tag 0 and
+    /// `time`; with `circle` = `(position_mapping, centre, radius)` only those inside it (as
+    /// `retain_inside_circle`). What extending a fresh mixture, keeping its components in the
+    /// circle and taking them all does, in one call.
+    #[pyo3(signature = (means, covar, weight, time, circle = None))]
+    #[allow(clippy::type_complexity)]
+    fn extend_births(&mut self, means: Bound<'_, PyArray2<f64>>, covar: Bound<'_, PyArray2<f64>>, weight: f64, time: i64, circle: Option<((usize, usize), (f64, f64), f64)>) -> PyResult<()> {
+        let d = self.0.ndim;
+        if means.shape()[1] != d {
+            return Err(shape_error("means", format!("(N, {d})"), means.shape()));
+        }
+        if covar.shape() != [d, d] {
+            return Err(shape_error("covar", format!("({d}, {d})"), covar.shape()));
+        }
+        let (m, c) = (borrow(&means, "means")?, borrow(&covar, "covar")?);
+        let circle = circle.map(|(p, c, r)| ([p.0, p.1], [c.0, c.1], r));
+        self.0.extend_births(slice(&m, "means")?, slice(&c, "covar")?, weight, time, circle).map_err(super::to_py)
+    }
+
     /// The distinct component times, ascending.
     fn distinct_times(&self) -> PyResult<Vec<i64>> {
         self.0.distinct_times().map_err(super::to_py)
@@ -155,6 +175,20 @@ impl PyGaussianMixtureArrays {
         let model = &model.0;
         let clutter_probability = detached(py, || mixture.update(model, z, pd, lam, &params))?;
         Ok(PyArray1::from_vec(py, clutter_probability))
+    }
+
+    /// P_D at each component's mean from a context's `DetectionAtPose`, read in place: the
+    /// same bits as `at_pose.evaluate(self.means())`, without the copy. None when the core
+    /// cannot evaluate them (a position not finite, a mapping beyond the dimension): the
+    /// caller's general route then says why.
+    fn prob_detection<'py>(&self, py: Python<'py>, at_pose: &Bound<'py, PyDetectionAtPose>) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
+        let (n, d, at_pose) = (self.0.len(), self.0.ndim, at_pose.get());
+        let mut pd = crate::memory::filled("means", n, 0.0).map_err(super::to_py)?;
+        let means = &self.0.means;
+        // (a panic is a RuntimeError, as in every call; the core's refusal is None)
+        let mut run = || Ok(at_pose.at_rows(means, d, &mut pd));
+        let evaluated = if n < DETACH_ROWS { guarded(run)? } else { detached(py, run)? };
+        Ok(evaluated.ok().map(|()| PyArray1::from_vec(py, pd)))
     }
 
     /// Keeps the components whose flag is true.

@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 
 /// Rows below which a call keeps the GIL: releasing and retaking it costs more than
 /// evaluating them (the core splits work over threads only far above this).
-const DETACH_ROWS: usize = 4096;
+pub(super) const DETACH_ROWS: usize = 4096;
 
 #[pyclass(name = "DetectionAtPose", module = "ctxmodels._core", frozen)]
 pub struct PyDetectionAtPose {
@@ -93,6 +93,12 @@ impl PyDetectionAtPose {
 }
 
 impl PyDetectionAtPose {
+    /// P_D at each of the `rows` (N×`ncols`, N = `out.len()`): [`Self::evaluate`]'s
+    /// computation on memory the core already holds (a mixture's means).
+    pub(super) fn at_rows(&self, rows: &[f64], ncols: usize, out: &mut [f64]) -> crate::Result<()> {
+        self.scan.at_states(rows, ncols, self.mapping, out)
+    }
+
     /// The mapped position of a float64 (D, 1) column or (D,) array; None for anything else.
     fn position_of(&self, vector: &Bound<'_, PyAny>) -> Option<(f64, f64)> {
         let PositionMapping { x, y } = self.mapping;

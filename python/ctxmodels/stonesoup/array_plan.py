@@ -23,6 +23,10 @@ from .measurement import AnalyticCartesianToBearingRange
 from .pointprocess import PHDUpdater
 
 _KALMAN = (KalmanUpdater, ExtendedKalmanUpdater)
+#: Core measurement models by (model value, state dimension, updater types).
+_SCAN_MODELS: dict = {}
+_MISSING = object()
+_UINT64_MAX = int(np.iinfo(np.uint64).max)
 
 
 def _plain_kalman(updater) -> bool:
@@ -34,9 +38,11 @@ class _Plan:
     """What a supported configuration asks of the core, read from the components."""
 
     def __init__(self, hypothesiser, updater, reducer):
-        inner = hypothesiser.hypothesiser
+        self._read(hypothesiser.hypothesiser, updater, updater.updater, reducer)
+
+    def _read(self, inner, updater, measurement_updater, reducer) -> None:
         self.predictor = inner.predictor
-        self.measurement_updater = updater.updater
+        self.measurement_updater = measurement_updater
         self.gate_updater = inner.updater
         self.missed_distance = float(inner.missed_distance)
         self.squared = type(inner.measure) is SquaredMahalanobis
@@ -45,14 +51,27 @@ class _Plan:
         self.prob_detection = float(updater.prob_detection)
         self.clutter = float(updater.clutter_spatial_density)
         self.normalise = bool(updater.normalisation)
-        self.force_symmetric = bool(updater.updater.force_symmetric_covariance)
+        self.force_symmetric = bool(measurement_updater.force_symmetric_covariance)
         self.reduce = dict(
             pruning=bool(reducer.pruning), prune_threshold=float(reducer.prune_threshold),
             merging=bool(reducer.merging), merge_threshold=float(reducer.merge_threshold),
             truncating=bool(reducer.truncating),
-            max_components=int(min(reducer.max_number_components, np.iinfo(np.uint64).max)),
+            max_components=int(min(reducer.max_number_components, _UINT64_MAX)),
             kdtree_max_distance=(None if reducer.kdtree_max_distance is None
                                  else float(reducer.kdtree_max_distance)))
+
+    @classmethod
+    def read(cls, tracker) -> _Plan | str:
+        """The plan of ``tracker``'s configuration, or why the core does not run it (a
+        string, as :meth:`refusal`). Runs every scan, so each component's Properties are
+        read once for both."""
+        hypothesiser, updater, reducer = tracker.hypothesiser, tracker.updater, tracker.reducer
+        refusal = cls._refusal(hypothesiser, updater, reducer)
+        if refusal is not None:
+            return refusal
+        plan = object.__new__(cls)
+        plan._read(hypothesiser.hypothesiser, updater, updater.updater, reducer)
+        return plan
 
     @classmethod
     def of(cls, tracker) -> _Plan | None:
@@ -60,10 +79,13 @@ class _Plan:
             return None
         return cls(tracker.hypothesiser, tracker.updater, tracker.reducer)
 
-    @staticmethod
-    def refusal(tracker) -> str | None:
+    @classmethod
+    def refusal(cls, tracker) -> str | None:
         """Why the core does not run this configuration (None: it does)."""
-        hypothesiser, updater, reducer = tracker.hypothesiser, tracker.updater, tracker.reducer
+        return cls._refusal(tracker.hypothesiser, tracker.updater, tracker.reducer)
+
+    @staticmethod
+    def _refusal(hypothesiser, updater, reducer) -> str | None:
         if type(hypothesiser) is not GaussianMixtureHypothesiser \
                 or not hypothesiser.order_by_detection:
             return ("the hypothesiser is not a GaussianMixtureHypothesiser with "
@@ -87,9 +109,25 @@ class _Plan:
             return "the reducer is not a GaussianMixtureReducer"
         return None
 
-    def scan_model(self, model, ndim: int):
+    def scan_model(self, model, ndim: int, key=None):
         """The core's form of one measurement model, or None if it has none (both updaters
-        must linearise it as the core does)."""
+        must linearise it as the core does). ``key``: the model's
+        :func:`~ctxmodels.model_key.measurement_model_key`, if known; a value key (equal keys
+        are bit-identical models) finds the core model built for an earlier scan."""
+        cache_key = None
+        if type(key) is tuple:
+            cache_key = (key, ndim, type(self.measurement_updater), type(self.gate_updater))
+            found = _SCAN_MODELS.get(cache_key, _MISSING)
+            if found is not _MISSING:
+                return found
+        scan_model = self._scan_model(model, ndim)
+        if cache_key is not None:
+            if len(_SCAN_MODELS) >= 64:
+                _SCAN_MODELS.clear()
+            _SCAN_MODELS[cache_key] = scan_model  # (immutable, like the model's value)
+        return scan_model
+
+    def _scan_model(self, model, ndim: int):
         kinds = {type(self.measurement_updater), type(self.gate_updater)}
         if type(model) is LinearGaussian:
             if model.ndim_state != ndim:

@@ -55,7 +55,7 @@ from stonesoup.types.state import TaggedWeightedGaussianState
 from stonesoup.types.track import Track
 
 from .. import _core
-from ..context import detection_positions
+from ..context import DetectorContext, detection_positions
 from ..model_key import scan_model_groups
 from ..foreign import as_array_context
 from .array_plan import _Plan
@@ -197,15 +197,23 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
         """The scan's detections' births wait in ``_pending`` for a scan that can see them."""
         birth = self.birth
         means = birth.means(detections, self._positions(detections, birth.position_mapping))
-        covar = np.asarray(birth.birth_covar, dtype=np.float64)
+        n, ndim = means.shape
+        covar = np.ascontiguousarray(birth.birth_covar, dtype=np.float64)
         if self._pending is None:
-            self._pending = _core.GaussianMixtureArrays(means.shape[1])
-        fresh = _core.GaussianMixtureArrays(means.shape[1])
-        fresh.extend(means, np.ascontiguousarray(np.broadcast_to(
-            covar, (len(means),) + covar.shape)), np.full(len(means), float(birth.birth_weight)),
-            [_BIRTH] * len(means), [time] * len(means))
+            self._pending = _core.GaussianMixtureArrays(ndim)
         # Only this scan's births meet this scan's region: the queued ones met their own
         # scan's (a region that moves may have left them behind since, as on the component path).
+        region = self._region
+        if region is None or type(region) is CircularRegion:  # (in one call into the core)
+            circle = None if region is None else (
+                tuple(map(int, self.position_mapping)), region.centre, region.radius)
+            self._pending.extend_births(means, covar, float(birth.birth_weight), time, circle)
+            return
+        covars = np.empty((n,) + covar.shape)
+        covars[...] = covar  # (one per birth)
+        fresh = _core.GaussianMixtureArrays(ndim)
+        fresh.extend(means, covars, np.full(n, float(birth.birth_weight)), [_BIRTH] * n,
+                     [time] * n)
         self._within_region(fresh)
         self._pending.take_from(fresh, [True] * len(fresh))
 
@@ -216,13 +224,19 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
         pending = self._pending
         if pending is None or not len(pending):
             return
-        if self.birth.max_delay is not None:
-            limit = self.birth.max_delay // _MICROSECOND
-            pending.retain((time - pending.times() <= limit).tolist())
+        birth = self.birth
+        if birth.max_delay is not None:
+            stale = time - pending.times() > birth.max_delay // _MICROSECOND
+            if stale.any():
+                pending.retain((~stale).tolist())
         if context is None:
             entering = [True] * len(pending)
         else:
-            entering = self.birth.visible(pending.means(), pending.covars(), context).tolist()
+            pd = _core_prob_detection(pending, context)
+            if pd is None:  # (a foreign context, P_D over the Gaussian, or an error to name)
+                entering = birth.visible(pending.means(), pending.covars(), context).tolist()
+            else:
+                entering = (pd > 0).tolist()  # (MeasurementDrivenBirth.visible's rule)
         arrays.take_from(pending, entering)
 
     def _within_region(self, arrays) -> None:
@@ -231,7 +245,7 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
         region = self._region
         if region is None or not len(arrays):
             return
-        mapping = tuple(int(i) for i in self.position_mapping)
+        mapping = tuple(map(int, self.position_mapping))
         if type(region) is CircularRegion:
             arrays.retain_inside_circle(mapping, region.centre, region.radius)
         else:
@@ -240,9 +254,9 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
     # --- a scan -----------------------------------------------------------------------------
     def _scan(self, time, detections) -> tuple[datetime.datetime, set[Track]]:
         """One checked scan (the parent's ``__next__`` checks it and calls this)."""
-        refusal = _Plan.refusal(self)
+        plan = _Plan.read(self)
+        refusal = plan if isinstance(plan, str) else None
         if refusal is None:
-            plan = _Plan(self.hypothesiser, self.updater, self.reducer)
             self._region = scan_region(self.surveillance_region, time)  # (the component
             scan = self._scan_inputs(plan, time, detections)           # path sets it itself)
             if isinstance(scan, str):
@@ -280,11 +294,11 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
             return f"detections with {len(groups)} distinct measurement models"
         if any(d.timestamp != time for d in ordered):
             return "detections with timestamps other than the scan's"
-        (model, _), = groups.values()
-        model = plan.gate_updater._check_measurement_model(model)
+        (key, (detections_model, _)), = groups.items()
+        model = plan.gate_updater._check_measurement_model(detections_model)
         if plan.measurement_updater._check_measurement_model(model) is not model:
             return "the hypothesiser's and the updater's measurement models differ"
-        scan_model = plan.scan_model(model, ndim)
+        scan_model = plan.scan_model(model, ndim, key if model is detections_model else None)
         if scan_model is None:
             return (f"a {type(model).__name__} measurement model (the core takes "
                     "LinearGaussian and, with extended Kalman updaters, 2-D bearing-range)")
@@ -322,12 +336,15 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
         self._predict(plan, arrays, now)
         n = len(arrays)
         if context is not None:
-            # A foreign context (no sensor model) is asked about each Gaussian prediction.
+            prob_detection = _core_prob_detection(arrays, context)
+            if prob_detection is None:
+                # A foreign context (no sensor model) is asked about each Gaussian prediction.
+                model = getattr(context, "sensor_model", None)
+                gaussian = model is None or model.pd_evaluation != "mean"
+                covars = arrays.covars() if gaussian else None
+                prob_detection = np.asarray(
+                    context.prob_detection_array(arrays.means(), covars), dtype=np.float64)
             model = getattr(context, "sensor_model", None)
-            gaussian = model is None or model.pd_evaluation != "mean"
-            covars = arrays.covars() if gaussian else None
-            prob_detection = np.asarray(context.prob_detection_array(arrays.means(), covars),
-                                        dtype=np.float64)
             positions = None
             if detections and getattr(getattr(model, "clutter", None), "uses_position", False):
                 positions = self._positions(detections, model.position_mapping)
@@ -436,6 +453,18 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
         self._track_of_tag = {self._tag_id(name): track
                               for name, track in self.target_tracks.items()}
         return tracker_time, tracks
+
+
+def _core_prob_detection(arrays, context):
+    """P_D at each component's mean of ``arrays``, computed in the core from a ctxmodels
+    context's model at the scan's pose (no means copied out and back): the bits of
+    ``context.prob_detection_array(arrays.means())``. None for a context or sensor model
+    the core route does not cover, or means it cannot evaluate (the general route then
+    names why)."""
+    if type(context) is not DetectorContext:
+        return None
+    at_pose = context._mean_detection()
+    return None if at_pose is None else arrays.prob_detection(at_pose)
 
 
 class _ComponentScan:

@@ -78,8 +78,12 @@ def _scans(source: Iterable, name: str, label: str = "",
 def _check_detections(time, detections, name: str, label: str) -> None:
     """A scan's detections must be a collection of detections (objects with a
     ``state_vector``): None, text or a lone detection say so, naming the scan."""
-    if detections is None or isinstance(detections, (str, bytes, Mapping)) \
-            or hasattr(detections, "state_vector") or not isinstance(detections, Iterable):
+    # (the usual collections are no Mapping and iterable: the abstract-class checks, twice
+    # a scan, are left to the others)
+    plain = type(detections) in _PLAIN_COLLECTIONS
+    if hasattr(detections, "state_vector") or not plain and (
+            detections is None or isinstance(detections, (str, bytes, Mapping))
+            or not isinstance(detections, Iterable)):
         raise TypeError(f"{name}: the scan at {time}{label} holds "
                         f"{type(detections).__name__} {_short(detections)}, not a set of "
                         f"detections (give an empty set for a scan without any)")
@@ -87,6 +91,9 @@ def _check_detections(time, detections, name: str, label: str) -> None:
         if not hasattr(detection, "state_vector"):
             raise TypeError(f"{name}: the scan at {time}{label} holds "
                             f"{type(detection).__name__} {_short(detection)}, not a detection")
+
+
+_PLAIN_COLLECTIONS = frozenset({set, frozenset, list, tuple, DetectionSet})
 
 
 def _short(value) -> str:

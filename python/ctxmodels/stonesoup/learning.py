@@ -22,6 +22,7 @@ from ..clutter_map import ClutterMap
 from ..context import detection_positions, measured_ranges
 from ..detection import DetectionProbabilityModel
 from ..detection_estimate import DetectionEstimate
+from ..sensor import SensorModel
 from .ordering import in_stable_order, in_track_order
 
 
@@ -59,7 +60,8 @@ class _GatedLearner(Base):
         if tracks is None or isinstance(tracks, (str, bytes)) or not isinstance(tracks, Iterable):
             raise TypeError(f"tracks: expected the tracker's tracks (a set of Tracks) at the "
                             f"scan at {time}, got {type(tracks).__name__}")
-        tracked = [t for t in in_track_order(tracks) if len(t) and t.timestamp == time]
+        # (filtered, then sorted: the same order, as sorting is stable; fewer keys built)
+        tracked = in_track_order([t for t in tracks if len(t) and t.timestamp == time])
         rows = []
         for track in tracked:
             vector = np.asarray(track.state_vector)
@@ -77,8 +79,23 @@ def _learned_factors(detections, part: str, kind: type):
     ``part`` ("clutter" or "detection"; none without a context)."""
     context = getattr(detections, "detector_context", None)
     model = getattr(context, "sensor_model", None)
+    if type(model) is SensorModel:
+        # (asked every scan, of every sensor; a SensorModel and its parts are immutable, so
+        # the answer per model object is kept with it)
+        found = _LEARNED_FACTORS.get((id(model), part, kind))
+        if found is not None and found[0] is model:
+            return context, model, list(found[1])
     factors = getattr(getattr(model, part, None), "factors", ())
-    return context, model, list({id(f): f for f in factors if isinstance(f, kind)}.values())
+    learned = list({id(f): f for f in factors if isinstance(f, kind)}.values())
+    if type(model) is SensorModel:
+        if len(_LEARNED_FACTORS) >= 64:
+            _LEARNED_FACTORS.clear()
+        _LEARNED_FACTORS[(id(model), part, kind)] = (model, tuple(learned))
+    return context, model, learned
+
+
+#: (id(sensor model), part, kind) -> (the model, its learned factors of that kind).
+_LEARNED_FACTORS: dict = {}
 
 
 def _scan(detections, model) -> tuple[list, np.ndarray]:

@@ -116,17 +116,28 @@ def in_stable_order(detections) -> OrderedDetections:
     ``detector_context`` (if the collection carries one)."""
     context = getattr(detections, "detector_context", None)
     detections = list(detections)
+    if not detections:
+        return OrderedDetections((), context, None)
     vectors = _float_vectors(detections)
+    if len(detections) == 1:  # (most of a 10 Hz sensor's scans: nothing to sort)
+        return OrderedDetections(detections, context, vectors)
     times: dict = {}  # str() once per timestamp
     heads = []
+    # each row's bytes cut from the rows' (C-ordered) bytes: the row's own tobytes()
+    raw = vectors.tobytes() if vectors is not None else b""
+    width = len(raw) // len(detections)
     for i, detection in enumerate(detections):
         timestamp = getattr(detection, "timestamp", None)
         time_key = times.get(timestamp)
         if time_key is None:
             time_key = times[timestamp] = _time_key(detection)
-        vector = vectors[i].tobytes() if vectors is not None else _vector_bytes(detection)
+        vector = raw[i * width:(i + 1) * width] if vectors is not None \
+            else _vector_bytes(detection)
         heads.append((time_key, type(detection).__qualname__, vector))
     order = sorted(range(len(detections)), key=heads.__getitem__)
+    if len(set(heads)) == len(heads):  # no ties: the usual case
+        return OrderedDetections([detections[i] for i in order], context,
+                                 None if vectors is None else vectors[order])
     # equal heads (equal time, type and vector; rare): metadata and model decide
     model_keys: dict = {}  # (models, whose repr is slow, keyed once per scan)
     start = 0

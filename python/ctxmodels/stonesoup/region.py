@@ -66,7 +66,15 @@ class PoseCentredRegion(Base):
         except (TypeError, ValueError) as err:  # e.g. a navigation log that ends too early
             raise type(err)(f"pose_source: no platform pose for the scan at {timestamp} "
                             f"(the surveillance region's centre): {err}") from err
-        return CircularRegion(centre=(pose.x, pose.y), radius=self.radius)
+        x, y, radius = pose.x, pose.y, self.radius
+        if type(x) is float and type(y) is float and type(radius) is float \
+                and math.isfinite(x + y + radius) and radius > 0:
+            # what CircularRegion(...) builds from values its checks pass: every scan builds
+            # one, and the checks cost more than the rest of the region's work
+            region = object.__new__(CircularRegion)
+            region.__dict__.update(_property_centre=(x, y), _property_radius=radius)
+            return region
+        return CircularRegion(centre=(x, y), radius=radius)
 
 
 def _radius(value) -> float:

@@ -28,7 +28,6 @@ report an error.
 """
 from __future__ import annotations
 
-import contextlib
 import datetime
 import re
 
@@ -131,7 +130,9 @@ def _check_vectors(items, vectors, models, where) -> None:
         return
     try:
         rows = np.array(vectors, dtype=np.float64)
-        finite = np.isfinite(rows).reshape(len(vectors), -1).all(axis=1)
+        finite = np.isfinite(rows)
+        # (per vector only when some value is not finite: the rare case)
+        finite = None if finite.all() else finite.reshape(len(vectors), -1).all(axis=1)
         length = rows.shape[1] if rows.ndim >= 2 else None  # shared by every vector
     except (TypeError, ValueError):  # vectors of different lengths (several sensors), or odd
         finite = []
@@ -142,7 +143,7 @@ def _check_vectors(items, vectors, models, where) -> None:
                 finite.append(False)
         finite = np.array(finite)
         length = None
-    if not finite.all():
+    if finite is not None and not finite.all():
         bad = [d for d, ok in zip(items, finite.tolist()) if not ok]
         row = min(_ordered_index(items, d) for d in bad)
         detection = in_stable_order(items)[row]
@@ -162,20 +163,40 @@ def _check_vectors(items, vectors, models, where) -> None:
                              f"measures {size}")
 
 
-@contextlib.contextmanager
-def naming_scan_errors(tracker, time, detections):
+class naming_scan_errors:
     """Re-raises Stone Soup's anonymous errors of a scan with the scan and detection named:
     ``No measurement model specified`` (a detection without a model, and an updater with
     none to fall back on) and the naive/aware datetime mix (a scan against the tracks'
-    states)."""
-    index = tracker.__dict__.get("_scan_checks", (1, None))[0] - 1
-    where = _where(index, time)
-    try:
-        yield
-    except ValueError as error:
+    states). A context manager (a class: it wraps every scan, and a generator-based one
+    costs more)."""
+
+    __slots__ = ("time", "detections", "index")
+
+    def __init__(self, tracker, time, detections):
+        self.index = tracker.__dict__.get("_scan_checks", (1, None))[0] - 1
+        self.time, self.detections = time, detections
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind, error, traceback) -> bool:
+        if kind is None:
+            return False
+        if issubclass(kind, ValueError):
+            self._named_model_error(error)
+        elif issubclass(kind, TypeError) and _MIXED_TZ.fullmatch(str(error)):
+            time = self.time
+            raise ValueError(
+                f"detector: {_where(self.index, time)}: the scan's time is timezone-"
+                f"{'aware' if _is_aware(time) else 'naive'} but a track's or component's "
+                f"state is not: naive and aware times cannot be subtracted") from error
+        return False
+
+    def _named_model_error(self, error) -> None:
         if str(error) != _NO_MODEL:
-            raise
-        ordered = in_stable_order(detections)
+            return
+        where = _where(self.index, self.time)
+        ordered = in_stable_order(self.detections)
         missing = [row for row, d in enumerate(ordered) if d.measurement_model is None]
         if not missing:  # (raised for something other than the scan's detections)
             raise ValueError(f"detections: {where}: {error}") from error
@@ -189,13 +210,6 @@ def naming_scan_errors(tracker, time, detections):
             f"detections: {where}: {named} no measurement model, and the tracker's updater "
             "has none to use instead: give each detection its measurement_model, or the "
             "updater one") from error
-    except TypeError as error:
-        if not _MIXED_TZ.fullmatch(str(error)):
-            raise
-        raise ValueError(
-            f"detector: {where}: the scan's time is timezone-"
-            f"{'aware' if _is_aware(time) else 'naive'} but a track's or component's state "
-            f"is not: naive and aware times cannot be subtracted") from error
 
 
 __all__ = ["checked_scan", "naming_scan_errors"]
