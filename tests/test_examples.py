@@ -72,10 +72,12 @@ def test_example_runs(example, tmp_path):
     if example.stem == "jpda_asynchronous_sensors":
         # seen: far 0 % / 97 %, near 98 % / 98 %
         held = [tuple(int(v) for v in re.findall(r"on (\d+)%", line)) for line in output.splitlines()]
-        assert len(held) == 2, output
-        (stock_far, stock_near), (context_far, context_near) = held
+        assert len(held) == 3, output
+        (stock_far, stock_near), (context_far, context_near), (array_far,) = held
         assert stock_far == 0 and context_far >= 90, output  # the case
         assert stock_near >= 90 and context_near >= 90, output
+        # the array drop-ins: the same held share, every initiator scan in the core
+        assert array_far == context_far and output.splitlines()[2].endswith("True"), output
         assert _run(example, tmp_path, hash_seed="4242") == output
     if example.stem == "jpda_expected_misses":
         assert output.splitlines() == [

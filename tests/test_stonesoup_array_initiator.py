@@ -142,6 +142,53 @@ def test_the_scenarios_radar_and_lidar_scans():
     assert _run(ours, reference, scans) >= 3
 
 
+def test_expected_misses_weighed_in_each_scans_context():
+    """An ExpectedMissesDeleter as the initiator's deleter (no hypothesiser: each miss weighed
+    by P_D in the scan's context) on scenario 1's radar and lidar scans with their contexts:
+    the same released and holding tracks as the component initiator, every scan on the
+    array path; and the weighing matters (a count of 3 misses releases fewer tracks)."""
+    from ctxmodels.experiment import trackers
+    from ctxmodels.experiment.scenarios import make_scenario
+    from ctxmodels.stonesoup import ExpectedMissesDeleter
+    from test_stonesoup_array_jpda import _array_initiator, _component
+    run = make_scenario("mixed-range", 0, 12.0)
+    scans = list(trackers.build_tracker(trackers.TRACKERS["jpda-context"], run).tracker.detector)
+
+    def pair(deleter):
+        reference = _component(trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker).initiator
+        reference.deleter = deleter()
+        ours = _array_initiator(reference)
+        ours.deleter = deleter()
+        return ours, reference
+
+    ours, reference = pair(lambda: ExpectedMissesDeleter(expected_misses=3))
+    released = 0
+    for time, detections in scans:
+        context = detections.detector_context
+        a = ours.initiate(set(detections), time, detector_context=context)
+        b = reference.initiate(set(detections), time, detector_context=context)
+        assert_same_tracks(a, b)
+        assert len(ours.holding_tracks) == len(reference.holding_tracks)
+        released += len(a)
+    assert ours.component_calls == 0 and ours.array_calls == len(scans)
+    assert_same_tracks(ours.holding_tracks, reference.holding_tracks)
+    counted, _ = pair(lambda: StockDeleter(3))
+    counted_released = sum(len(counted.initiate(set(d), t)) for t, d in scans)
+    assert released > counted_released
+
+
+def test_expected_misses_without_a_context_run_the_component_path():
+    """A scan without a context cannot weigh the misses: it runs the component path, whose
+    deleter counts them and says so once."""
+    from ctxmodels.stonesoup import ExpectedMissesDeleter, MissesNotWeighedWarning
+    ours, _ = _tutorial_pair(deleter=ExpectedMissesDeleter(expected_misses=3), min_points=3)
+    scans = tutorial_scans(seed=9, steps=12, clutter_max=6)
+    with pytest.warns(MissesNotWeighedWarning):
+        for time, detections in scans:
+            ours.initiate(set(detections), time)
+    assert ours.array_calls == 0 and ours.component_calls == len(scans)
+
+
 def test_only_released_tracks_are_built(monkeypatch):
     """On scenario 1's scans, with nothing reading :attr:`holding_tracks`, the only Stone
     Soup tracks the array initiator builds are the ones it releases: the holding tracks the

@@ -42,8 +42,9 @@ extended Kalman updaters without covariance options (``force_symmetric_covarianc
 applied), measurement models the core takes (``LinearGaussian``, 2-D
 ``CartesianToBearingRange`` or :class:`~ctxmodels.stonesoup.AnalyticCartesianToBearingRange`,
 all of a scan's models measuring the same number of values), a stock or ctxmodels
-``UpdateTimeStepsDeleter`` or Stone Soup's ``UpdateTimeDeleter`` with a ``timedelta``
-window (``delete_last_pred`` off; the verdicts from per-row counts, see
+``UpdateTimeStepsDeleter``, Stone Soup's ``UpdateTimeDeleter`` with a ``timedelta``
+window, or an :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` without a hypothesiser
+given each scan's context (``delete_last_pred`` off; the verdicts from per-row counts, see
 :mod:`~ctxmodels.stonesoup.initiator_deletion`), Gaussian float64 states, and detections
 stamped with the scan time.
 """
@@ -56,6 +57,8 @@ from stonesoup.measures import Mahalanobis, SquaredMahalanobis
 from stonesoup.models.base import LinearModel, ReversibleModel
 from stonesoup.types.state import GaussianState
 
+from ..foreign import as_array_context
+from .deleter import ExpectedMissesDeleter
 from .fast import KALMAN_UPDATERS, supports_predictor
 from .fast_association import FastGNNWith2DAssignment, _copied_properties
 from . import initiator_deletion
@@ -87,6 +90,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._next_block = 0
         self._births = Births()
         self._scan_core = ScanCore()
+        self._context = None  # the scan's, while an ExpectedMissesDeleter weighs its misses
         self.array_calls = 0
         self.component_calls = 0
 
@@ -116,8 +120,9 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
     def holding_tracks(self) -> set:
         """The live set of holding tracks, as stock; reading it builds the tracks not built
         yet and adds their pending states, so the tracks read are complete."""
-        for record in self._records:
+        for k, record in enumerate(self._records):
             self._materialise(record)
+            self._record_misses(k, record)
         return self._holding
 
     @holding_tracks.setter
@@ -136,9 +141,19 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         materialise(record, self._blocks, self._next_block,
                     self.data_associator.hypothesiser.predictor.transition_model)
 
+    def _record_misses(self, row: int, record: Holding) -> None:
+        """Hands an ExpectedMissesDeleter the P_D of the misses since the row's last
+        detection, for the states the track now holds (its component path reads them)."""
+        misses = self._deletion.misses[row]
+        if misses and type(self.deleter) is ExpectedMissesDeleter:
+            track, n = record.track, len(record.track)
+            for i, pd in enumerate(misses):
+                self.deleter.record_prob_detect(track, n - len(misses) + i, pd)
+
     def _materialise_all(self) -> None:
-        for record in self._records:
+        for k, record in enumerate(self._records):
             self._materialise(record)
+            self._record_misses(k, record)
         self._records = []
         self._serials = []
         self._means = self._covars = None
@@ -213,15 +228,19 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             [np.empty((0, ndim, ndim)) if empty else self._covars]
             + [state.covar[np.newaxis] for state, _, _ in read])
         self._counted = np.concatenate([self._counted, [p for _, p, _ in read]]).astype(np.int64)
-        self._deletion.add([n for _, _, n in read])
+        misses = ([self.deleter.prob_detect_since_detection(t) for t in added]
+                  if type(self.deleter) is ExpectedMissesDeleter else None)
+        self._deletion.add([n for _, _, n in read], misses)
         self._last_times = self._last_times + [state.timestamp for state, _, _ in read]
         return True
 
     # --- a scan ---------------------------------------------------------------------------------
-    def initiate(self, detections, timestamp, **kwargs):
-        # The tracker's scan context: accepted, as by the component path (which, like the
-        # stock initiator, does not pass it on: holding tracks are gated by distance).
-        kwargs.pop("detector_context", None)
+    def initiate(self, detections, timestamp, detector_context=None, **kwargs):
+        """The holding tracks confirmed by this scan's ``detections``; the scan's
+        ``detector_context`` weighs the misses of an ExpectedMissesDeleter (a scan without
+        one runs the component path, whose deleter then warns that it counts)."""
+        weighs = type(self.deleter) is ExpectedMissesDeleter
+        self._context = detector_context if weighs else None
         if type(detections) is not OrderedDetections:  # (already in order: not sorted again)
             detections = in_stable_order(detections)
         if self.skip_non_reversible:
@@ -232,13 +251,14 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                        "ndim_state", None)
         scan = None
         if not kwargs and self._supported() and all(d.timestamp == timestamp for d in detections) \
-                and self._sync(ndim):
+                and (detector_context is not None or not weighs) and self._sync(ndim):
             scan = self._scan_core(self, self._rows(), detections, timestamp) \
                 if self._records else ()
         if scan is None:
             self._materialise_all()
             self.component_calls += 1
-            return super().initiate(detections, timestamp, **kwargs)
+            return super().initiate(detections, timestamp, detector_context=detector_context,
+                                    **kwargs)
         self.array_calls += 1
 
         sure_tracks = set()
@@ -284,6 +304,24 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._last_times = self._last_times + [timestamp] * n
         return True
 
+    def _missed_prob_detect(self, out, missed) -> np.ndarray:
+        """P_D of the rows ``missed`` at their predictions, in the scan's context (as the
+        deleter evaluates it at the prediction the component path appends)."""
+        if not len(missed):
+            return np.empty(0)
+        context = as_array_context(self._context, "prob_detection_array",
+                                   "clutter_spatial_density_detections")
+        model = getattr(context, "sensor_model", None)
+        gaussian = model is None or model.pd_evaluation != "mean"
+        means = np.ascontiguousarray(out["pred_means"][missed])
+        covars = np.ascontiguousarray(out["pred_covars"][missed]) if gaussian else None
+        values = np.asarray(context.prob_detection_array(means, covars), dtype=np.float64)
+        bad = np.flatnonzero(~((values >= 0.0) & (values <= 1.0)))
+        if len(bad):
+            raise ValueError(f"detector_context: P_D must lie in [0, 1], got "
+                             f"{values[bad[0]]} for a holding track")
+        return values
+
     def _rows(self) -> Rows:
         return Rows(self._means, self._covars, self._counted, self._deletion.since,
                     self._last_times, self._row_prior)
@@ -318,7 +356,11 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
                 out["meas_means"][u], out["meas_covars"][u], out["cross_covars"][u],
                 bearing[model_index[j]])
         self._counted = out["points"]
-        self._deletion.advance(out["since"], rows, timestamp)
+        missed = prob_detect = None
+        if self._context is not None:
+            missed = np.flatnonzero(assigned < 0)
+            prob_detect = self._missed_prob_detect(out, missed)
+        self._deletion.advance(out["since"], rows, timestamp, missed, prob_detect)
         self._last_times = [timestamp] * len(records)
         released, expired = out["released"], out["expired"]
         for k in np.flatnonzero(released).tolist():

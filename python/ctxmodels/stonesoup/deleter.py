@@ -147,9 +147,6 @@ class ExpectedMissesDeleter(Deleter):
     def _weigh_last_misses(self, tracks, detector_context) -> None:
         context = as_array_context(detector_context, "prob_detection_states",
                                    "clutter_spatial_density_detections")
-        log = self.__dict__.get("_context_log")
-        if log is None:
-            log = self.__dict__["_context_log"] = weakref.WeakKeyDictionary()
         for track in tracks:
             n = len(track)
             if n < 2 or is_detection_backed(track[-1]):
@@ -161,10 +158,30 @@ class ExpectedMissesDeleter(Deleter):
             if not 0.0 <= prob_detect <= 1.0:
                 raise ValueError(f"detector_context: P_D must lie in [0, 1], got {prob_detect} "
                                  f"for a track at {track[-1].timestamp}")
-            entries = log.get(track)
-            if entries is None or is_detection_backed(track[-2]):
-                entries = log[track] = {}  # only the states since the last detection matter
-            entries[n - 1] = (track[-1].timestamp, prob_detect)
+            self.record_prob_detect(track, n - 1, prob_detect)
+
+    def record_prob_detect(self, track, index: int, prob_detect: float) -> None:
+        """Records ``prob_detect`` as the P_D of the miss at ``index`` of ``track`` (a state
+        after its last detection-backed one; what :meth:`delete_tracks` records from a
+        context, and the array initiator for the holding tracks it builds)."""
+        log = self.__dict__.get("_context_log")
+        if log is None:
+            log = self.__dict__["_context_log"] = weakref.WeakKeyDictionary()
+        entries = log.get(track)
+        if entries is None or is_detection_backed(track[index - 1]):
+            entries = log[track] = {}  # only the states since the last detection matter
+        entries[index] = (track[index].timestamp, float(prob_detect))
+
+    def prob_detect_since_detection(self, track) -> list[float]:
+        """The P_D of each state after the track's last detection-backed one, oldest first
+        (what :meth:`expected_misses_since_detection` sums, newest first)."""
+        values = []
+        for index in range(len(track) - 1, 0, -1):  # the first state is the anchor
+            if is_detection_backed(track[index]):
+                break
+            values.append(self._prob_detect(track, index))
+        values.reverse()
+        return values
 
     def _from_context(self, track, index: int):
         log = self.__dict__.get("_context_log")

@@ -8,6 +8,10 @@ tracks (whose coasting predictions are not even appended yet).
   delete when there is none at or after ``last - time_since_update`` (``last``: the row's
   last state's time), as :func:`~ctxmodels.stonesoup.array_deletion.update_time_verdict`
   decides.
+* :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` without a hypothesiser (an initiator's:
+  each miss weighed by the P_D of the row's prediction in the scan's context): the P_D of
+  each miss since the row's last detection; delete when their sum, newest first as the
+  deleter sums, reaches ``expected_misses``.
 """
 from __future__ import annotations
 
@@ -18,7 +22,7 @@ from stonesoup.deleter.time import UpdateTimeDeleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 
 from .array_deletion import latest_backed_time, update_time_verdict
-from .deleter import UpdateTimeStepsDeleter
+from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .hypothesiser import is_detection_backed
 
 
@@ -29,6 +33,8 @@ def supported(deleter) -> bool:
     kind = type(deleter)
     if kind in (UpdateTimeStepsDeleter, _StockUpdateTimeStepsDeleter):
         return True
+    if kind is ExpectedMissesDeleter:
+        return deleter.hypothesiser is None  # (P_D from each scan's context)
     return kind is UpdateTimeDeleter and type(deleter.time_since_update) is datetime.timedelta
 
 
@@ -54,11 +60,17 @@ class HoldingCounts:
     def __init__(self):
         self.since = np.empty(0, dtype=np.int64)
         self.backed: list = []
+        #: Per row, the P_D of each miss since its last detection, oldest first (kept for an
+        #: ExpectedMissesDeleter only; empty lists otherwise).
+        self.misses: list[list[float]] = []
 
-    def add(self, counts) -> None:
-        """Appends rows with ``counts`` (pairs from :func:`read`)."""
+    def add(self, counts, misses=None) -> None:
+        """Appends rows with ``counts`` (pairs from :func:`read`) and, for an
+        ExpectedMissesDeleter, the P_D of their misses since their last detection."""
         self.since = np.concatenate([self.since, [n for n, _ in counts]]).astype(np.int64)
         self.backed = self.backed + [b for _, b in counts]
+        self.misses = self.misses + (list(misses) if misses is not None
+                                     else [[] for _ in counts])
 
     def take(self, keep) -> None:
         """Keeps the rows ``keep`` (indices, or a boolean mask), in that order."""
@@ -66,15 +78,21 @@ class HoldingCounts:
         if isinstance(keep, np.ndarray) and keep.dtype == bool:
             keep = np.flatnonzero(keep).tolist()
         self.backed = [self.backed[k] for k in keep]
+        self.misses = [self.misses[k] for k in keep]
 
-    def advance(self, since, updated, timestamp) -> None:
+    def advance(self, since, updated, timestamp, missed=None, prob_detect=None) -> None:
         """A scan at ``timestamp``: ``since`` from the core (see
         :func:`ctxmodels._core.initiator_scan`); the rows ``updated`` (indices) got a
-        detection."""
+        detection; for an ExpectedMissesDeleter the rows ``missed`` (indices) missed with
+        P_D ``prob_detect`` (aligned)."""
         self.since = since
         for k in updated.tolist():
             if self.backed[k] is None or timestamp > self.backed[k]:
                 self.backed[k] = timestamp
+            self.misses[k] = []
+        if missed is not None:
+            for k, pd in zip(missed.tolist(), prob_detect.tolist()):
+                self.misses[k].append(pd)
 
     def expired(self, deleter, rows, last_times) -> list:
         """Of the rows ``rows`` (indices), those ``deleter`` deletes; ``last_times``: each
@@ -83,8 +101,22 @@ class HoldingCounts:
             window = deleter.time_since_update
             return [k for k in rows
                     if update_time_verdict(self.backed[k], last_times[k], window)]
+        if type(deleter) is ExpectedMissesDeleter:
+            return [k for k in rows
+                    if _reaches(self.misses[k], float(deleter.expected_misses))]
         limit = deleter.time_steps_since_update
         return [k for k in rows if self.since[k] > limit]
 
 
 __all__ = ["HoldingCounts", "read", "supported"]
+
+
+def _reaches(misses: list, threshold: float) -> bool:
+    """Whether the P_D of ``misses``, summed newest first as the deleter sums them, reach
+    ``threshold``."""
+    total = 0.0
+    for pd in reversed(misses):
+        total += pd
+        if total >= threshold:
+            return True
+    return False
