@@ -21,7 +21,7 @@ def add_experiment_command(commands) -> None:
                     "(JPDA, GM-PHD uniform / radar-only / P_D-aware / context-aware, ...) on "
                     "each seed, and scores HOTA and RMS GOSPA at radar timestamps. With no "
                     "options it runs the full study on the calibrated truth (every tracker, "
-                    "all 480 s of each scenario, 10 seeds: about 5 min on 2 cores). Prints the "
+                    "all 480 s of each scenario, 10 seeds: about 4 min on 2 cores). Prints the "
                     "table (paper Table II layout, mean and 95 % bootstrap interval over "
                     "seeds, the paper's values beside them), the paper's findings as paired "
                     "comparisons with sign, size and non-inferiority verdicts (Holm-adjusted), "
