@@ -17,6 +17,10 @@ pub enum ModelError {
     /// A buffer whose size the argument sets cannot be allocated (or its size overflows).
     #[error("{argument}: needs {bytes} bytes of memory, which cannot be allocated")]
     Memory { argument: &'static str, bytes: u128 },
+    /// A covariance the maths needs positive definite is not (Cholesky failed): the binding
+    /// raises `ctxmodels.NotPositiveDefiniteError`, so callers need not read the message.
+    #[error("{argument}: {message}")]
+    NotPositiveDefinite { argument: &'static str, message: String },
 }
 
 impl ModelError {
@@ -36,13 +40,18 @@ impl ModelError {
         ModelError::Memory { argument, bytes }
     }
 
+    pub fn not_positive_definite(argument: &'static str, message: impl Into<String>) -> Self {
+        ModelError::NotPositiveDefinite { argument, message: message.into() }
+    }
+
     /// The argument the error is about.
     pub fn argument(&self) -> &'static str {
         match self {
             ModelError::InvalidArgument { argument, .. }
             | ModelError::NonFinite { argument, .. }
             | ModelError::Shape { argument, .. }
-            | ModelError::Memory { argument, .. } => argument,
+            | ModelError::Memory { argument, .. }
+            | ModelError::NotPositiveDefinite { argument, .. } => argument,
         }
     }
 }

@@ -33,9 +33,17 @@ mod mixture;
 mod particles;
 mod scan;
 
+pyo3::create_exception!(
+    ctxmodels._core,
+    NotPositiveDefiniteError,
+    PyValueError,
+    "A covariance the computation needs positive definite is not (a ValueError naming the argument)."
+);
+
 fn to_py(err: ModelError) -> PyErr {
     match err {
         ModelError::Memory { .. } => PyMemoryError::new_err(err.to_string()),
+        ModelError::NotPositiveDefinite { .. } => NotPositiveDefiniteError::new_err(err.to_string()),
         _ => PyValueError::new_err(err.to_string()),
     }
 }
@@ -552,6 +560,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mount, m)?)?;
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;
     m.add_function(wrap_pyfunction!(simd_backend, m)?)?;
+    m.add("NotPositiveDefiniteError", m.py().get_type::<NotPositiveDefiniteError>())?;
     mixture::register(m)?;
     jpda::register(m)?;
     initiation::register(m)?;

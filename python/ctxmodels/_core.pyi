@@ -27,6 +27,7 @@ __all__ = [
     "LandMask",
     "LineOfSight",
     "MetadataThreshold",
+    "NotPositiveDefiniteError",
     "RangeBands",
     "ScanMeasurementModel",
     "jpda_marginals",
@@ -46,6 +47,10 @@ _Mapping: TypeAlias = tuple[int, int]
 _Floats: TypeAlias = NDArray[np.float64]
 _Bools: TypeAlias = NDArray[np.bool_]
 _Rule: TypeAlias = Literal["mean", "cubature", "unscented", "gauss-hermite"]
+
+class NotPositiveDefiniteError(ValueError):
+    """A covariance the computation needs positive definite is not (a ValueError naming the
+    argument)."""
 
 @final
 class RangeBands:

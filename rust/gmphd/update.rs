@@ -214,7 +214,7 @@ impl Mixture {
                     continue;
                 }
                 if lin.log_det[i].is_nan() {
-                    return Err(ModelError::invalid(
+                    return Err(ModelError::not_positive_definite(
                         "measurement_model",
                         format!("the innovation covariance of component {i} is not positive definite, so detection {j}'s likelihood is undefined (its covariance has lost positive definiteness)"),
                     ));

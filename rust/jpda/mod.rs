@@ -248,7 +248,7 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
         push_row_major(&mut out.meas_covars, &s);
         push_row_major(&mut out.cross_covars, &cross);
         let chol = s.clone().cholesky().ok_or_else(|| {
-            ModelError::invalid("covars", format!("track {t}: the innovation covariance H P Hᵀ + R is not positive definite"))
+            ModelError::not_positive_definite("covars", format!("track {t}: the innovation covariance H P Hᵀ + R is not positive definite"))
         })?;
         let lower = chol.l();
         let log_det = 2.0 * lower.diagonal().iter().map(|v| v.ln()).sum::<f64>();
@@ -263,7 +263,7 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
                 nu[a] = mod_bearing(nu[a]);
             }
             let white = lower.solve_lower_triangular(&nu).ok_or_else(|| {
-                ModelError::invalid("covars", format!("track {t}: the innovation covariance H P Hᵀ + R is not positive definite"))
+                ModelError::not_positive_definite("covars", format!("track {t}: the innovation covariance H P Hᵀ + R is not positive definite"))
             })?;
             let d2 = white.norm_squared();
             if d2 <= input.gate_threshold || input.include_all {

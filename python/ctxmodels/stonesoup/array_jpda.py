@@ -132,11 +132,6 @@ _MEASUREMENT_PREDICTION = ObjectFactory(GaussianMeasurementPrediction, dict(
     state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
     cross_covar=Matrix([[1.0]])))
 
-#: The message prefix of the core's error for a non-positive-definite innovation covariance:
-#: the stock code then takes the nearest positive-definite matrix, so such a scan runs the
-#: component path.
-_NOT_POSITIVE_DEFINITE = "covars: track"
-
 
 class _ScanHypotheses(MultipleHypothesis):
     """The JPDA :class:`MultipleHypothesis` of one track and scan, built from the scan's
@@ -465,11 +460,10 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
                                   prob_detect, np.ascontiguousarray(clutter), prob_gate,
                                   threshold, bool(hypothesiser.include_all),
                                   force_symmetric=bool(self.updater.force_symmetric_covariance))
-        except ValueError as error:
-            if str(error).startswith(_NOT_POSITIVE_DEFINITE):
-                return ("an innovation covariance that is not positive definite (the stock "
-                        "code takes the nearest positive-definite matrix)")
-            raise
+        except _core.NotPositiveDefiniteError:
+            # the stock code takes the nearest positive-definite matrix: the component path
+            return ("an innovation covariance that is not positive definite (the stock "
+                    "code takes the nearest positive-definite matrix)")
         scan = _Scan()
         scan.time = time
         scan.detections = detections
