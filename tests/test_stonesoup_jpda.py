@@ -785,3 +785,14 @@ def test_trailing_states_deleter_equals_the_stock_deleter():
             assert ours.check_for_deletion(track) == verdict
             verdicts.append(verdict)
         assert 0 < sum(verdicts) < len(verdicts)  # both answers occur
+
+
+@pytest.mark.parametrize("prob_gate", [0.5, 0.9, 0.95, 0.99, 0.9999, Probability(0.95)])
+@pytest.mark.parametrize("ndim", [1, 2, 3, 4])
+def test_gate_threshold_is_stone_soups(prob_gate, ndim):
+    """The JPDA's gate (ctxmodels' hypothesiser and the array JPDA read our
+    gate_threshold) is exactly the value Stone Soup's PDA hypothesiser compares with (its
+    private _gate_threshold: pinned here, so a change upstream fails this test)."""
+    from stonesoup.hypothesiser.probability import PDAHypothesiser as StockPDAHypothesiser
+    from ctxmodels.stonesoup.hypothesiser import gate_threshold
+    assert gate_threshold(prob_gate, ndim) == StockPDAHypothesiser._gate_threshold(prob_gate, ndim)

@@ -103,7 +103,7 @@ from .transition import ControlTerms
 from .initiator_history import PRIOR_PREDICTION as _PRIOR_PREDICTION
 from .fast import KALMAN_UPDATERS, ObjectFactory, plain_track_lists, supports_predictor
 from .fast_association import _copied_properties
-from .hypothesiser import PDAHypothesiser, is_detection_backed, scan_context
+from .hypothesiser import PDAHypothesiser, gate_threshold, is_detection_backed, scan_context
 from .measurement import jpda_core_model
 from .mixture_tracker import MultiTargetMixtureTracker
 from .paths import PathCounts
@@ -449,12 +449,11 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
             if context is None:
                 clutter = np.full(len(detections), float(hypothesiser.clutter_spatial_density))
             else:
-                clutter = np.asarray(hypothesiser._scan_clutter(context, context, detections),
+                clutter = np.asarray(hypothesiser.scan_clutter(context, context, detections),
                                      dtype=np.float64)
             z = np.array([d.state_vector for d in detections], dtype=np.float64)[:, :, 0]
         prob_gate = float(hypothesiser.prob_gate)
-        threshold = float(hypothesiser._gate_threshold(hypothesiser.prob_gate,
-                                                        core_model.ndim_meas))
+        threshold = gate_threshold(hypothesiser.prob_gate, core_model.ndim_meas)
         try:
             out = _core.jpda_scan(core_model, pred_means, pred_covars, np.ascontiguousarray(z),
                                   prob_detect, np.ascontiguousarray(clutter), prob_gate,

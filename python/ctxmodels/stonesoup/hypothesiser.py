@@ -19,9 +19,11 @@ forwards; it takes precedence over the set's.
 """
 from __future__ import annotations
 
+import functools
 import weakref
 
 import numpy as np
+from scipy.stats import chi2
 from stonesoup.functions import batch_multivariate_normal_logpdf
 from stonesoup.hypothesiser.probability import PDAHypothesiser as _StockPDAHypothesiser
 from stonesoup.measures import SquaredMahalanobis
@@ -44,6 +46,18 @@ def scan_context(detections, kwargs: dict):
     if context is None:
         context = getattr(detections, "detector_context", None)
     return context
+
+
+@functools.lru_cache(maxsize=256)
+def _chi2_quantile(prob_gate: float, ndim: int) -> float:
+    return float(chi2.ppf(prob_gate, ndim))
+
+
+def gate_threshold(prob_gate, ndim: int) -> float:
+    r"""The PDA gate on the squared Mahalanobis distance, :math:`\gamma = F^{-1}_{\chi^2_n}(P_G)`
+    for ``ndim`` measured values: the value Stone Soup's PDA hypothesiser compares with (a
+    test holds the two equal)."""
+    return _chi2_quantile(float(prob_gate), int(ndim))
 
 
 def is_detection_backed(state) -> bool:
@@ -131,7 +145,7 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         if not detections:
             return MultipleHypothesis(hypotheses, normalise=self.normalise)
 
-        clutter = self._scan_clutter(given, context, detections)
+        clutter = self.scan_clutter(given, context, detections)
         # Predictions at each detection's own time, as the stock class does.
         predictions = [self.predictor.predict(track, timestamp=det.timestamp, **kwargs)
                        for det in detections]
@@ -143,8 +157,7 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         distance = SquaredMahalanobis(state_covar_inv_cache_size=None)
         for det, pred, meas_pred, log_l, lam in zip(
                 detections, predictions, measurement_predictions, log_likelihoods, clutter):
-            gated = distance(meas_pred, det) <= self._gate_threshold(self.prob_gate,
-                                                                      meas_pred.ndim)
+            gated = distance(meas_pred, det) <= gate_threshold(self.prob_gate, meas_pred.ndim)
             if not (gated or self.include_all):
                 continue
             weight = Probability(log_l, log_value=True)
@@ -154,10 +167,10 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         return MultipleHypothesis(hypotheses, normalise=self.normalise)
 
     # --- clutter density per scan ---------------------------------------------------------
-    def _scan_clutter(self, given, context, detections) -> list:
+    def scan_clutter(self, given, context, detections) -> list:
         """λ of each detection, evaluated once per (context ``given``, detection) with its
-        array form ``context``: the first track of a scan pays one array call, the others
-        read the cache."""
+        array form ``context`` (:func:`~ctxmodels.foreign.as_array_context`): the first track
+        of a scan pays one array call, the others read the cache."""
         values: dict[object, float]
         cache = self.__dict__.get("_clutter_cache")
         if cache is not None and cache[0] is given:
@@ -245,4 +258,5 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         self.__dict__.update(state)
 
 
-__all__ = ["PDAHypothesiser", "is_detection_backed", "prob_detect_at", "scan_context"]
+__all__ = ["PDAHypothesiser", "gate_threshold", "is_detection_backed", "prob_detect_at",
+           "scan_context"]
