@@ -16,6 +16,7 @@ relative, and the next scans carry that on. There the agreement is measured and 
 """
 from __future__ import annotations
 
+import datetime
 import json
 import math
 import os
@@ -189,6 +190,76 @@ def test_context_run_matches_the_context_aware_pipeline(deleter):
     for track in ours.tracks:
         recorded = hypothesiser.recorded_prob_detect(track)
         assert recorded is None or recorded in (0.95, 0.35, 0.2)
+
+
+def test_context_p_d_read_in_the_core_is_the_array_routes_bits():
+    """A ctxmodels context reading P_D at the mean hands the core its model at the pose
+    (read at each predicted mean in the scan's one call); the same context with its array
+    route set on the object takes the route through ``prob_detection_array``. Same tracks,
+    bit for bit."""
+    from ctxmodels.context import DetectorContext
+
+    def run(route):
+        scans = _context_scans()
+        ours, _ = tutorial_pair(hypothesiser_cls=PDAHypothesiser, scans=scans,
+                                clutter_spatial_density=1.0)
+        out = []
+        for time, detections in scans:
+            if route == "array":
+                context = detections.detector_context
+                context.prob_detection_array = (  # ctxmodels' route, wrapped: not recognised
+                    lambda means, covars=None, _c=context: DetectorContext.prob_detection_array(
+                        _c, means, covars))
+            _, tracks = ours.update_tracker(time, detections)
+            out.append([[(s.state_vector.tobytes(), s.covar.tobytes()) for s in t]
+                        for t in in_track_order(tracks)])
+        assert ours.array_scans == len(scans)
+        return out
+
+    core, array = run("core"), run("array")
+    assert sum(len(t) for scan in core for t in scan) > 50
+    assert core == array
+
+
+def test_scan_with_transitions_and_at_pose_p_d_is_predict_then_scan():
+    """``jpda_scan`` with the transitions predicts first; with a ``DetectionAtPose`` it reads
+    P_D at the predicted means: the bits of ``jpda_predict``, ``DetectionAtPose.evaluate``
+    and a scan of the prediction."""
+    rng = np.random.default_rng(3)
+    model = _core.JPDAMeasurementModel.bearing_range(
+        (0, 2), (0.0, 0.0), np.eye(3), np.diag([1e-4, 4.0]))
+    means = rng.uniform(-800, 800, (6, 4))
+    covars = np.stack([np.diag(rng.uniform(1.0, 30.0, 4)) for _ in range(6)])
+    index = [0, 1, 0, 1, 1, 0]
+    matrices = np.stack([TRANSITION.matrix(time_interval=dt) for dt in (_dt(1.0), _dt(2.5))])
+    noises = np.stack([TRANSITION.covar(time_interval=dt) for dt in (_dt(1.0), _dt(2.5))])
+    z = np.column_stack([rng.uniform(-np.pi, np.pi, 5), rng.uniform(10, 1200, 5)])
+    lam = np.full(5, 1e-5)
+    at_pose = VARYING.context(ORIGIN.pose_at(datetime.datetime(2024, 1, 1)))._mean_detection()
+    predicted = _core.jpda_predict(means, covars, index, matrices, noises)
+    pd = at_pose.evaluate(predicted[0])
+    stepwise = _core.jpda_scan(model, *predicted, z, pd, lam, 0.99, 9.21)
+    once = _core.jpda_scan(model, means, covars, z, at_pose, lam, 0.99, 9.21,
+                           transition_index=index, transition_matrices=matrices,
+                           transition_covars=noises)
+    assert once["pred_means"].tobytes() == predicted[0].tobytes()
+    assert once["pred_covars"].tobytes() == predicted[1].tobytes()
+    assert once["prob_detect"].tobytes() == pd.tobytes()
+    for key, value in stepwise.items():
+        assert once[key].tobytes() == value.tobytes(), key
+    with pytest.raises(ValueError, match="^prob_detect: must be a float64 array"):
+        _core.jpda_scan(model, means, covars, z, [0.9] * 6, lam, 0.99, 9.21)
+    with pytest.raises(ValueError, match="^transition_index: .* come together"):
+        _core.jpda_scan(model, means, covars, z, at_pose, lam, 0.99, 9.21,
+                        transition_index=index)
+    with pytest.raises(ValueError, match="^transition_index: must have 6 entries"):
+        _core.jpda_scan(model, means, covars, z, at_pose, lam, 0.99, 9.21,
+                        transition_index=[0], transition_matrices=matrices,
+                        transition_covars=noises)
+
+
+def _dt(seconds):
+    return datetime.timedelta(seconds=seconds)
 
 
 # --- conformance: composite and covariance deleters -----------------------------------------

@@ -470,16 +470,22 @@ def jpda_scan(
     means: _Floats,
     covars: _Floats,
     detections: _Floats,
-    prob_detect: _Floats,
+    prob_detect: _Floats | DetectionAtPose,
     clutter_density: _Floats,
     prob_gate: float,
     gate_threshold: float,
     include_all: bool = False,
     *,
+    transition_index: Sequence[int] | None = None,
+    transition_matrices: _Floats | None = None,
+    transition_covars: _Floats | None = None,
     force_symmetric: bool = False,
 ) -> dict[str, _Floats | _Bools]:
     """One JPDA scan: keys means, covars, is_update, taken, gated, weights, marginals,
-    meas_means, meas_covars, cross_covars."""
+    meas_means, meas_covars, cross_covars, prob_detect (the P_D used) and, with the
+    transitions (the states are then the tracks' last ones, predicted first), pred_means
+    and pred_covars. `prob_detect`: one P_D per track, or a `DetectionAtPose` read at each
+    predicted mean."""
 
 def jpda_marginals(weights: _Floats, gated: _Bools) -> _Floats:
     """Exact joint association marginals of (T, M+1) weights (column 0: missed detection)

@@ -427,21 +427,10 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
             if np.any(offset) or np.any(ctrl_noise):
                 return "a control input (the core predicts without one)"
             noises.append(np.asarray(transition.covar(time_interval=interval), dtype=np.float64))
-        pred_means, pred_covars = _core.jpda_predict(
-            np.ascontiguousarray(means), np.ascontiguousarray(covars), index,
-            np.ascontiguousarray(np.stack(matrices)), np.ascontiguousarray(np.stack(noises)))
-
-        # P_D per track and λ per detection, as the (ctxmodels) hypothesiser takes them
-        if context is None:
-            prob_detect = np.full(len(tracks), float(hypothesiser.prob_detect))
-        else:
-            covar_arg = None if context.sensor_model.pd_evaluation == "mean" else pred_covars
-            prob_detect = np.array(context.prob_detection_array(pred_means, covar_arg),
-                                   dtype=np.float64)
-            bad = np.flatnonzero(~((prob_detect >= 0.0) & (prob_detect <= 1.0)))
-            if bad.size:
-                raise ValueError(f"detector_context: P_D must lie in [0, 1], got "
-                                 f"{prob_detect[bad[0]]} for a track at {time}")
+        matrices = np.ascontiguousarray(np.stack(matrices))
+        noises = np.ascontiguousarray(np.stack(noises))
+        means, covars = np.ascontiguousarray(means), np.ascontiguousarray(covars)
+        # λ per detection and P_D per track, as the (ctxmodels) hypothesiser takes them
         if not detections:
             clutter = np.empty(0)
             z = np.empty((0, core_model.ndim_meas))
@@ -451,18 +440,32 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
             else:
                 clutter = np.asarray(hypothesiser.scan_clutter(context, context, detections),
                                      dtype=np.float64)
-            z = np.array([d.state_vector for d in detections], dtype=np.float64)[:, :, 0]
-        prob_gate = float(hypothesiser.prob_gate)
+            z = np.ascontiguousarray(
+                np.array([d.state_vector for d in detections], dtype=np.float64)[:, :, 0])
+        predict = dict(transition_index=index, transition_matrices=matrices,
+                       transition_covars=noises)
+        if context is None:
+            prob_detect = np.full(len(tracks), float(hypothesiser.prob_detect))
+        else:
+            # a ctxmodels context reading P_D at the mean: its model at the pose, read in
+            # the core at each predicted mean; any other: its array route on the prediction
+            prob_detect = _core_detection(context)
+            if prob_detect is None:
+                means, covars = _core.jpda_predict(means, covars, **predict)
+                predict = {}
+                prob_detect = _context_prob_detection(context, means, covars, time)
         threshold = gate_threshold(hypothesiser.prob_gate, core_model.ndim_meas)
         try:
-            out = _core.jpda_scan(core_model, pred_means, pred_covars, np.ascontiguousarray(z),
-                                  prob_detect, np.ascontiguousarray(clutter), prob_gate,
-                                  threshold, bool(hypothesiser.include_all),
+            out = _core.jpda_scan(core_model, means, covars, z, prob_detect, clutter,
+                                  float(hypothesiser.prob_gate), threshold,
+                                  bool(hypothesiser.include_all), **predict,
                                   force_symmetric=bool(self.updater.force_symmetric_covariance))
         except _core.NotPositiveDefiniteError:
             # the stock code takes the nearest positive-definite matrix: the component path
             return ("an innovation covariance that is not positive definite (the stock "
                     "code takes the nearest positive-definite matrix)")
+        pred_means, pred_covars = (out["pred_means"], out["pred_covars"]) if predict else (
+            means, covars)
         scan = _Scan()
         scan.time = time
         scan.detections = detections
@@ -477,7 +480,7 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
         if bearing_row is not None:
             from stonesoup.types.angle import Bearing
             scan.bearing_type = Bearing
-        return scan, out, prob_detect
+        return scan, out, out["prob_detect"]
 
     def _append_states(self, time, tracks, priors, scan, out, prob_detect, hypothesiser):
         means = out["means"][:, :, np.newaxis]
@@ -543,6 +546,29 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
         metadatas.append(metadata)
         states.append(state)
         return len(states) - 1
+
+
+def _core_detection(context):
+    """A ctxmodels context's P_D model at the scan's pose (``DetectionAtPose``), which the
+    core reads at each predicted mean: the bits of ``context.prob_detection_array`` of the
+    predicted means. None for a sensor model reading P_D over the Gaussian, or a context
+    whose array route is not ctxmodels' own (a subclass's, or one set on the object)."""
+    route = getattr(context.prob_detection_array, "__func__", None)
+    if route is not DetectorContext.prob_detection_array:
+        return None
+    return context._mean_detection()
+
+
+def _context_prob_detection(context, pred_means, pred_covars, time):
+    """P_D per track from the context's array route, checked to lie in [0, 1]."""
+    covar_arg = None if context.sensor_model.pd_evaluation == "mean" else pred_covars
+    prob_detect = np.ascontiguousarray(context.prob_detection_array(pred_means, covar_arg),
+                                       dtype=np.float64)
+    bad = np.flatnonzero(~((prob_detect >= 0.0) & (prob_detect <= 1.0)))
+    if bad.size:
+        raise ValueError(f"detector_context: P_D must lie in [0, 1], got "
+                         f"{prob_detect[bad[0]]} for a track at {time}")
+    return prob_detect
 
 
 __all__ = ["ArrayJPDATracker"]
