@@ -110,8 +110,8 @@ def main(argv=None) -> int:
                 outcome["array_scans"] = tracker.array_scans
                 outcome["component_scans"] = tracker.component_scans
         results[name] = outcome
-        print(f"{name:>20}: {outcome['seconds']:8.2f} s tracking (min of {args.repeats}), {outcome['scans']} scans, "
-              f"{outcome['tracks']} tracks", flush=True)
+        print(f"{name:>20}: {outcome['seconds']:8.2f} s tracking (min of {args.repeats}), "
+              f"{outcome['scans']} scans, {outcome['tracks']} tracks", flush=True)
     if "per-detection models" in results:
         ratio = results["per-detection models"]["seconds"] / results["array"]["seconds"]
         results["models_ratio"] = ratio

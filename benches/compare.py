@@ -313,8 +313,10 @@ def _bench_expected_pd(n, repeats, min_sample):
     check = agreement(ours, ref, near, atol=1e-12)
     out = np.empty(n)
     times = {
-        "ctxmodels": median_time(lambda: cubature.prob_detection_array(means, covars, out=out), repeats, min_sample),
-        "ctxmodels_at_mean": median_time(lambda: at_mean.prob_detection_array(means, out=out), repeats, min_sample),
+        "ctxmodels": median_time(lambda: cubature.prob_detection_array(means, covars, out=out),
+                                 repeats, min_sample),
+        "ctxmodels_at_mean": median_time(lambda: at_mean.prob_detection_array(means, out=out),
+                                         repeats, min_sample),
         "numpy": median_time(numpy_cubature, repeats, min_sample),
     }
     return [row("expected_pd_cubature", n, n, times, check)]
@@ -356,8 +358,9 @@ def _bench_clutter(n, repeats, min_sample):
     check = agreement(ours, ref, np.abs(r - 1000.0) < TOL)
     ours_out = np.empty(n)
     times = {
-        "ctxmodels": median_time(lambda: context.clutter_spatial_density_array(positions, metadata, out=ours_out),
-                                 repeats, min_sample),
+        "ctxmodels": median_time(
+            lambda: context.clutter_spatial_density_array(positions, metadata, out=ours_out),
+            repeats, min_sample),
         "numpy": median_time(numpy_clutter, repeats, min_sample),
     }
     return [row("clutter_metadata", n, n, times, check)]
@@ -386,7 +389,8 @@ def bench_land(vertex_counts, n_points, repeats, min_sample):
             if differ.any():
                 near[differ] = shapely.distance(polygon.boundary, shapely.points(points[differ])) < TOL
             check = {"n": n_points, "differ": int(differ.sum()),
-                     "differ_far_from_boundary": int((differ & ~near).sum()), "near_boundary": int(near.sum())}
+                     "differ_far_from_boundary": int((differ & ~near).sum()),
+                     "near_boundary": int(near.sum())}
             times = {
                 "ctxmodels": median_time(lambda: land.contains(points), repeats, min_sample),
                 "shapely": median_time(lambda: shapely.contains_xy(polygon, px, py), repeats, min_sample),
@@ -430,7 +434,8 @@ def bench_sight(vertex_counts, n_targets, shapely_budget, repeats, min_sample):
             ref = shapely_visible(polygon, sub)
             check = sight_check(ours[:n_shapely], ref, polygon, sub)
             t_ctx = median_time(lambda: sight.visible(SENSOR, targets), repeats, min_sample) / n_targets
-            t_shp = median_time(lambda: shapely_visible(polygon, sub), max(1, repeats // 2 + 1), min_sample) / n_shapely
+            t_shp = median_time(lambda: shapely_visible(polygon, sub), max(1, repeats // 2 + 1),
+                                min_sample) / n_shapely
             r = row(f"line_of_sight_{'jagged' if jagged else 'smooth'}", nv, 1,
                     {"ctxmodels": t_ctx, "shapely": t_shp}, check)
             r["targets"] = {"ctxmodels": n_targets, "shapely": n_shapely}
@@ -490,7 +495,8 @@ def print_table(results: dict) -> None:
     m = results["machine"]
     print(f"# ctxmodels {m['ctxmodels']} · numpy {m['numpy']} · shapely {m['shapely']} · "
           f"{m['cpu_count']} cores · {m['repeats']} repeats (median)")
-    header = f"{'benchmark':28s} {'size':>8s} {'ctxmodels':>10s} {'reference':>24s} {'speed-up':>9s} {'agree':>12s}"
+    header = (f"{'benchmark':28s} {'size':>8s} {'ctxmodels':>10s} {'reference':>24s} "
+              f"{'speed-up':>9s} {'agree':>12s}")
     print(header)
     print("-" * len(header))
     for r in results["results"]:
@@ -517,7 +523,8 @@ def main(argv=None) -> int:
     repeats = args.repeats or (3 if quick else 7)
     min_sample = 0.002 if quick else 0.02
     if quick:
-        pd_sizes, vertex_counts, n_points, n_targets, shapely_budget = (1000, 10_000), (100, 1000), 10_000, 5_000, 5e6
+        pd_sizes, vertex_counts = (1000, 10_000), (100, 1000)
+        n_points, n_targets, shapely_budget = 10_000, 5_000, 5e6
         cub_n, clutter_n, combo = (10_000,), (10_000,), (5_000, 1000)
     else:
         pd_sizes, vertex_counts, n_points, n_targets, shapely_budget = (

@@ -104,7 +104,8 @@ def phd_scan(n_components: int, n_detections: int, seed: int = 3):
             detections.add(Detection(z.reshape(-1, 1), timestamp=timestamp, measurement_model=MEASUREMENT))
         else:
             z = [rng.uniform(-2500, 500), rng.uniform(-1000, 1500)]
-            detections.add(Clutter(np.array(z).reshape(-1, 1), timestamp=timestamp, measurement_model=MEASUREMENT))
+            detections.add(Clutter(np.array(z).reshape(-1, 1), timestamp=timestamp,
+                                   measurement_model=MEASUREMENT))
     kalman = KalmanUpdater(MEASUREMENT)
     hypothesiser = GaussianMixtureHypothesiser(
         DistanceHypothesiser(KalmanPredictor(TRANSITION), kalman, Mahalanobis(), missed_distance=1e6),
@@ -199,7 +200,8 @@ def main(argv=None) -> int:
     print(f"# {os.cpu_count()} cores · {repeats} repeats (median per scan)")
     for r in results["results"]:
         times = "  ".join(f"{k} {v:8.3f} ms" for k, v in r["ms_per_scan"].items())
-        size = (f"{r['components']}×{r['detections']}" if "components" in r else f"{r['particles']} particles")
+        size = (f"{r['components']}×{r['detections']}" if "components" in r
+                else f"{r['particles']} particles")
         ratio = f"  old/new {r['ratio_old_over_new']:.2f}×" if "ratio_old_over_new" in r else ""
         print(f"{r['benchmark']:34s} {size:>18s}  {times}{ratio}")
     if args.json:

@@ -153,7 +153,8 @@ def main(argv=None) -> int:
         worst = max(worst, float(np.max(np.abs(a / b - 1))))
     t_ours = per_scan(ours, args.scans, args.repeats)
     t_numpy = per_scan(numpy_scan, args.scans, args.repeats)
-    print(f"clutter map ({args.pooling} pooling), {args.detections} detections, {len(BEARINGS) - 1}×{len(RANGES) - 1} grid: "
+    print(f"clutter map ({args.pooling} pooling), {args.detections} detections, "
+          f"{len(BEARINGS) - 1}×{len(RANGES) - 1} grid: "
           f"{t_ours * 1e6:.2f} µs per scan (context + λ + update) vs NumPy {t_numpy * 1e6:.2f} µs "
           f"({t_numpy / t_ours:.1f}×); agreement over 200 scans: max relative difference {worst:.1e}")
     return 0 if worst < 1e-12 else 1

@@ -95,7 +95,8 @@ def sites(root: Path = ROOT):
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--unexplained", action="store_true", help="only the sites without a comment")
     args = parser.parse_args()
     found = list(sites())

@@ -28,3 +28,14 @@ def stock_in_stable_order(monkeypatch):
     and ours can be compared bit for bit ("the stock pipeline under the same stable order")."""
     import stonesoup.mixturereducer.gaussianmixture as module
     monkeypatch.setattr(module, "set", lambda items: list(dict.fromkeys(items)), raising=False)
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Fails the test if the experiment or the sweep gets as far as running a job."""
+    from ctxmodels.experiment import runner, sweep
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("work started before the arguments were checked")
+    monkeypatch.setattr(runner, "run_experiment", refuse)
+    monkeypatch.setattr(sweep, "run_sweep", refuse)

@@ -22,17 +22,6 @@ TINY = ["--scenarios", "mixed-range", "--trackers", "gmphd-context", "--seeds", 
         "--duration", "5", "--workers", "1", "--quiet"]
 
 
-@pytest.fixture
-def no_work(monkeypatch):
-    """Fails the test if the experiment or the sweep gets as far as running a job."""
-    from ctxmodels.experiment import runner, sweep
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("work started before the arguments were checked")
-    monkeypatch.setattr(runner, "run_experiment", refuse)
-    monkeypatch.setattr(sweep, "run_sweep", refuse)
-
-
 def usage_error(argv, capsys) -> str:
     """Runs the CLI in-process, expects a usage error; returns its one error line."""
     with pytest.raises(SystemExit) as exit_:

@@ -109,7 +109,8 @@ class ReferenceMap:
         level = (self.prior * self.s0 * volume + (keep * self.counts).sum(axis=axis, keepdims=True)) / \
             (self.s0 * volume + (keep * cell_exposure).sum(axis=axis, keepdims=True))
         excess = (keep * ((self.counts - level * cell_exposure) ** 2
-                          - level * cell_exposure * self.squares / self.exposure)).sum(axis=axis, keepdims=True)
+                          - level * cell_exposure * self.squares / self.exposure)
+                  ).sum(axis=axis, keepdims=True)
         weight = (keep * cell_exposure ** 2).sum(axis=axis, keepdims=True)
         self.spread = np.where(weight > 0, np.maximum(excess, 0) / np.where(weight > 0, weight, 1), 0)
         with np.errstate(divide="ignore", invalid="ignore"):

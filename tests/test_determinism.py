@@ -200,7 +200,7 @@ def test_drop_ins_keep_the_stock_live_sets_and_nested_initiators():
     tracker = _tracker(MultiTargetMixtureTracker, MultiMeasurementInitiator, scans)
     assert tracker.tracks is tracker._tracks
     removed = None
-    for k, (_, tracks) in enumerate(tracker):
+    for _, tracks in tracker:
         assert tracks is tracker.tracks and set(tracker.tracks_in_order) == tracks
         if removed is None and tracks:
             removed = next(iter(in_track_order(tracks)))

@@ -12,7 +12,6 @@ import math
 import re
 
 import numpy as np
-import pytest
 from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
@@ -71,7 +70,8 @@ def assert_densities(values, n):
 def range_bands_args(draw, values=None):
     if draw(st.booleans()):  # mostly valid: sorted distinct edges, one more value
         edges = sorted(set(draw(st.lists(st.floats(0, 3000), max_size=4))))
-        vals = draw(st.lists(st.floats(0, 1) if values is None else values, min_size=len(edges) + 1, max_size=len(edges) + 1))
+        vals = draw(st.lists(st.floats(0, 1) if values is None else values,
+                             min_size=len(edges) + 1, max_size=len(edges) + 1))
         owns = draw(st.lists(st.booleans(), min_size=len(edges), max_size=len(edges)))
     else:
         edges = draw(st.one_of(st.lists(SCALARS, max_size=4), JUNK))
@@ -305,7 +305,8 @@ def sensors(draw):
     clutter = clutter or ClutterDensityModel(factors=[1e-3])
     return SensorModel(detection=detection, clutter=clutter,
                        position_mapping=draw(st.sampled_from([(0, 2), (0, 1), (2, 0), (1, 3)])),
-                       pd_evaluation=draw(st.sampled_from(["mean", "cubature", "unscented", "gauss-hermite"])),
+                       pd_evaluation=draw(st.sampled_from(
+                           ["mean", "cubature", "unscented", "gauss-hermite"])),
                        pd_order=draw(st.integers(1, 6)))
 
 

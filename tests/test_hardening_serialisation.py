@@ -1,5 +1,6 @@
-"""Whole trackers configured with ctxmodels components survive Stone Soup's YAML: the configuration is written out and read back *before* running, and the loaded
-tracker, run over the same files, gives the same tracks bit for bit.
+"""Whole trackers configured with ctxmodels components survive Stone Soup's YAML: the
+configuration is written out and read back *before* running, and the loaded tracker, run
+over the same files, gives the same tracks bit for bit.
 
 Component-level round trips live in test_core_components.py, test_stonesoup_feeder.py,
 test_stonesoup_pointprocess.py and test_stonesoup_jpda.py; this module checks the assembly:

@@ -116,7 +116,7 @@ def test_a_gmphd_learns_the_clutter_and_not_its_target(learner):
     tracker = _learning_tracker(scans, learned, [learner])
     everything = _map()  # fed every detection, no gates: the target is clutter to it
     held = 0
-    for (time, tracks), (_, detections) in zip(tracker, scans):
+    for (_, tracks), (_, detections) in zip(tracker, scans):
         everything.update((0.0, 0.0, 0.0), [
             [d.state_vector[1, 0] * math.cos(d.state_vector[0, 0]),
              d.state_vector[1, 0] * math.sin(d.state_vector[0, 0])] for d in detections])
@@ -151,7 +151,7 @@ def test_a_gmphd_learns_its_targets_detection_probability():
                                  forgetting=0.99)
     tracker = _learning_tracker(scans, 2e-3, [DetectionLearner(gate_radius=30.0)], estimate)
     seen = []
-    for time, tracks in tracker:
+    for _ in tracker:
         seen.append(estimate.probabilities()[0])
     # the target's P_D is 0.9; a memory of ~100 scans of one track: σ ≈ √(0.09/100) = 0.03,
     # a clutter point in a 30 m gate at 670 m ≈ 0.008 a scan

@@ -347,11 +347,16 @@ def test_both_paths_agree_when_births_wait_while_the_region_moves():
                                      PHDUpdater)
 
     start = datetime.datetime(2026, 1, 1)
-    at = lambda s: start + datetime.timedelta(seconds=s)
+
+    def at(s):
+        return start + datetime.timedelta(seconds=s)
     navigation = NavigationTrack(timestamps=[at(0), at(0.5), at(1), at(2)],
                                  positions=[[0, 0], [5, 0], [0, 0], [0, 0]], headings=[0] * 4)
     model = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
-    seen = lambda x, s: {Detection([[x], [0.0]], timestamp=at(s), measurement_model=model)}
+
+    def seen(x, s):
+        return {Detection([[x], [0.0]], timestamp=at(s), measurement_model=model)}
+
     far_scans = [(at(0), seen(-57.0, 0)), (at(1), seen(-57.0, 1)), (at(2), seen(-57.0, 2))]
     near_scans = [(at(0.5), seen(6.0, 0.5)), (at(1.5), set())]
 

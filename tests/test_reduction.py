@@ -22,7 +22,7 @@ def _mixture(seed, n=60, tags=8):
     names = [str(uuid.uuid4()) for _ in range(tags)]
     centres = rng.normal(0, 30, (6, 4))
     components = []
-    for i in range(n):
+    for _ in range(n):
         mean = centres[rng.integers(6)] + rng.normal(0, 2, 4)
         a = rng.normal(0, 1, (4, 4))
         weight = float(rng.choice([0.5, 0.25, rng.uniform(1e-8, 1)]))
@@ -57,8 +57,8 @@ def test_equals_the_stock_reduction_in_first_appearance_order(reducer, seed, mon
         stock = reducer.reduce(copy.deepcopy(base))
         assert _key(ours) == _key(stock)
         # the same components keep their tags (the others are renamed, with new uuids)
-        kept = lambda cs: [c.tag if c.tag in original else None for c in cs]
-        assert kept(ours) == kept(stock)
+        assert [c.tag if c.tag in original else None for c in ours] == \
+            [c.tag if c.tag in original else None for c in stock]
     # and the Rust core's reduction (the array tracker's), gate or not: the same
     # components in the same order, to round-off (its own linear algebra)
     core = _core.GaussianMixtureArrays(4)

@@ -201,7 +201,8 @@ def test_only_released_tracks_are_built(monkeypatch):
     real = Births.track
     monkeypatch.setattr(Births, "track", lambda self, *birth: built.append(1) or real(self, *birth))
     run = make_scenario("mixed-range", 0, 30.0)
-    ours = _array_initiator(_component(trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker).initiator)
+    built = trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker
+    ours = _array_initiator(_component(built).initiator)
     released = 0
     for time, detections in trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker.detector:
         released += len(ours.initiate(set(detections), time))

@@ -22,7 +22,6 @@ import numpy as np
 
 from ctxmodels import (DetectionProbabilityModel, LandMask, LineOfSight, RangeBands,
                        ClutterDensityModel, SensorModel)
-from ctxmodels.geo import lonlat_to_local
 
 origin = (10.60, 59.85)  # longitude, latitude: the radar's harbour
 

@@ -54,7 +54,7 @@ learned = ClutterMap(space="bearing-range",
                      prior_intensity=1e-3, prior_scans=10.0, forgetting=0.99)
 clutter = ClutterDensityModel(factors=[learned])  # what a sensor model would hold
 
-for scan in range(400):  # 8 minutes at 0.8 Hz
+for _ in range(400):  # 8 minutes at 0.8 Hz
     learned.update(pose, np.concatenate([sea_clutter(), coast_returns()]))
 
 # %%

@@ -32,7 +32,7 @@ estimate = next(f for feeder in tracker.tracker.detector.feeders
                 if isinstance(f, DetectionEstimate))
 
 times, history = [], []
-for time, tracks in tracker:
+for time, _ in tracker:
     if not history or not np.array_equal(history[-1], estimate.probabilities()):
         times.append((time - run.radar_times[0]).total_seconds())
         history.append(estimate.probabilities())

@@ -97,7 +97,7 @@ def run(with_context):
     truths, radar, simulator = simulation()
     tracker = gmphd(radar, simulator, with_context)
     estimated, true = [], []
-    for time, _ in tracker:
+    for _ in tracker:
         # targets the tracker reports now: components above the extraction threshold
         estimated.append(sum(c.weight > 0.5 for c in tracker.gaussian_mixture))
         true.append(len(truths.current[1]))

@@ -19,7 +19,7 @@ def _component_class(tag_suffix: str, node):
         class_ = getattr(import_module(module_name), class_name)
     except (ImportError, AttributeError):
         raise ConstructorError("while constructing a ctxmodels component", node.start_mark,
-                               f"unable to import 'ctxmodels.{tag_suffix}'", node.start_mark)
+                               f"unable to import 'ctxmodels.{tag_suffix}'", node.start_mark) from None
     if not (isinstance(class_, type) and issubclass(class_, Base)):
         raise ConstructorError("while constructing a ctxmodels component", node.start_mark,
                                f"'ctxmodels.{tag_suffix}' is not a component", node.start_mark)

@@ -77,9 +77,9 @@ hidden under a false track — count as spread, as a coast does. The residuals a
 about :math:`\hat\lambda_g`, prior and the cell's own counts included, uncorrected: in a
 pool's first scans the prior's pull adds to :math:`\tau_g^2`, and in a pool of few cells
 the own-count share takes from it; the test for leaving uses the level of every cell of the
-pool, which the cells apart lift, so it errs towards keeping a cell. ``pooling='grid'`` pools the whole grid (any
-space). Without pooling (the default) every cell shrinks towards :math:`\lambda_0` alone.
-Pooled, an update also recomputes the pools' sums from the cells (vectorised passes,
+pool, which the cells apart lift, so it errs towards keeping a cell. ``pooling='grid'``
+pools the whole grid (any space). Without pooling (the default) every cell shrinks towards
+:math:`\lambda_0` alone. Pooled, an update also recomputes the pools' sums from the cells (vectorised passes,
 O(cells)), so that a restored map is exactly the saved one.
 
 The map is *state*, not a value like the other components: it changes with each

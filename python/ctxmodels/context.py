@@ -45,11 +45,11 @@ class DetectionSet(_UpstreamSet):
     tells a tracker the sensor looked and saw nothing there.
     """
 
-    def __init__(self, detections: Iterable = (), detector_context: "DetectorContext | None" = None):
+    def __init__(self, detections: Iterable = (), detector_context: DetectorContext | None = None):
         super().__init__(detections)
         self.detector_context = detector_context
 
-    def copy(self) -> "DetectionSet":
+    def copy(self) -> DetectionSet:
         return DetectionSet(self, self.detector_context)
 
     def __repr__(self):
@@ -134,7 +134,7 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
                             f"{type(self.timestamp).__name__} {self.timestamp!r}")
 
     @classmethod
-    def _of(cls, sensor_model: SensorModel, pose: Pose, timestamp=None) -> "DetectorContext":
+    def _of(cls, sensor_model: SensorModel, pose: Pose, timestamp=None) -> DetectorContext:
         """``DetectorContext(sensor_model=..., pose=..., timestamp=...)``; when the values
         pass its checks as they stand (a feeder's every scan), the same object without
         Stone Soup's per-Property setting, which costs more than the scan's P_D calls."""

@@ -65,7 +65,7 @@ class DetectionProbabilityModel(ModelComponent):
             return _core.DetectionModel(parts)
         return self._cached("core", build)
 
-    def frozen(self) -> "DetectionProbabilityModel":
+    def frozen(self) -> DetectionProbabilityModel:
         """This model with every :class:`DetectionEstimate` factor replaced by its
         :meth:`~DetectionEstimate.bands` as they stand now (itself when it has none): the
         snapshot a :class:`~ctxmodels.DetectorContext` evaluates for its whole scan, on

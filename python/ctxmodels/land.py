@@ -99,7 +99,7 @@ class LandMask(ModelComponent):
             [(p["shell"], list(p["holes"])) for p in self.polygons]))
 
     @classmethod
-    def from_geojson(cls, source, origin=None) -> "LandMask":
+    def from_geojson(cls, source, origin=None) -> LandMask:
         """Land from GeoJSON: a file path, a JSON string or a parsed mapping holding a
         FeatureCollection, Feature, GeometryCollection, Polygon or MultiPolygon (every
         polygon with its holes; other geometry types raise, naming where they are).
@@ -123,7 +123,7 @@ class LandMask(ModelComponent):
         return _land_from_document(cls, node, document, origin)
 
     @classmethod
-    def from_shapely(cls, geometry, origin=None) -> "LandMask":
+    def from_shapely(cls, geometry, origin=None) -> LandMask:
         """Land from a shapely Polygon, MultiPolygon or GeometryCollection of polygons, with
         holes. An invalid geometry raises :class:`ValueError` with shapely's reason. With
         ``origin`` (longitude, latitude) the coordinates are longitude/latitude degrees,
@@ -354,7 +354,7 @@ def _linear_ring(ring, document: _Document, where: str) -> np.ndarray:
     return xy
 
 
-def _land_from_document(cls, node, document: _Document, origin) -> "LandMask":
+def _land_from_document(cls, node, document: _Document, origin) -> LandMask:
     """The mask of a GeoJSON document's polygons, projected around ``origin``: errors in a
     polygon (from the projection or the mask's validation) name where it is."""
     if origin is not None:

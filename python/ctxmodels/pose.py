@@ -194,7 +194,7 @@ class NavigationTrack(PoseSource):
             log.last = (timestamp, pose)
         return pose
 
-    def _log(self) -> "_NavigationLog":
+    def _log(self) -> _NavigationLog:
         return _NavigationLog(_seconds(self.timestamps, self.timestamps[0]).tolist(),
                               self.positions.tolist(), self.headings.tolist(),
                               time_kind(self.timestamps[0]))

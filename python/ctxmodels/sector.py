@@ -31,12 +31,12 @@ class AngularSector(ModelComponent):
         self._compiled()
 
     @classmethod
-    def blind(cls, centre: float, width: float) -> "AngularSector":
+    def blind(cls, centre: float, width: float) -> AngularSector:
         """A blind sector: 0 inside, 1 outside."""
         return cls(centre=centre, width=width, inside=0.0, outside=1.0)
 
     @classmethod
-    def field_of_view(cls, centre: float, width: float) -> "AngularSector":
+    def field_of_view(cls, centre: float, width: float) -> AngularSector:
         """A field of view: 1 inside, 0 outside."""
         return cls(centre=centre, width=width, inside=1.0, outside=0.0)
 

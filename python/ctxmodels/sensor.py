@@ -62,7 +62,7 @@ class SensorModel(ModelComponent):
 
     @classmethod
     def from_stonesoup(cls, sensor, prob_detection: float, clutter_density: float,
-                       *, name: str = "") -> "SensorModel":
+                       *, name: str = "") -> SensorModel:
         """The model of a Stone Soup radar's coverage (range limit, rotating field of view)
         with P_D ``prob_detection`` inside it and λ ``clutter_density``; its pose at a scan
         is :func:`ctxmodels.stonesoup.sensor_pose`. See

@@ -801,7 +801,7 @@ def test_platform_feeder_gives_each_scan_its_sensors_model():
     models = _models(sensors)
     scans = list(PlatformContextFeeder(reader=simulator, sensor_models=models))
     assert len(scans) == 3 * 3  # 3 sensors, 3 times
-    for k, (time, scan) in enumerate(scans):
+    for k, (_, scan) in enumerate(scans):
         assert scan.detector_context.sensor_model is models[k % 3]
         assert scan.detector_context.pose == sensor_pose(sensors[k % 3])
 
@@ -831,7 +831,8 @@ def _scan_with_estimates(kind):
     from ctxmodels import (ClutterDensityModel, ClutterMap, DetectionEstimate,
                            DetectionProbabilityModel, DetectionSet, Pose, SensorModel)
     measurement = LinearGaussian(ndim_state=4, mapping=(0, 2), noise_covar=np.eye(2))
-    detection = (DetectionEstimate(edges=(0.0, 100.0, 200.0), prior_probability=0.5) if kind == "detection" else 0.9)
+    detection = (DetectionEstimate(edges=(0.0, 100.0, 200.0), prior_probability=0.5)
+                 if kind == "detection" else 0.9)
     clutter = (ClutterMap(space="world-xy", edges=(np.linspace(-200, 200, 5),) * 2,
                           prior_intensity=1e-3)
                if kind == "clutter" else 1e-3)

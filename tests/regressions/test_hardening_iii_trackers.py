@@ -441,7 +441,7 @@ def test_tqdm_is_a_base_dependency():
 
 
 # --- the study's command line -------------------------------------------------------------------
-from test_cli_reliability import TINY, no_work  # noqa: E402,F401  (a fixture)
+from test_cli_reliability import TINY  # noqa: E402
 from test_cli_reliability import usage_error as _usage_error  # noqa: E402
 
 

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from ctxmodels import ClutterDensityModel, DetectionProbabilityModel, NavigationTrack, Pose, RangeBands, SensorModel
+from ctxmodels import (ClutterDensityModel, DetectionProbabilityModel, NavigationTrack, Pose,
+                       RangeBands, SensorModel)
 
 POSE = Pose(x=0.0, y=0.0, heading=0.0)
 

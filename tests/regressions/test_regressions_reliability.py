@@ -209,7 +209,8 @@ def test_infinite_ranges_are_ordered_like_any_range():
 def _mutable_components():
     """(build(lists), mutate(lists)) pairs: build a component from the lists, then edit them."""
     return {
-        "RangeBands": (lambda: {"edges": [50.0, 80.0], "values": [0.95, 0.2, 0.0], "upper_owns": [True, False]},
+        "RangeBands": (lambda: {"edges": [50.0, 80.0], "values": [0.95, 0.2, 0.0],
+                                "upper_owns": [True, False]},
                        lambda kw: RangeBands(**kw),
                        lambda kw: (kw["edges"].__setitem__(0, 60.0), kw["values"].append(9.0),
                                    kw["upper_owns"].__setitem__(1, True))),
@@ -221,13 +222,15 @@ def _mutable_components():
         "LandMask": (lambda: {"polygons": [([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]],
                                             [[[4.0, 4.0], [6.0, 4.0], [6.0, 6.0]]])]},
                      lambda kw: LandMask(**kw),
-                     lambda kw: (kw["polygons"][0][0].__setitem__(0, [-5.0, -5.0]), kw["polygons"][0][1].clear(),
+                     lambda kw: (kw["polygons"][0][0].__setitem__(0, [-5.0, -5.0]),
+                                 kw["polygons"][0][1].clear(),
                                  kw["polygons"].append([[20.0, 20.0], [30.0, 20.0], [30.0, 30.0]]))),
         "DetectionProbabilityModel": (lambda: {"factors": [0.5, RangeBands(edges=[50.0], values=[1.0, 0.4])]},
                                       lambda kw: DetectionProbabilityModel(**kw),
-                                      lambda kw: (kw["factors"].append(0.1), kw["factors"].__setitem__(0, 0.9))),
-        "ClutterDensityModel": (lambda: {"factors": [2e-3, MetadataThreshold(key="area", threshold=10, below=1e-1,
-                                                                             at_or_above=1e-3)]},
+                                      lambda kw: (kw["factors"].append(0.1),
+                                                  kw["factors"].__setitem__(0, 0.9))),
+        "ClutterDensityModel": (lambda: {"factors": [2e-3, MetadataThreshold(
+                                    key="area", threshold=10, below=1e-1, at_or_above=1e-3)]},
                                 lambda kw: ClutterDensityModel(**kw),
                                 lambda kw: (kw["factors"].append(10.0), kw["factors"].__setitem__(0, 1.0))),
         "SensorModel": (lambda: {"position_mapping": [0, 2]},
@@ -238,7 +241,8 @@ def _mutable_components():
         "NavigationTrack": (lambda: {"timestamps": [datetime.datetime(2024, 1, 1, 0, 0, s) for s in (0, 10)],
                                      "positions": [[0.0, 0.0], [100.0, 0.0]], "headings": [0.0, 1.0]},
                             lambda kw: NavigationTrack(**kw),
-                            lambda kw: (kw["timestamps"].__setitem__(1, datetime.datetime(2024, 1, 1, 0, 0, 20)),
+                            lambda kw: (kw["timestamps"].__setitem__(
+                                            1, datetime.datetime(2024, 1, 1, 0, 0, 20)),
                                         kw["positions"][1].__setitem__(0, 7.0), kw["headings"].append(3.0))),
     }
 
@@ -412,7 +416,8 @@ def test_feeders_mixing_naive_and_aware_scan_times_name_the_stream_and_time():
     assert "radar" in message and str(AWARE + SECOND) in message
     aware_log = NavigationTrack(timestamps=[AWARE, AWARE + 10 * SECOND], positions=[[0, 0], [10, 0]],
                                 headings=[0, 0])
-    message = names(lambda: list(ContextFeeder(reader=reader[:1], sensor_model=sensor, pose_source=aware_log)),
+    message = names(lambda: list(ContextFeeder(reader=reader[:1], sensor_model=sensor,
+                                               pose_source=aware_log)),
                     TypeError, "pose_source")
     assert "radar" in message and str(NAIVE) in message and "naive" in message
     naive = ContextFeeder(reader=[(NAIVE, _detections(NAIVE))], sensor_model=sensor, pose_source=pose)
@@ -447,7 +452,8 @@ def test_non_sequence_factors_name_factors(factors):
     names(lambda: ClutterDensityModel(factors=factors), TypeError, "factors")
 
 
-@pytest.mark.parametrize("value", [1e308 * 10, -math.inf, 10**400, -(10**400)], ids=["inf", "-inf", "1e400", "-1e400"])
+@pytest.mark.parametrize("value", [1e308 * 10, -math.inf, 10**400, -(10**400)],
+                         ids=["inf", "-inf", "1e400", "-1e400"])
 def test_huge_metadata_names_metadata(value):
     positions = np.zeros((2, 2))
     names(lambda: CLUTTER.evaluate(POSE, positions, [{"area": 1.0}, {"area": value}]), ValueError, "metadata")

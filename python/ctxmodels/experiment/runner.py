@@ -248,7 +248,7 @@ def job_cost(job: Job) -> float:
     return (TRACKERS[job.tracker].cost + 1.0) * duration / 480.0
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _default_duration(scenario: str) -> float:
     return SCENARIOS[scenario].layout().default_duration
 

@@ -220,7 +220,7 @@ class SweepResults:
         folder.mkdir(parents=True, exist_ok=True)
         paths = {"markdown": folder / "sweep.md", "json": folder / "sweep.json"}
         rows = []
-        for key, by_cell in self.findings().items():
+        for by_cell in self.findings().values():
             for cell, result in by_cell.items():
                 rows.append({**dataclasses.asdict(cell), **result.as_dict()})
         write_atomic(paths["markdown"], self.markdown() + "\n")
@@ -276,6 +276,7 @@ def run_sweep(config: SweepConfig, executor=None, progress: bool = True) -> Swee
     for result in results:
         by_sensors.setdefault((result.job.radar, result.job.lidar), []).append(result)
     wall = time.perf_counter() - started
-    cells = {cell: ExperimentResults(experiment, by_sensors.get((experiment.radar, experiment.lidar), []), wall)
+    cells = {cell: ExperimentResults(
+                 experiment, by_sensors.get((experiment.radar, experiment.lidar), []), wall)
              for cell, experiment in experiments.items()}
     return SweepResults(config, cells, wall)

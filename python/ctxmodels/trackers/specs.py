@@ -52,8 +52,8 @@ line-of-sight-aware (context-aware plus land mask and radar shadow in the radar'
 GM-PHD (learned λ, ours): the context-aware GM-PHD whose radar λ is not the paper's equation
 but a :class:`~ctxmodels.ClutterMap` learned online from the tracker's own output
 (:class:`~ctxmodels.stonesoup.ClutterMapLearner` after each scan; settings below,
-:class:`~ctxmodels.trackers.models.ClutterMapSettings`); the lidar keeps the paper's ``area`` rule. GM-PHD (learned λ, P_D,
-ours): the same with the radar's range-band P_D learned as well
+:class:`~ctxmodels.trackers.models.ClutterMapSettings`); the lidar keeps the paper's ``area``
+rule. GM-PHD (learned λ, P_D, ours): the same with the radar's range-band P_D learned as well
 (:class:`~ctxmodels.DetectionEstimate`, :class:`~ctxmodels.stonesoup.DetectionLearner`;
 :class:`~ctxmodels.trackers.models.DetectionEstimateSettings`); its blind sector stays as specified.
 
@@ -117,7 +117,8 @@ class TrackerSpec:
     pd: str = "uniform"  # "uniform" | "context" | "learned" (the primary's bands, online)
     clutter: str = "uniform"  # "uniform" | "context" | "learned" (the primary's, online)
     line_of_sight: bool = False
-    #: The primary's λ also has a coastal band (:data:`~ctxmodels.trackers.models.COAST_WIDTH`) along its P_D's land.
+    #: The primary's λ also has a coastal band
+    #: (:data:`~ctxmodels.trackers.models.COAST_WIDTH`) along its P_D's land.
     coastal: bool = False
     only_scenarios: tuple[str, ...] | None = None
     extraction_threshold: float = EXTRACTION_THRESHOLD
