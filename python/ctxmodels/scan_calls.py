@@ -1,11 +1,11 @@
 """What a :class:`~ctxmodels.DetectorContext` prepares once for its scan's P_D and λ calls.
 
 A tracker asks a scan's context for :math:`P_D` once per hypothesis (Stone Soup's stock
-hypothesisers and updaters) or once per batch of a few states. Each call used to read the
-context's Properties, convert the pose, check the position mapping and wrap the result in
-a new :class:`~stonesoup.types.numeric.Probability`: several microseconds of Python around
-a fraction of a microsecond in the core. :class:`ScanCalls` does that work once per
-context: the snapshot of the detection model that the whole scan evaluates (its learned
+hypothesisers and updaters) or once per batch of a few states. Reading the context's
+Properties, converting the pose, checking the position mapping and wrapping the result in
+a new :class:`~stonesoup.types.numeric.Probability` on every call would cost several
+microseconds of Python around a fraction of a microsecond in the core. :class:`ScanCalls`
+does that work once per context: the snapshot of the detection model that the whole scan evaluates (its learned
 factors fixed as they stand, :meth:`~ctxmodels.DetectionProbabilityModel.frozen`), that
 snapshot in the core at the scan's pose and mapping (and the sensor model's rule for the
 expected P_D of a Gaussian), the clutter model at the pose, and one ``Probability`` per

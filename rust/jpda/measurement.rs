@@ -2,7 +2,8 @@
 //! `CartesianToBearingRange` with its finite-difference or the closed-form Jacobian.
 
 use super::check_finite;
-// Bit-identical to the JPDA's former copies (tests::shared_bearing_helpers_are_the_jpda_formulae).
+// The GM-PHD's bearing helpers, held against their definitions in
+// tests::shared_bearing_helpers_are_the_jpda_formulae.
 pub(super) use crate::gmphd::measurement::spacing;
 pub use crate::gmphd::measurement::mod_bearing;
 use crate::error::{ModelError, Result};

@@ -336,8 +336,8 @@ fn jpda_and_gmphd_models_agree_to_rounding() {
 }
 
 /// The bearing helpers, shared with the GM-PHD, against their definitions: Stone Soup's
-/// floored `((x + π) mod 2π) − π` (the JPDA's former `rem_euclid` form) and NumPy's
-/// `spacing` (the JPDA's former sign-branch form), bit for bit.
+/// floored `((x + π) mod 2π) − π` (as `rem_euclid`) and NumPy's `spacing` (as a branch on
+/// the sign), bit for bit.
 #[test]
 fn shared_bearing_helpers_are_the_jpda_formulae() {
     let floored = |x: f64| (x + PI).rem_euclid(2.0 * PI) - PI;
