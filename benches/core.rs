@@ -10,8 +10,8 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode, Throughput};
 use ctxmodels::{
-    AngularSector, ClutterFactor, ClutterModel, DetectionFactor, DetectionModel, LandMask, LineOfSight, MetadataThreshold,
-    Polygon, Pose, PositionMapping, RangeBands, Rule,
+    AngularSector, ClutterFactor, ClutterModel, DetectionFactor, DetectionModel, LandMask, LineOfSight,
+    MetadataThreshold, Polygon, Pose, PositionMapping, RangeBands, Rule,
 };
 use std::f64::consts::{PI, TAU};
 use std::hint::black_box;
@@ -62,12 +62,25 @@ fn coastline(n: usize, jagged: bool) -> Vec<[f64; 2]> {
 }
 
 fn land(n: usize, jagged: bool) -> Arc<LandMask> {
-    Arc::new(LandMask::new(vec![Polygon { shell: coastline(n, jagged), holes: vec![] }]).expect("a star-shaped ring is valid"))
+    Arc::new(
+        LandMask::new(vec![Polygon {
+            shell: coastline(n, jagged),
+            holes: vec![],
+        }])
+        .expect("a star-shaped ring is valid"),
+    )
 }
 
 fn query_points(n: usize, seed: u64) -> Vec<[f64; 2]> {
     let mut rng = SplitMix(seed);
-    (0..n).map(|_| [rng.uniform(-QUERY_HALF_WIDTH, QUERY_HALF_WIDTH), rng.uniform(-QUERY_HALF_WIDTH, QUERY_HALF_WIDTH)]).collect()
+    (0..n)
+        .map(|_| {
+            [
+                rng.uniform(-QUERY_HALF_WIDTH, QUERY_HALF_WIDTH),
+                rng.uniform(-QUERY_HALF_WIDTH, QUERY_HALF_WIDTH),
+            ]
+        })
+        .collect()
 }
 
 /// The paper's radar: 0.4 between 50 m (exclusive) and 1612 m (exclusive), blind astern
@@ -84,7 +97,12 @@ fn states(n: usize, seed: u64) -> Vec<f64> {
     let mut rng = SplitMix(seed);
     let mut s = Vec::with_capacity(4 * n);
     for _ in 0..n {
-        s.extend([rng.uniform(-2000.0, 2000.0), rng.uniform(-10.0, 10.0), rng.uniform(-2000.0, 2000.0), rng.uniform(-10.0, 10.0)]);
+        s.extend([
+            rng.uniform(-2000.0, 2000.0),
+            rng.uniform(-10.0, 10.0),
+            rng.uniform(-2000.0, 2000.0),
+            rng.uniform(-10.0, 10.0),
+        ]);
     }
     s
 }
@@ -124,7 +142,10 @@ fn pd_radar(c: &mut Criterion) {
         let mut out = vec![0.0; n];
         group.throughput(Throughput::Elements(n as u64));
         group.bench_with_input(BenchmarkId::from_parameter(format!("1e{exp}")), &s, |b, s| {
-            b.iter(|| scan.at_states(black_box(s), 4, PositionMapping::default(), &mut out).unwrap())
+            b.iter(|| {
+                scan.at_states(black_box(s), 4, PositionMapping::default(), &mut out)
+                    .unwrap()
+            })
         });
     }
     group.finish();
@@ -139,9 +160,16 @@ fn pd_call(c: &mut Criterion) {
     for n in [1usize, 10, 100] {
         let s = states(n, 8);
         let mut out = vec![0.0; n];
-        group.bench_function(format!("rows/{n}"), |b| b.iter(|| scan.at_states(black_box(&s), 4, PositionMapping::default(), &mut out).unwrap()));
+        group.bench_function(format!("rows/{n}"), |b| {
+            b.iter(|| {
+                scan.at_states(black_box(&s), 4, PositionMapping::default(), &mut out)
+                    .unwrap()
+            })
+        });
     }
-    group.bench_function("at_point", |b| b.iter(|| scan.at_point(black_box(420.0), black_box(-75.0))));
+    group.bench_function("at_point", |b| {
+        b.iter(|| scan.at_point(black_box(420.0), black_box(-75.0)))
+    });
     group.finish();
 }
 
@@ -164,10 +192,25 @@ fn expected_pd(c: &mut Criterion) {
         let mut out = vec![0.0; n];
         let mut group = c.benchmark_group(format!("expected_pd_1e{exp}"));
         group.throughput(Throughput::Elements(n as u64));
-        group.bench_function("at_mean_states", |b| b.iter(|| scan.at_states(black_box(&means), 4, PositionMapping::default(), &mut out).unwrap()));
+        group.bench_function("at_mean_states", |b| {
+            b.iter(|| {
+                scan.at_states(black_box(&means), 4, PositionMapping::default(), &mut out)
+                    .unwrap()
+            })
+        });
         for (name, rule) in &rules {
             group.bench_function(*name, |b| {
-                b.iter(|| scan.expected_at_gaussians(black_box(&means), &covars, 4, PositionMapping::default(), rule, &mut out).unwrap())
+                b.iter(|| {
+                    scan.expected_at_gaussians(
+                        black_box(&means),
+                        &covars,
+                        4,
+                        PositionMapping::default(),
+                        rule,
+                        &mut out,
+                    )
+                    .unwrap()
+                })
             });
         }
         group.finish();
@@ -184,7 +227,9 @@ fn land_contains(c: &mut Criterion) {
         for exp in 2..=5u32 {
             let mask = land(10usize.pow(exp), jagged);
             let id = format!("{}/1e{exp}", if jagged { "jagged" } else { "smooth" });
-            group.bench_function(id, |b| b.iter(|| black_box(&points).iter().filter(|&&p| mask.contains(p)).count()));
+            group.bench_function(id, |b| {
+                b.iter(|| black_box(&points).iter().filter(|&&p| mask.contains(p)).count())
+            });
         }
     }
     group.finish();
@@ -198,7 +243,13 @@ fn land_build(c: &mut Criterion) {
             let ring = coastline(10usize.pow(exp), jagged);
             let id = format!("{}/1e{exp}", if jagged { "jagged" } else { "smooth" });
             group.bench_function(id, |b| {
-                b.iter(|| LandMask::new(vec![Polygon { shell: black_box(ring.clone()), holes: vec![] }]).unwrap())
+                b.iter(|| {
+                    LandMask::new(vec![Polygon {
+                        shell: black_box(ring.clone()),
+                        holes: vec![],
+                    }])
+                    .unwrap()
+                })
             });
         }
     }
@@ -215,7 +266,12 @@ fn line_of_sight(c: &mut Criterion) {
             let sight = LineOfSight::new(land(10usize.pow(exp), jagged)).unwrap();
             let id = format!("{}/1e{exp}", if jagged { "jagged" } else { "smooth" });
             group.bench_function(format!("pairwise/{id}"), |b| {
-                b.iter(|| black_box(&targets).iter().filter(|&&t| sight.visible(SENSOR, t)).count())
+                b.iter(|| {
+                    black_box(&targets)
+                        .iter()
+                        .filter(|&&t| sight.visible(SENSOR, t))
+                        .count()
+                })
             });
             // One scan: build the per-position index, then answer every target.
             group.bench_function(format!("index/{id}"), |b| {
@@ -257,7 +313,10 @@ fn pd_radar_with_land(c: &mut Criterion) {
         let pose = pose();
         let scan = model.at_pose(&pose);
         group.bench_function(if jagged { "jagged_1e4" } else { "smooth_1e4" }, |b| {
-            b.iter(|| scan.at_states(black_box(&s), 4, PositionMapping::default(), &mut out).unwrap())
+            b.iter(|| {
+                scan.at_states(black_box(&s), 4, PositionMapping::default(), &mut out)
+                    .unwrap()
+            })
         });
     }
     group.finish();
@@ -268,8 +327,20 @@ fn clutter(c: &mut Criterion) {
     // of a radar-like range rule.
     let model = ClutterModel::new(vec![
         ClutterFactor::Range(RangeBands::new(vec![1000.0], vec![1e-3, 1e-2], vec![true]).unwrap()),
-        ClutterFactor::Metadata(MetadataThreshold { column: 0, threshold: 10.0, below: 1e-1, at_or_above: 1e-3, missing: Some(1e-2) }),
-        ClutterFactor::Metadata(MetadataThreshold { column: 1, threshold: 0.5, below: 2.0, at_or_above: 0.5, missing: None }),
+        ClutterFactor::Metadata(MetadataThreshold {
+            column: 0,
+            threshold: 10.0,
+            below: 1e-1,
+            at_or_above: 1e-3,
+            missing: Some(1e-2),
+        }),
+        ClutterFactor::Metadata(MetadataThreshold {
+            column: 1,
+            threshold: 0.5,
+            below: 2.0,
+            at_or_above: 0.5,
+            missing: None,
+        }),
     ])
     .unwrap();
     let pose = pose();
@@ -279,12 +350,21 @@ fn clutter(c: &mut Criterion) {
         let mut rng = SplitMix(7);
         let positions: Vec<f64> = (0..2 * m).map(|_| rng.uniform(-2000.0, 2000.0)).collect();
         let metadata: Vec<f64> = (0..m)
-            .flat_map(|i| [if i % 10 == 0 { f64::NAN } else { (i % 37) as f64 }, (i % 3) as f64 * 0.4])
+            .flat_map(|i| {
+                [
+                    if i % 10 == 0 { f64::NAN } else { (i % 37) as f64 },
+                    (i % 3) as f64 * 0.4,
+                ]
+            })
             .collect();
         let mut out = vec![0.0; m];
         group.throughput(Throughput::Elements(m as u64));
         group.bench_function(format!("1e{exp}"), |b| {
-            b.iter(|| model.evaluate(&pose, black_box(&positions), &metadata, &mut out).unwrap())
+            b.iter(|| {
+                model
+                    .evaluate(&pose, black_box(&positions), &metadata, &mut out)
+                    .unwrap()
+            })
         });
     }
     group.finish();

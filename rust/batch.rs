@@ -24,7 +24,10 @@ impl Default for PositionMapping {
 impl PositionMapping {
     pub fn new(x: usize, y: usize) -> Result<Self> {
         if x == y {
-            return Err(ModelError::invalid("position_mapping", format!("x and y must be different columns, got ({x}, {y})")));
+            return Err(ModelError::invalid(
+                "position_mapping",
+                format!("x and y must be different columns, got ({x}, {y})"),
+            ));
         }
         Ok(PositionMapping { x, y })
     }
@@ -34,7 +37,10 @@ impl PositionMapping {
         if self.x >= ncols || self.y >= ncols {
             return Err(ModelError::shape(
                 argument,
-                format!("position_mapping ({}, {}) is out of range for rows of {ncols} columns", self.x, self.y),
+                format!(
+                    "position_mapping ({}, {}) is out of range for rows of {ncols} columns",
+                    self.x, self.y
+                ),
             ));
         }
         Ok(())
@@ -193,15 +199,30 @@ where
 }
 
 /// Checks a (D, N) particle array of `ndim` rows against N = `n_out` states and the mapping.
-pub fn check_columns(states: &[f64], ndim: usize, n_out: usize, mapping: PositionMapping, argument: &'static str) -> Result<()> {
+pub fn check_columns(
+    states: &[f64],
+    ndim: usize,
+    n_out: usize,
+    mapping: PositionMapping,
+    argument: &'static str,
+) -> Result<()> {
     if mapping.x >= ndim || mapping.y >= ndim {
         return Err(ModelError::shape(
             argument,
-            format!("has {ndim} rows (state dimensions), but position_mapping ({}, {}) reads beyond them", mapping.x, mapping.y),
+            format!(
+                "has {ndim} rows (state dimensions), but position_mapping ({}, {}) reads beyond them",
+                mapping.x, mapping.y
+            ),
         ));
     }
     if states.len() != ndim * n_out {
-        return Err(ModelError::shape(argument, format!("must hold {ndim} × {n_out} values (one column per output), got {}", states.len())));
+        return Err(ModelError::shape(
+            argument,
+            format!(
+                "must hold {ndim} × {n_out} values (one column per output), got {}",
+                states.len()
+            ),
+        ));
     }
     Ok(())
 }
@@ -212,11 +233,17 @@ pub fn check_rows(states: &[f64], ncols: usize, n_out: usize, argument: &'static
         return Err(ModelError::shape(argument, "rows must have at least one column"));
     }
     if states.len() % ncols != 0 {
-        return Err(ModelError::shape(argument, format!("length {} is not a multiple of the row width {ncols}", states.len())));
+        return Err(ModelError::shape(
+            argument,
+            format!("length {} is not a multiple of the row width {ncols}", states.len()),
+        ));
     }
     let n = states.len() / ncols;
     if n != n_out {
-        return Err(ModelError::shape("out", format!("must have {n} entries (one per row of {argument}), got {n_out}")));
+        return Err(ModelError::shape(
+            "out",
+            format!("must have {n} entries (one per row of {argument}), got {n_out}"),
+        ));
     }
     Ok(n)
 }

@@ -10,10 +10,10 @@ use crate::batch::for_each_chunk;
 use crate::clutter_map::ClutterMap;
 use crate::coast::CoastalBand;
 use crate::error::{ModelError, Result};
-use std::sync::{Arc, RwLock, RwLockReadGuard};
 use crate::pose::Pose;
 use crate::range_bands::RangeBands;
 use crate::simd::{dispatch, LaneKernel, Lanes};
+use std::sync::{Arc, RwLock, RwLockReadGuard};
 
 /// λ factor from one metadata column: `below` when value < threshold, `at_or_above`
 /// otherwise; `missing` (if given) when the detection has no such metadata (NaN).
@@ -100,7 +100,10 @@ impl ClutterModel {
                 }
                 ClutterFactor::Metadata(rule) => {
                     if !rule.threshold.is_finite() {
-                        return Err(ModelError::invalid("threshold", format!("must be finite, got {}", rule.threshold)));
+                        return Err(ModelError::invalid(
+                            "threshold",
+                            format!("must be finite, got {}", rule.threshold),
+                        ));
                     }
                     for v in [rule.below, rule.at_or_above].into_iter().chain(rule.missing) {
                         check_density(i, v)?;
@@ -112,7 +115,11 @@ impl ClutterModel {
                 }
             }
         }
-        Ok(ClutterModel { factors, metadata_columns, uses_position })
+        Ok(ClutterModel {
+            factors,
+            metadata_columns,
+            uses_position,
+        })
     }
 
     /// How many metadata columns the caller must pass.
@@ -135,27 +142,55 @@ impl ClutterModel {
     /// not NaN: a bearing–range sensor's measured range, so band edges are exact instead of
     /// depending on the polar → Cartesian → range round trip (which can land an ulp short).
     pub fn evaluate_with_ranges(
-        &self, pose: &Pose, positions: &[f64], metadata: &[f64], ranges: Option<&[f64]>, out: &mut [f64],
+        &self,
+        pose: &Pose,
+        positions: &[f64],
+        metadata: &[f64],
+        ranges: Option<&[f64]>,
+        out: &mut [f64],
     ) -> Result<()> {
         let m = out.len();
         if positions.len() != 2 * m {
-            return Err(ModelError::shape("positions", format!("must be ({m}, 2), got {} values", positions.len())));
+            return Err(ModelError::shape(
+                "positions",
+                format!("must be ({m}, 2), got {} values", positions.len()),
+            ));
         }
         if let Some(r) = ranges {
             if r.len() != m {
-                return Err(ModelError::shape("ranges", format!("must have {m} entries, got {}", r.len())));
+                return Err(ModelError::shape(
+                    "ranges",
+                    format!("must have {m} entries, got {}", r.len()),
+                ));
             }
             if let Some(row) = r.iter().position(|v| v.is_infinite() || *v < 0.0) {
-                return Err(ModelError::non_finite("ranges", row, "range is infinite or negative (NaN = use the position)"));
+                return Err(ModelError::non_finite(
+                    "ranges",
+                    row,
+                    "range is infinite or negative (NaN = use the position)",
+                ));
             }
         }
         let k = self.metadata_columns;
         if metadata.len() != k * m {
-            return Err(ModelError::shape("metadata", format!("must be ({m}, {k}), got {} values", metadata.len())));
+            return Err(ModelError::shape(
+                "metadata",
+                format!("must be ({m}, {k}), got {} values", metadata.len()),
+            ));
         }
         // The first row that cannot be evaluated; what is wrong with it, from its inputs and
         // the density the kernel left in `out`.
-        let bad = for_each_chunk(out, |first, chunk| dispatch(Densities { model: self, pose, positions, metadata, ranges, first, out: chunk }));
+        let bad = for_each_chunk(out, |first, chunk| {
+            dispatch(Densities {
+                model: self,
+                pose,
+                positions,
+                metadata,
+                ranges,
+                first,
+                out: chunk,
+            })
+        });
         if let Some(row) = bad {
             let (argument, message) = self.problem(positions, metadata, row, out[row]);
             return Err(ModelError::non_finite(argument, row, message));
@@ -167,8 +202,16 @@ impl ClutterModel {
     /// one factor after another: the readable reference the lane kernel must match bit for
     /// bit. NaN when the detection cannot be evaluated.
     pub fn at_one(&self, pose: &Pose, [x, y]: [f64; 2], metadata: &[f64], measured: f64) -> f64 {
-        let range = if measured.is_nan() { ((x - pose.x).powi(2) + (y - pose.y).powi(2)).sqrt() } else { measured };
-        let mut density = if self.uses_position && !(x.is_finite() && y.is_finite()) { f64::NAN } else { 1.0 };
+        let range = if measured.is_nan() {
+            ((x - pose.x).powi(2) + (y - pose.y).powi(2)).sqrt()
+        } else {
+            measured
+        };
+        let mut density = if self.uses_position && !(x.is_finite() && y.is_finite()) {
+            f64::NAN
+        } else {
+            1.0
+        };
         for f in &self.factors {
             density *= match f {
                 ClutterFactor::Constant(v) => *v,
@@ -205,9 +248,15 @@ impl ClutterModel {
             ClutterFactor::Metadata(rule) => {
                 let value = metadata[row * k + rule.column];
                 if value.is_infinite() {
-                    Some(format!("metadata column {} is {value}; values must be finite (NaN = missing)", rule.column))
+                    Some(format!(
+                        "metadata column {} is {value}; values must be finite (NaN = missing)",
+                        rule.column
+                    ))
                 } else if rule.missing.is_none() && value.is_nan() {
-                    Some(format!("metadata column {} is missing and the rule has no `missing` value", rule.column))
+                    Some(format!(
+                        "metadata column {} is missing and the rule has no `missing` value",
+                        rule.column
+                    ))
                 } else {
                     None
                 }
@@ -240,7 +289,15 @@ impl LaneKernel for Densities<'_> {
 
     #[inline(always)]
     fn run<L: Lanes>(self) -> Option<usize> {
-        let Densities { model, pose, positions, metadata, ranges, first, out } = self;
+        let Densities {
+            model,
+            pose,
+            positions,
+            metadata,
+            ranges,
+            first,
+            out,
+        } = self;
         let k = model.metadata_columns;
         let full = out.len() / 4 * 4;
         // (a λ below the smallest normal double is refused: 1/λ would overflow)
@@ -295,7 +352,11 @@ impl LaneKernel for Densities<'_> {
                             }
                             None => bands.lanes_at_root(squared),
                         };
-                        let before = if fresh { L::select(L::or(x.non_finite(), y.non_finite()), nan, one) } else { L::load(o) };
+                        let before = if fresh {
+                            L::select(L::or(x.non_finite(), y.non_finite()), nan, one)
+                        } else {
+                            L::load(o)
+                        };
                         let density = before * value;
                         if checks {
                             bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
@@ -329,7 +390,11 @@ impl LaneKernel for Densities<'_> {
                     }
                 }
                 ClutterFactor::Metadata(rule) => {
-                    let (threshold, below, above) = (L::splat(rule.threshold), L::splat(rule.below), L::splat(rule.at_or_above));
+                    let (threshold, below, above) = (
+                        L::splat(rule.threshold),
+                        L::splat(rule.below),
+                        L::splat(rule.at_or_above),
+                    );
                     let missing = L::splat(rule.missing.unwrap_or(f64::NAN));
                     for (o, r) in blocks.zip(rows.chunks_exact(4 * k)) {
                         let value = if k == 1 {
@@ -358,7 +423,12 @@ impl LaneKernel for Densities<'_> {
         for (i, density) in out.iter_mut().enumerate().skip(full) {
             let row = first + i;
             let measured = ranges.map_or(f64::NAN, |r| r[row]);
-            *density = model.at_one(pose, [positions[2 * row], positions[2 * row + 1]], &metadata[row * k..(row + 1) * k], measured);
+            *density = model.at_one(
+                pose,
+                [positions[2 * row], positions[2 * row + 1]],
+                &metadata[row * k..(row + 1) * k],
+                measured,
+            );
         }
         if !L::any(bad) && out[full..].iter().all(|v| is_density(*v)) {
             return None;
@@ -373,7 +443,13 @@ mod tests {
 
     #[test]
     fn a_metadata_column_beyond_usize_is_an_error_not_an_overflow() {
-        let rule = MetadataThreshold { column: usize::MAX, threshold: 10.0, below: 1e-1, at_or_above: 1e-3, missing: None };
+        let rule = MetadataThreshold {
+            column: usize::MAX,
+            threshold: 10.0,
+            below: 1e-1,
+            at_or_above: 1e-3,
+            missing: None,
+        };
         assert!(ClutterModel::new(vec![ClutterFactor::Metadata(rule)]).is_err());
     }
 
@@ -386,14 +462,28 @@ mod tests {
         let short = 1000.0f64.next_down();
         let positions = [short, 0.0, short, 0.0, short, 0.0];
         let mut out = [0.0; 3];
-        model.evaluate_with_ranges(&pose, &positions, &[], Some(&[1000.0, f64::NAN, 999.0]), &mut out).unwrap();
+        model
+            .evaluate_with_ranges(&pose, &positions, &[], Some(&[1000.0, f64::NAN, 999.0]), &mut out)
+            .unwrap();
         assert_eq!(out, [1e-2, 1e-3, 1e-3]);
-        let err = model.evaluate_with_ranges(&pose, &positions, &[], Some(&[f64::INFINITY, 0.0, 0.0]), &mut out).unwrap_err();
-        assert_eq!(err, ModelError::non_finite("ranges", 0, "range is infinite or negative (NaN = use the position)"));
+        let err = model
+            .evaluate_with_ranges(&pose, &positions, &[], Some(&[f64::INFINITY, 0.0, 0.0]), &mut out)
+            .unwrap_err();
+        assert_eq!(
+            err,
+            ModelError::non_finite("ranges", 0, "range is infinite or negative (NaN = use the position)")
+        );
         // a negative measured range is no range: refused, naming its row
-        let err = model.evaluate_with_ranges(&pose, &positions, &[], Some(&[0.0, -1.0, f64::NAN]), &mut out).unwrap_err();
-        assert_eq!(err, ModelError::non_finite("ranges", 1, "range is infinite or negative (NaN = use the position)"));
-        assert!(model.evaluate_with_ranges(&pose, &positions, &[], Some(&[1.0]), &mut out).is_err());
+        let err = model
+            .evaluate_with_ranges(&pose, &positions, &[], Some(&[0.0, -1.0, f64::NAN]), &mut out)
+            .unwrap_err();
+        assert_eq!(
+            err,
+            ModelError::non_finite("ranges", 1, "range is infinite or negative (NaN = use the position)")
+        );
+        assert!(model
+            .evaluate_with_ranges(&pose, &positions, &[], Some(&[1.0]), &mut out)
+            .is_err());
     }
 
     #[test]
@@ -408,30 +498,61 @@ mod tests {
         .unwrap();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         let mut out = [0.0; 3];
-        model.evaluate(&pose, &[0.0; 6], &[9.99, 10.0, 250.0], &mut out).unwrap();
+        model
+            .evaluate(&pose, &[0.0; 6], &[9.99, 10.0, 250.0], &mut out)
+            .unwrap();
         assert_eq!(out, [1e-1, 1e-3, 1e-3]);
-        let err = model.evaluate(&pose, &[0.0; 6], &[9.99, f64::NAN, 250.0], &mut out).unwrap_err();
-        assert_eq!(err, ModelError::non_finite("metadata", 1, "metadata column 0 is missing and the rule has no `missing` value"));
+        let err = model
+            .evaluate(&pose, &[0.0; 6], &[9.99, f64::NAN, 250.0], &mut out)
+            .unwrap_err();
+        assert_eq!(
+            err,
+            ModelError::non_finite(
+                "metadata",
+                1,
+                "metadata column 0 is missing and the rule has no `missing` value"
+            )
+        );
     }
 
     #[test]
     fn infinite_metadata_is_an_error_naming_metadata() {
-        let rule = MetadataThreshold { column: 0, threshold: 10.0, below: 1e-1, at_or_above: 1e-3, missing: Some(1.0) };
+        let rule = MetadataThreshold {
+            column: 0,
+            threshold: 10.0,
+            below: 1e-1,
+            at_or_above: 1e-3,
+            missing: Some(1.0),
+        };
         let model = ClutterModel::new(vec![ClutterFactor::Metadata(rule)]).unwrap();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         let mut out = [0.0; 3];
         for bad in [f64::INFINITY, f64::NEG_INFINITY] {
-            let err = model.evaluate(&pose, &[0.0; 6], &[1.0, f64::NAN, bad], &mut out).unwrap_err();
-            assert_eq!(err, ModelError::non_finite("metadata", 2, format!("metadata column 0 is {bad}; values must be finite (NaN = missing)")));
+            let err = model
+                .evaluate(&pose, &[0.0; 6], &[1.0, f64::NAN, bad], &mut out)
+                .unwrap_err();
+            assert_eq!(
+                err,
+                ModelError::non_finite(
+                    "metadata",
+                    2,
+                    format!("metadata column 0 is {bad}; values must be finite (NaN = missing)")
+                )
+            );
         }
     }
 
     #[test]
     fn paper_radar_range_rule() {
-        let model = ClutterModel::new(vec![ClutterFactor::Range(RangeBands::new(vec![1000.0], vec![1e-3, 1e-2], vec![true]).unwrap())]).unwrap();
+        let model = ClutterModel::new(vec![ClutterFactor::Range(
+            RangeBands::new(vec![1000.0], vec![1e-3, 1e-2], vec![true]).unwrap(),
+        )])
+        .unwrap();
         let pose = Pose::new(10.0, 10.0, 0.0).unwrap();
         let mut out = [0.0; 3];
-        model.evaluate(&pose, &[10.0, 1009.0, 10.0, 1010.0, 1010.0, 10.0], &[], &mut out).unwrap();
+        model
+            .evaluate(&pose, &[10.0, 1009.0, 10.0, 1010.0, 1010.0, 10.0], &[], &mut out)
+            .unwrap();
         assert_eq!(out, [1e-3, 1e-2, 1e-2]);
     }
 
@@ -443,12 +564,29 @@ mod tests {
 
     fn learned_map() -> ClutterFactor {
         use crate::clutter_map::MapSpace;
-        let bearings: Vec<f64> = (0..=12).map(|i| -std::f64::consts::PI + i as f64 * std::f64::consts::PI / 6.0).collect();
-        let mut map = ClutterMap::new(MapSpace::BearingRange, [bearings, vec![0.0, 300.0, 1000.0, 1600.0]], 1e-3, 3.0, 0.95).unwrap();
+        let bearings: Vec<f64> = (0..=12)
+            .map(|i| -std::f64::consts::PI + i as f64 * std::f64::consts::PI / 6.0)
+            .collect();
+        let mut map = ClutterMap::new(
+            MapSpace::BearingRange,
+            [bearings, vec![0.0, 300.0, 1000.0, 1600.0]],
+            1e-3,
+            3.0,
+            0.95,
+        )
+        .unwrap();
         let pose = Pose::new(3.0, -4.0, 0.7).unwrap();
-        let clutter: Vec<f64> = (0..80).map(|k| ((k as f64) * 1.618_033_988_749_895).sin() * 1500.0).collect();
+        let clutter: Vec<f64> = (0..80)
+            .map(|k| ((k as f64) * 1.618_033_988_749_895).sin() * 1500.0)
+            .collect();
         for scan in 0..5 {
-            map.update(&pose, &clutter[8 * scan..8 * scan + 16], None, &[clutter[scan], clutter[scan + 1], 150.0]).unwrap();
+            map.update(
+                &pose,
+                &clutter[8 * scan..8 * scan + 16],
+                None,
+                &[clutter[scan], clutter[scan + 1], 150.0],
+            )
+            .unwrap();
         }
         ClutterFactor::Map(Arc::new(RwLock::new(map)))
     }
@@ -456,40 +594,82 @@ mod tests {
     #[test]
     fn a_model_reads_its_map_as_it_stands() {
         let factor = learned_map();
-        let ClutterFactor::Map(shared) = &factor else { unreachable!() };
+        let ClutterFactor::Map(shared) = &factor else {
+            unreachable!()
+        };
         let model = ClutterModel::new(vec![ClutterFactor::Constant(2.0), factor.clone()]).unwrap();
         assert!(model.uses_position());
         let pose = Pose::new(3.0, -4.0, 0.7).unwrap();
         let at = [500.0, 300.0];
         let mut before = [0.0];
         model.evaluate(&pose, &at, &[], &mut before).unwrap();
-        assert_eq!(before[0], 2.0 * read_map(shared).value_at(&pose, at[0], at[1], f64::NAN));
-        shared.write().unwrap().update(&pose, &[at, at, at].concat(), None, &[]).unwrap();
+        assert_eq!(
+            before[0],
+            2.0 * read_map(shared).value_at(&pose, at[0], at[1], f64::NAN)
+        );
+        shared
+            .write()
+            .unwrap()
+            .update(&pose, &[at, at, at].concat(), None, &[])
+            .unwrap();
         let mut after = [0.0];
         model.evaluate(&pose, &at, &[], &mut after).unwrap();
         assert!(after[0] > before[0]);
         assert_eq!(after[0], 2.0 * read_map(shared).value_at(&pose, at[0], at[1], f64::NAN));
         // equal models share the map itself
-        assert_eq!(model, ClutterModel::new(vec![ClutterFactor::Constant(2.0), factor]).unwrap());
-        assert_ne!(model, ClutterModel::new(vec![ClutterFactor::Constant(2.0), learned_map()]).unwrap());
+        assert_eq!(
+            model,
+            ClutterModel::new(vec![ClutterFactor::Constant(2.0), factor]).unwrap()
+        );
+        assert_ne!(
+            model,
+            ClutterModel::new(vec![ClutterFactor::Constant(2.0), learned_map()]).unwrap()
+        );
     }
 
     #[test]
     fn every_backend_gives_the_reference_bits() {
         use crate::simd::{run_on, Backend};
-        let bands = |edges: Vec<f64>, values: Vec<f64>, owns: Vec<bool>| ClutterFactor::Range(RangeBands::new(edges, values, owns).unwrap());
-        let rule = |column, threshold, missing| ClutterFactor::Metadata(MetadataThreshold { column, threshold, below: 1e-1, at_or_above: 1e-3, missing });
+        let bands = |edges: Vec<f64>, values: Vec<f64>, owns: Vec<bool>| {
+            ClutterFactor::Range(RangeBands::new(edges, values, owns).unwrap())
+        };
+        let rule = |column, threshold, missing| {
+            ClutterFactor::Metadata(MetadataThreshold {
+                column,
+                threshold,
+                below: 1e-1,
+                at_or_above: 1e-3,
+                missing,
+            })
+        };
         // Each pass order of the kernel: a constant first, a range factor first (its pass
         // also starts λ), a metadata rule first with range bands later, no factors, no
         // position at all.
         let models = [
-            vec![ClutterFactor::Constant(0.7), bands(vec![100.0, 1000.0], vec![1e-3, 1e-2, 3e-2], vec![true, false]), rule(1, 10.0, Some(1e-2)), rule(0, 0.5, None)],
-            vec![bands(vec![1000.0], vec![1e-3, 1e-2], vec![true]), rule(0, 10.0, Some(1e-2))],
-            vec![rule(0, 10.0, Some(1e-2)), bands(vec![100.0], vec![2.0, 3.0], vec![false]), ClutterFactor::Constant(1e-300), ClutterFactor::Constant(1e-300)],
+            vec![
+                ClutterFactor::Constant(0.7),
+                bands(vec![100.0, 1000.0], vec![1e-3, 1e-2, 3e-2], vec![true, false]),
+                rule(1, 10.0, Some(1e-2)),
+                rule(0, 0.5, None),
+            ],
+            vec![
+                bands(vec![1000.0], vec![1e-3, 1e-2], vec![true]),
+                rule(0, 10.0, Some(1e-2)),
+            ],
+            vec![
+                rule(0, 10.0, Some(1e-2)),
+                bands(vec![100.0], vec![2.0, 3.0], vec![false]),
+                ClutterFactor::Constant(1e-300),
+                ClutterFactor::Constant(1e-300),
+            ],
             vec![],
             vec![ClutterFactor::Constant(0.25), rule(2, 5.0, Some(4.0))],
             // a learned map with some evidence, between a range factor and a rule
-            vec![bands(vec![1000.0], vec![1e-3, 1e-2], vec![true]), learned_map(), rule(0, 10.0, Some(1e-2))],
+            vec![
+                bands(vec![1000.0], vec![1e-3, 1e-2], vec![true]),
+                learned_map(),
+                rule(0, 10.0, Some(1e-2)),
+            ],
             vec![learned_map()],
         ];
         let origin = [3.0, -4.0];
@@ -497,7 +677,9 @@ mod tests {
         for model in models.map(|factors| ClutterModel::new(factors).unwrap()) {
             let k = model.metadata_columns();
             for m in [1, 3, 4, 5, 9, 130] {
-                let mut positions: Vec<f64> = (0..2 * m).map(|k| ((k as f64) * 0.618_033_988_749_895).sin() * 1500.0).collect();
+                let mut positions: Vec<f64> = (0..2 * m)
+                    .map(|k| ((k as f64) * 0.618_033_988_749_895).sin() * 1500.0)
+                    .collect();
                 // on the band edges exactly, far away, and positions that cannot be used
                 positions[0] = origin[0] + 100.0;
                 positions[1] = origin[1];
@@ -510,17 +692,48 @@ mod tests {
                     positions[2 * 77 + 1] = f64::NAN;
                     positions[2 * 90] = f64::NEG_INFINITY;
                 }
-                let metadata: Vec<f64> = (0..k * m).map(|k| match k % 7 { 0 => f64::NAN, 1 => 10.0, 2 => 0.5, _ => (k % 23) as f64 }).collect();
+                let metadata: Vec<f64> = (0..k * m)
+                    .map(|k| match k % 7 {
+                        0 => f64::NAN,
+                        1 => 10.0,
+                        2 => 0.5,
+                        _ => (k % 23) as f64,
+                    })
+                    .collect();
                 let ranges: Vec<f64> = (0..m).map(|i| if i % 3 == 0 { 1000.0 } else { f64::NAN }).collect();
                 for ranges in [None, Some(&ranges[..])] {
                     let reference: Vec<u64> = (0..m)
-                        .map(|i| model.at_one(&pose, [positions[2 * i], positions[2 * i + 1]], &metadata[k * i..k * (i + 1)], ranges.map_or(f64::NAN, |r| r[i])).to_bits())
+                        .map(|i| {
+                            model
+                                .at_one(
+                                    &pose,
+                                    [positions[2 * i], positions[2 * i + 1]],
+                                    &metadata[k * i..k * (i + 1)],
+                                    ranges.map_or(f64::NAN, |r| r[i]),
+                                )
+                                .to_bits()
+                        })
                         .collect();
                     let first_bad = reference.iter().position(|&v| !is_density(f64::from_bits(v)));
                     for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
                         let mut out = vec![0.0; m];
-                        let bad = run_on(backend, Densities { model: &model, pose: &pose, positions: &positions, metadata: &metadata, ranges, first: 0, out: &mut out });
-                        assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), reference, "{backend:?} m={m} {model:?}");
+                        let bad = run_on(
+                            backend,
+                            Densities {
+                                model: &model,
+                                pose: &pose,
+                                positions: &positions,
+                                metadata: &metadata,
+                                ranges,
+                                first: 0,
+                                out: &mut out,
+                            },
+                        );
+                        assert_eq!(
+                            out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                            reference,
+                            "{backend:?} m={m} {model:?}"
+                        );
                         assert_eq!(bad, first_bad, "{backend:?} m={m} {model:?}");
                     }
                 }

@@ -184,23 +184,33 @@ fn whole(sums: &[[f64; 5]]) -> [f64; 5] {
 
 fn check_edges(argument: &'static str, edges: &[f64], lowest: f64, highest: f64) -> Result<()> {
     if edges.len() < 2 {
-        return Err(ModelError::invalid(argument, format!("a grid axis needs at least 2 edges, got {}", edges.len())));
+        return Err(ModelError::invalid(
+            argument,
+            format!("a grid axis needs at least 2 edges, got {}", edges.len()),
+        ));
     }
     if let Some(v) = edges.iter().find(|v| !v.is_finite()) {
         return Err(ModelError::invalid(argument, format!("edges must be finite, got {v}")));
     }
-    if edges.windows(2).any(|w| w[0] >= w[1]) { // (finite, checked above)
+    if edges.windows(2).any(|w| w[0] >= w[1]) {
+        // (finite, checked above)
         return Err(ModelError::invalid(argument, "edges must be strictly increasing"));
     }
     if edges[0] < lowest || edges[edges.len() - 1] > highest {
-        return Err(ModelError::invalid(argument, format!("edges must lie in [{lowest}, {highest}]")));
+        return Err(ModelError::invalid(
+            argument,
+            format!("edges must lie in [{lowest}, {highest}]"),
+        ));
     }
     Ok(())
 }
 
 fn positive(argument: &'static str, value: f64) -> Result<()> {
     if !(value.is_finite() && value > 0.0) {
-        return Err(ModelError::invalid(argument, format!("must be finite and > 0, got {value}")));
+        return Err(ModelError::invalid(
+            argument,
+            format!("must be finite and > 0, got {value}"),
+        ));
     }
     Ok(())
 }
@@ -220,16 +230,30 @@ fn posterior_mean(direct: f64, mean: f64, weight: f64, evidence: f64, exposure: 
     if weight.is_infinite() || total == 0.0 {
         return mean.clamp(f64::MIN_POSITIVE, f64::MAX); // the prior alone, or nothing to weigh
     }
-    let rate = if evidence.is_infinite() { f64::MAX } else { evidence / total };
+    let rate = if evidence.is_infinite() {
+        f64::MAX
+    } else {
+        evidence / total
+    };
     let value = mean * (weight / total) + rate;
     // (NaN only from a restored state whose sums are themselves at f64's limit)
-    if value.is_nan() { mean } else { value.clamp(f64::MIN_POSITIVE, f64::MAX) }
+    if value.is_nan() {
+        mean
+    } else {
+        value.clamp(f64::MIN_POSITIVE, f64::MAX)
+    }
 }
 
 impl ClutterMap {
     /// A fresh map (the prior everywhere). `edges[0]` is bearing (rad, within [−π, π]) or x,
     /// `edges[1]` range (m, ≥ 0) or y.
-    pub fn new(space: MapSpace, edges: [Vec<f64>; 2], prior_intensity: f64, prior_scans: f64, forgetting: f64) -> Result<Self> {
+    pub fn new(
+        space: MapSpace,
+        edges: [Vec<f64>; 2],
+        prior_intensity: f64,
+        prior_scans: f64,
+        forgetting: f64,
+    ) -> Result<Self> {
         let (low, high) = match space {
             MapSpace::BearingRange => ([-PI, 0.0], [PI, f64::INFINITY]),
             _ => ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]),
@@ -239,11 +263,20 @@ impl ClutterMap {
         positive("prior_intensity", prior_intensity)?;
         if prior_intensity < f64::MIN_POSITIVE {
             // (a λ is a density trackers divide by: 1/λ must be finite)
-            return Err(ModelError::invalid("prior_intensity", format!("must be at least {:e} (a normal double), got {prior_intensity:e}", f64::MIN_POSITIVE)));
+            return Err(ModelError::invalid(
+                "prior_intensity",
+                format!(
+                    "must be at least {:e} (a normal double), got {prior_intensity:e}",
+                    f64::MIN_POSITIVE
+                ),
+            ));
         }
         positive("prior_scans", prior_scans)?;
         if !(forgetting > 0.0 && forgetting <= 1.0) {
-            return Err(ModelError::invalid("forgetting", format!("must be in (0, 1], got {forgetting}")));
+            return Err(ModelError::invalid(
+                "forgetting",
+                format!("must be in (0, 1], got {forgetting}"),
+            ));
         }
         let cells = memory::product("edges", &[edges[0].len() - 1, edges[1].len() - 1])?;
         let mut volumes = memory::with_room("edges", cells)?;
@@ -253,16 +286,41 @@ impl ClutterMap {
             }
         }
         if let Some(v) = volumes.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
-            return Err(ModelError::invalid("edges", format!("every cell needs a finite volume > 0, got {v}")));
+            return Err(ModelError::invalid(
+                "edges",
+                format!("every cell needs a finite volume > 0, got {v}"),
+            ));
         }
         let total = (edges[0][edges[0].len() - 1] - edges[0][0]) * (edges[1][edges[1].len() - 1] - edges[1][0]);
         if !(total <= MAX_VOLUME) {
-            return Err(ModelError::invalid("edges", format!("the grid's volume must be at most {MAX_VOLUME:e} (2^702), got {total:e}")));
+            return Err(ModelError::invalid(
+                "edges",
+                format!("the grid's volume must be at most {MAX_VOLUME:e} (2^702), got {total:e}"),
+            ));
         }
-        let (counts, deficit) = (memory::filled("edges", cells, 0.0)?, memory::filled("edges", cells, 0.0)?);
+        let (counts, deficit) = (
+            memory::filled("edges", cells, 0.0)?,
+            memory::filled("edges", cells, 0.0)?,
+        );
         Ok(ClutterMap {
-            space, edges, prior_intensity, prior_scans, forgetting, volumes, counts, deficit, exposure: 0.0, scale: 1.0,
-            pooling: Pooling::None, pooled_scans: Some(prior_scans), pool_volumes: Vec::new(), pool_counts: Vec::new(), pool_deficit: Vec::new(), pool_level: Vec::new(), pool_spread: Vec::new(), apart: Vec::new(),
+            space,
+            edges,
+            prior_intensity,
+            prior_scans,
+            forgetting,
+            volumes,
+            counts,
+            deficit,
+            exposure: 0.0,
+            scale: 1.0,
+            pooling: Pooling::None,
+            pooled_scans: Some(prior_scans),
+            pool_volumes: Vec::new(),
+            pool_counts: Vec::new(),
+            pool_deficit: Vec::new(),
+            pool_level: Vec::new(),
+            pool_spread: Vec::new(),
+            apart: Vec::new(),
             scratch: Scratch::default(),
         })
     }
@@ -290,11 +348,17 @@ impl ClutterMap {
             Pooling::Grid => vec![rings.iter().sum()],
         };
         let pools = self.pool_volumes.len();
-        (self.pool_counts, self.pool_deficit) = (memory::filled("edges", pools, 0.0)?, memory::filled("edges", pools, 0.0)?);
+        (self.pool_counts, self.pool_deficit) = (
+            memory::filled("edges", pools, 0.0)?,
+            memory::filled("edges", pools, 0.0)?,
+        );
         (self.pool_level, self.pool_spread, self.apart) = (Vec::new(), Vec::new(), Vec::new());
         self.scratch = Scratch::default();
         if pooling != Pooling::None && pooled_scans.is_none() {
-            (self.pool_level, self.pool_spread) = (memory::filled("edges", pools, 0.0)?, memory::filled("edges", pools, 0.0)?);
+            (self.pool_level, self.pool_spread) = (
+                memory::filled("edges", pools, 0.0)?,
+                memory::filled("edges", pools, 0.0)?,
+            );
             self.apart = memory::filled("edges", self.counts.len(), false)?;
             let column = || memory::filled("edges", columns, 0.0);
             self.scratch = Scratch {
@@ -337,7 +401,12 @@ impl ClutterMap {
         if self.pooling == Pooling::Range {
             counts.fill(0.0);
             deficit.fill(0.0);
-            for ((n, d), v) in self.counts.chunks_exact(columns).zip(self.deficit.chunks_exact(columns)).zip(self.volumes.chunks_exact(columns)) {
+            for ((n, d), v) in self
+                .counts
+                .chunks_exact(columns)
+                .zip(self.deficit.chunks_exact(columns))
+                .zip(self.volumes.chunks_exact(columns))
+            {
                 for j in 0..columns {
                     counts[j] += n[j];
                     deficit[j] += v[j] * d[j];
@@ -384,8 +453,21 @@ impl ClutterMap {
         };
         let threshold = (members as f64 / APART).ln();
         let (mut scratch, mut apart) = (std::mem::take(&mut self.scratch), std::mem::take(&mut self.apart));
-        let cells = Cells { counts: &self.counts, deficit: &self.deficit, volumes: &self.volumes, columns, exposure: self.exposure, inverse };
-        let Scratch { sums, levels, changed, rows: to_test, moments } = &mut scratch;
+        let cells = Cells {
+            counts: &self.counts,
+            deficit: &self.deficit,
+            volumes: &self.volumes,
+            columns,
+            exposure: self.exposure,
+            inverse,
+        };
+        let Scratch {
+            sums,
+            levels,
+            changed,
+            rows: to_test,
+            moments,
+        } = &mut scratch;
         cells.moments(moments, sums);
         // every cell's pool level (of all its cells), per column
         match self.pooling {
@@ -398,7 +480,11 @@ impl ClutterMap {
         }
         // cells apart: a bound on each cell's divergence first (vectorised, per row), the
         // logarithm only in rows where the bound cannot keep every cell
-        let tests = Tests { levels, effective, threshold };
+        let tests = Tests {
+            levels,
+            effective,
+            threshold,
+        };
         apart.fill(false);
         changed.fill(false);
         cells.rows_to_test(tests, to_test);
@@ -417,7 +503,11 @@ impl ClutterMap {
             sums[j] = cells.column_moments(j, |c| !apart[c]);
         }
         for g in 0..self.pool_volumes.len() {
-            let s = if self.pooling == Pooling::Grid { whole(sums) } else { sums[g] };
+            let s = if self.pooling == Pooling::Grid {
+                whole(sums)
+            } else {
+                sums[g]
+            };
             let [_, e, nn, ne, ee] = s;
             let l = self.level(&s, self.pool_volumes[g]);
             // Σ (n − λ e)² − λ (S2/S) Σ e, expanded
@@ -425,15 +515,26 @@ impl ClutterMap {
             self.pool_level[g] = l;
             // (NaN where e² overflows, in a grid of huge cells: no spread resolved, max gives
             // 0; an infinite one, from a level near f64::MAX, is the largest double instead)
-            self.pool_spread[g] = if ee > 0.0 { (excess / ee).max(0.0).min(f64::MAX) } else { 0.0 };
+            self.pool_spread[g] = if ee > 0.0 {
+                (excess / ee).max(0.0).min(f64::MAX)
+            } else {
+                0.0
+            };
         }
         (self.scratch, self.apart) = (scratch, apart);
     }
 
     /// λ_g of a pool of `volume` from its cells' sums (Σ n, Σ e, …), with the λ₀ prior.
     fn level(&self, sums: &[f64; 5], volume: f64) -> f64 {
-        let direct = (self.prior_intensity * self.prior_scans * volume + sums[0]) / (self.prior_scans * volume + sums[1]);
-        posterior_mean(direct, self.prior_intensity, self.prior_scans * volume, sums[0], sums[1])
+        let direct =
+            (self.prior_intensity * self.prior_scans * volume + sums[0]) / (self.prior_scans * volume + sums[1]);
+        posterior_mean(
+            direct,
+            self.prior_intensity,
+            self.prior_scans * volume,
+            sums[0],
+            sums[1],
+        )
     }
 
     /// The map with a saved state (see [`state`](Self::state)).
@@ -443,25 +544,50 @@ impl ClutterMap {
 
     /// [`with_state`](Self::with_state) where a missing `counts` or `deficit` is the fresh
     /// map's (zeros; no second grid is allocated).
-    pub fn with_saved(mut self, counts: Option<Vec<f64>>, deficit: Option<Vec<f64>>, exposure: f64, scale: f64) -> Result<Self> {
+    pub fn with_saved(
+        mut self,
+        counts: Option<Vec<f64>>,
+        deficit: Option<Vec<f64>>,
+        exposure: f64,
+        scale: f64,
+    ) -> Result<Self> {
         let counts = counts.unwrap_or_else(|| std::mem::take(&mut self.counts));
         let deficit = deficit.unwrap_or_else(|| std::mem::take(&mut self.deficit));
         for (argument, values) in [("counts", &counts), ("deficit", &deficit)] {
             if values.len() != self.volumes.len() {
-                return Err(ModelError::shape(argument, format!("must have one entry per cell ({}), got {}", self.volumes.len(), values.len())));
+                return Err(ModelError::shape(
+                    argument,
+                    format!(
+                        "must have one entry per cell ({}), got {}",
+                        self.volumes.len(),
+                        values.len()
+                    ),
+                ));
             }
             if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
-                return Err(ModelError::invalid(argument, format!("must be finite and >= 0, got {v}")));
+                return Err(ModelError::invalid(
+                    argument,
+                    format!("must be finite and >= 0, got {v}"),
+                ));
             }
         }
         if !(exposure.is_finite() && exposure >= 0.0) {
-            return Err(ModelError::invalid("exposure", format!("must be finite and >= 0, got {exposure}")));
+            return Err(ModelError::invalid(
+                "exposure",
+                format!("must be finite and >= 0, got {exposure}"),
+            ));
         }
         if !(scale.is_finite() && scale > 0.0) {
-            return Err(ModelError::invalid("scale", format!("must be finite and > 0, got {scale}")));
+            return Err(ModelError::invalid(
+                "scale",
+                format!("must be finite and > 0, got {scale}"),
+            ));
         }
         if let Some(v) = deficit.iter().find(|v| **v > exposure) {
-            return Err(ModelError::invalid("deficit", format!("cannot exceed the exposure ({exposure}), got {v}")));
+            return Err(ModelError::invalid(
+                "deficit",
+                format!("cannot exceed the exposure ({exposure}), got {v}"),
+            ));
         }
         self.counts = counts;
         self.deficit = deficit;
@@ -526,7 +652,10 @@ impl ClutterMap {
 
     #[inline]
     fn intensity_of(&self, cell: usize) -> f64 {
-        let (n, s) = (self.counts[cell] / self.scale, (self.exposure - self.deficit[cell]) / self.scale);
+        let (n, s) = (
+            self.counts[cell] / self.scale,
+            (self.exposure - self.deficit[cell]) / self.scale,
+        );
         let (prior, weight) = match (self.pool_of(cell), self.pooled_scans) {
             (Some(g), Some(weight)) => (self.pool_intensity(g), weight),
             (Some(_), None) if self.apart[cell] => (self.prior_intensity, self.prior_scans),
@@ -572,7 +701,14 @@ impl ClutterMap {
     pub fn intensity_at(&self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>) -> Result<Vec<f64>> {
         let m = self.check_detections(positions, ranges)?;
         let mut values = memory::with_room("positions", m)?;
-        values.extend((0..m).map(|i| self.value_at(pose, positions[2 * i], positions[2 * i + 1], ranges.map_or(f64::NAN, |r| r[i]))));
+        values.extend((0..m).map(|i| {
+            self.value_at(
+                pose,
+                positions[2 * i],
+                positions[2 * i + 1],
+                ranges.map_or(f64::NAN, |r| r[i]),
+            )
+        }));
         Ok(values)
     }
 
@@ -587,10 +723,17 @@ impl ClutterMap {
         }
         if let Some(r) = ranges {
             if r.len() != m {
-                return Err(ModelError::shape("ranges", format!("must have {m} entries, got {}", r.len())));
+                return Err(ModelError::shape(
+                    "ranges",
+                    format!("must have {m} entries, got {}", r.len()),
+                ));
             }
             if let Some(row) = r.iter().position(|v| v.is_infinite() || *v < 0.0) {
-                return Err(ModelError::non_finite("ranges", row, "range is infinite or negative (NaN = use the position)"));
+                return Err(ModelError::non_finite(
+                    "ranges",
+                    row,
+                    "range is infinite or negative (NaN = use the position)",
+                ));
             }
         }
         Ok(m)
@@ -626,11 +769,21 @@ impl ClutterMap {
     /// clutter point instead of 1: the probability that it is clutter, when a tracker
     /// knows it (a PHD update's λ / (λ + Σ P_D w g), a JPDA's no-target association).
     /// The expected clutter count then feeds the posterior: an EM-style estimate.
-    pub fn update_weighted(&mut self, pose: &Pose, positions: &[f64], ranges: Option<&[f64]>, weights: Option<&[f64]>, gates: &[f64]) -> Result<()> {
+    pub fn update_weighted(
+        &mut self,
+        pose: &Pose,
+        positions: &[f64],
+        ranges: Option<&[f64]>,
+        weights: Option<&[f64]>,
+        gates: &[f64],
+    ) -> Result<()> {
         let m = self.check_detections(positions, ranges)?;
         if let Some(w) = weights {
             if w.len() != m {
-                return Err(ModelError::shape("weights", format!("must have {m} entries, got {}", w.len())));
+                return Err(ModelError::shape(
+                    "weights",
+                    format!("must have {m} entries, got {}", w.len()),
+                ));
             }
             if let Some(row) = w.iter().position(|v| !(*v >= 0.0 && *v <= 1.0)) {
                 return Err(ModelError::non_finite("weights", row, "a weight must be in [0, 1]"));
@@ -639,8 +792,15 @@ impl ClutterMap {
         if !gates.len().is_multiple_of(3) {
             return Err(ModelError::shape("gates", "must be (G, 3): x, y, radius"));
         }
-        if let Some(g) = gates.chunks_exact(3).position(|g| !(g.iter().all(|v| v.is_finite()) && g[2] >= 0.0)) {
-            return Err(ModelError::non_finite("gates", g, "a gate needs a finite centre and a finite radius >= 0"));
+        if let Some(g) = gates
+            .chunks_exact(3)
+            .position(|g| !(g.iter().all(|v| v.is_finite()) && g[2] >= 0.0))
+        {
+            return Err(ModelError::non_finite(
+                "gates",
+                g,
+                "a gate needs a finite centre and a finite radius >= 0",
+            ));
         }
         // the gated fractions this scan, per cell (room for every gate, before anything changes)
         let mut gated: Vec<(usize, f64)> = memory::with_room("gates", gates.len() / 3)?;
@@ -654,7 +814,11 @@ impl ClutterMap {
             }
             self.exposure *= self.forgetting;
         }
-        let inside_a_gate = |x: f64, y: f64| gates.chunks_exact(3).any(|g| (x - g[0]).powi(2) + (y - g[1]).powi(2) <= g[2] * g[2]);
+        let inside_a_gate = |x: f64, y: f64| {
+            gates
+                .chunks_exact(3)
+                .any(|g| (x - g[0]).powi(2) + (y - g[1]).powi(2) <= g[2] * g[2])
+        };
         for i in 0..m {
             let (x, y) = (positions[2 * i], positions[2 * i + 1]);
             if inside_a_gate(x, y) {
@@ -696,7 +860,14 @@ mod tests {
 
     fn radar() -> ClutterMap {
         let bearings: Vec<f64> = (0..=8).map(|i| -PI + i as f64 * PI / 4.0).collect();
-        ClutterMap::new(MapSpace::BearingRange, [bearings, vec![0.0, 500.0, 1000.0]], 1e-3, 5.0, 0.9).unwrap()
+        ClutterMap::new(
+            MapSpace::BearingRange,
+            [bearings, vec![0.0, 500.0, 1000.0]],
+            1e-3,
+            5.0,
+            0.9,
+        )
+        .unwrap()
     }
 
     #[test]
@@ -747,12 +918,20 @@ mod tests {
 
     #[test]
     fn a_gate_takes_its_detections_and_its_area_out() {
-        let mut map = ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 10.0, 20.0], vec![0.0, 10.0]], 0.01, 2.0, 1.0).unwrap();
+        let mut map = ClutterMap::new(
+            MapSpace::WorldXY,
+            [vec![0.0, 10.0, 20.0], vec![0.0, 10.0]],
+            0.01,
+            2.0,
+            1.0,
+        )
+        .unwrap();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         // a track at (5, 5) with a 2 m gate, its detection at (5.5, 5) and clutter at (1, 1)
         // and (15, 5); a second gate of the same cell and one outside the grid
         let gates = [5.0, 5.0, 2.0, 8.0, 8.0, 1.0, 50.0, 50.0, 3.0];
-        map.update(&pose, &[5.5, 5.0, 1.0, 1.0, 15.0, 5.0], None, &gates).unwrap();
+        map.update(&pose, &[5.5, 5.0, 1.0, 1.0, 15.0, 5.0], None, &gates)
+            .unwrap();
         let fraction = (PI * 4.0 + PI) / 100.0;
         let (counts, deficit, exposure, _) = map.state();
         assert_eq!(counts, [1.0, 1.0]);
@@ -763,7 +942,9 @@ mod tests {
         // a cell gated whole every scan learns nothing: the prior
         let mut covered = ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 1.0], vec![0.0, 1.0]], 0.01, 2.0, 0.9).unwrap();
         for _ in 0..50 {
-            covered.update(&pose, &[0.2, 0.2, 0.9, 0.9], None, &[0.5, 0.5, 3.0]).unwrap();
+            covered
+                .update(&pose, &[0.2, 0.2, 0.9, 0.9], None, &[0.5, 0.5, 3.0])
+                .unwrap();
         }
         assert_eq!(covered.intensities().unwrap()[0], 0.01);
     }
@@ -787,7 +968,8 @@ mod tests {
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         // two points ~100 m ahead, just to port (cell (4, 0)), one at 700 m port (cell (6, 1)), then an
         // empty scan
-        map.update(&pose, &[100.0, 1.0, 100.0, 2.0, 0.0, 700.0], None, &[]).unwrap();
+        map.update(&pose, &[100.0, 1.0, 100.0, 2.0, 0.0, 700.0], None, &[])
+            .unwrap();
         map.update(&pose, &[], None, &[]).unwrap();
         let (v, big) = (PI / 4.0 * 500.0, 2.0 * PI * 500.0);
         let exposure = g + 1.0;
@@ -796,13 +978,18 @@ mod tests {
         let grid = map.intensities().unwrap(); // rows: 8 bearings, columns: 2 ranges
         let near = ring(2.0 * g);
         assert!((grid[4 * 2] - cell(near, 2.0 * g)).abs() <= 1e-15 * grid[8]);
-        assert!((grid[0] - cell(near, 0.0)).abs() <= 1e-15 * grid[0], "a quiet cell follows its ring");
+        assert!(
+            (grid[0] - cell(near, 0.0)).abs() <= 1e-15 * grid[0],
+            "a quiet cell follows its ring"
+        );
         let far = ring(g);
         assert!((grid[6 * 2 + 1] - cell(far, g)).abs() <= 1e-15 * grid[13]);
         assert!((grid[1] - cell(far, 0.0)).abs() <= 1e-15 * grid[1]);
         // the whole grid as one pool
         let mut whole = radar().with_pooling(Pooling::Grid, Some(sp)).unwrap();
-        whole.update(&pose, &[100.0, 1.0, 100.0, 2.0, 0.0, 700.0], None, &[]).unwrap();
+        whole
+            .update(&pose, &[100.0, 1.0, 100.0, 2.0, 0.0, 700.0], None, &[])
+            .unwrap();
         whole.update(&pose, &[], None, &[]).unwrap();
         let level = (1e-3 * s0 * 2.0 * big + 3.0 * g) / (2.0 * s0 * big + 2.0 * big * exposure);
         assert!((whole.intensities().unwrap()[1] - cell(level, 0.0)).abs() <= 1e-15 * level);
@@ -813,13 +1000,24 @@ mod tests {
         let (g, s0) = (0.9f64, 5.0);
         let mut map = radar().with_pooling(Pooling::Range, None).unwrap();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
-        assert_eq!(map.intensities().unwrap(), vec![1e-3; 16], "no evidence: the prior everywhere");
+        assert_eq!(
+            map.intensities().unwrap(),
+            vec![1e-3; 16],
+            "no evidence: the prior everywhere"
+        );
         // the near ring: four points a scan in cell (4, 0), two in (5, 0); the far ring: one
         // point in cell (6, 1), then one in (2, 1), beside a gate of radius 0 (no area, so no
         // deficit)
         let near_points = [100.0, 1.0, 100.0, 2.0, 110.0, 3.0, 120.0, 1.0, 60.0, 80.0, 50.0, 85.0];
-        map.update(&pose, &[&near_points[..], &[0.0, 700.0]].concat(), None, &[]).unwrap();
-        map.update(&pose, &[&near_points[..], &[0.0, -700.0]].concat(), None, &[0.0, -600.0, 0.0]).unwrap();
+        map.update(&pose, &[&near_points[..], &[0.0, 700.0]].concat(), None, &[])
+            .unwrap();
+        map.update(
+            &pose,
+            &[&near_points[..], &[0.0, -700.0]].concat(),
+            None,
+            &[0.0, -600.0, 0.0],
+        )
+        .unwrap();
         let (v, big) = (PI / 4.0 * 500.0, 2.0 * PI * 500.0);
         let total = g + 1.0;
         let squares = (1.0 - (1.0 - total * (1.0 - g)).powi(2)) / (1.0 - g * g); // g² + 1
@@ -843,14 +1041,22 @@ mod tests {
         let weight = near / (tau * v);
         let grid = map.intensities().unwrap();
         let cell = |n: f64| (near * weight + n / v) / (weight + total);
-        assert!((grid[8] - (1e-3 * s0 + n4 / v) / (s0 + total)).abs() <= 1e-12 * grid[8], "alone");
+        assert!(
+            (grid[8] - (1e-3 * s0 + n4 / v) / (s0 + total)).abs() <= 1e-12 * grid[8],
+            "alone"
+        );
         assert!((grid[10] - cell(n5)).abs() <= 1e-12 * grid[10]);
         assert!((grid[0] - cell(0.0)).abs() <= 1e-12 * grid[0]);
         // far ring: one point per cell in two cells, one scan apart
         let far = (1e-3 * s0 * big + g + 1.0) / (s0 * big + big * total);
-        let excess = (g - far * e).powi(2) + (1.0 - far * e).powi(2) + 6.0 * (far * e).powi(2) - 8.0 * far * v * squares;
+        let excess =
+            (g - far * e).powi(2) + (1.0 - far * e).powi(2) + 6.0 * (far * e).powi(2) - 8.0 * far * v * squares;
         let tau = (excess / (8.0 * e * e)).max(0.0);
-        let expected = if tau == 0.0 { far } else { (far * far / (tau * v) + g / v) / (far / (tau * v) + total) };
+        let expected = if tau == 0.0 {
+            far
+        } else {
+            (far * far / (tau * v) + g / v) / (far / (tau * v) + total)
+        };
         assert!((grid[6 * 2 + 1] - expected).abs() <= 1e-12 * expected);
     }
 
@@ -860,12 +1066,17 @@ mod tests {
         // the far ring one cell with 5 a scan (a coast), from a fixed sequence
         let bearings: Vec<f64> = (0..=36).map(|i| -PI + i as f64 * PI / 18.0).collect();
         let edges = [bearings, vec![500.0, 1000.0, 1500.0]];
-        let mut map = ClutterMap::new(MapSpace::BearingRange, edges.clone(), 1e-3, 1.0, 0.99).unwrap().with_pooling(Pooling::Range, None).unwrap();
+        let mut map = ClutterMap::new(MapSpace::BearingRange, edges.clone(), 1e-3, 1.0, 0.99)
+            .unwrap()
+            .with_pooling(Pooling::Range, None)
+            .unwrap();
         let mut alone = ClutterMap::new(MapSpace::BearingRange, edges, 1e-3, 1.0, 0.99).unwrap(); // the same evidence
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
         let mut state = 12345u64;
         let mut uniform = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..300 {
@@ -890,25 +1101,56 @@ mod tests {
             alone.update(&pose, &points, None, &[]).unwrap();
         }
         let v = PI / 18.0 * 500.0;
-        let ring = |m: &ClutterMap, r: usize| -> Vec<f64> { m.intensities().unwrap().chunks_exact(2).map(|c| c[r] * v).collect() }; // points a scan
+        let ring = |m: &ClutterMap, r: usize| -> Vec<f64> {
+            m.intensities().unwrap().chunks_exact(2).map(|c| c[r] * v).collect()
+        }; // points a scan
         let spread = |values: &[f64]| {
             let mean = values.iter().sum::<f64>() / values.len() as f64;
             (values.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / values.len() as f64).sqrt()
         };
         // the flat ring: its cells take its level, where alone they scatter by ~±0.07
         let (near, near_alone) = (ring(&map, 0), ring(&alone, 0));
-        assert!(spread(&near_alone) > 0.04, "the cells alone scatter: {}", spread(&near_alone));
-        assert!(spread(&near) < 0.5 * spread(&near_alone), "pooled {} vs alone {}", spread(&near), spread(&near_alone));
+        assert!(
+            spread(&near_alone) > 0.04,
+            "the cells alone scatter: {}",
+            spread(&near_alone)
+        );
+        assert!(
+            spread(&near) < 0.5 * spread(&near_alone),
+            "pooled {} vs alone {}",
+            spread(&near),
+            spread(&near_alone)
+        );
         assert!(near.iter().all(|l| (l - 0.5).abs() < 0.1), "{near:?}");
         // the ring with a coast: the hot cell leaves it, and its quiet cells keep the ring's
         // level (of the quiet cells alone: the coast does not lift it) as the flat ring's do
-        assert_eq!(map.apart.iter().filter(|a| **a).count(), 1, "only the coast's cell leaves");
+        assert_eq!(
+            map.apart.iter().filter(|a| **a).count(),
+            1,
+            "only the coast's cell leaves"
+        );
         assert!(map.apart[9 * 2 + 1]);
         let (far, far_alone) = (ring(&map, 1), ring(&alone, 1));
-        assert!((far[9] - 5.0).abs() < 0.5, "the hot cell departs from its ring: {}", far[9]);
-        let others = |values: &[f64]| -> Vec<f64> { values.iter().enumerate().filter(|(c, _)| *c != 9).map(|(_, l)| *l).collect() };
+        assert!(
+            (far[9] - 5.0).abs() < 0.5,
+            "the hot cell departs from its ring: {}",
+            far[9]
+        );
+        let others = |values: &[f64]| -> Vec<f64> {
+            values
+                .iter()
+                .enumerate()
+                .filter(|(c, _)| *c != 9)
+                .map(|(_, l)| *l)
+                .collect()
+        };
         let (quiet, quiet_alone) = (others(&far), others(&far_alone));
-        assert!(spread(&quiet) < 0.5 * spread(&quiet_alone), "pooled {} vs alone {}", spread(&quiet), spread(&quiet_alone));
+        assert!(
+            spread(&quiet) < 0.5 * spread(&quiet_alone),
+            "pooled {} vs alone {}",
+            spread(&quiet),
+            spread(&quiet_alone)
+        );
         assert!(quiet.iter().all(|l| (l - 0.5).abs() < 0.1), "{quiet:?}");
     }
 
@@ -917,10 +1159,19 @@ mod tests {
         let pose = Pose::new(3.0, -2.0, 0.4).unwrap();
         for weight in [Some(2.0), None] {
             let fresh = || {
-                ClutterMap::new(MapSpace::BearingRange, [(0..=8).map(|i| -PI + i as f64 * PI / 4.0).collect(), vec![0.0, 500.0, 1000.0]], 1e-3, 5.0, 0.3)
-                    .unwrap()
-                    .with_pooling(Pooling::Range, weight)
-                    .unwrap()
+                ClutterMap::new(
+                    MapSpace::BearingRange,
+                    [
+                        (0..=8).map(|i| -PI + i as f64 * PI / 4.0).collect(),
+                        vec![0.0, 500.0, 1000.0],
+                    ],
+                    1e-3,
+                    5.0,
+                    0.3,
+                )
+                .unwrap()
+                .with_pooling(Pooling::Range, weight)
+                .unwrap()
             };
             let mut map = fresh();
             for k in 0..600 {
@@ -928,15 +1179,45 @@ mod tests {
                 // (a hot cell at (50, 20): three points every scan)
                 // (and in the far ring a point in one of three cells in turn: a spread)
                 let turn = (k % 3) as f64 * PI / 4.0;
-                let points = [50.0, 20.0, 51.0, 20.0, 52.0, 21.0, 700.0 * turn.cos(), 700.0 * turn.sin(), 800.0 * turn.cos(), 800.0 * turn.sin(), 200.0 * t.cos(), 300.0 * t.sin(), 600.0 + t % 7.0, -40.0 * (t % 3.0), 50.0, 20.0];
-                map.update(&pose, &points[..12 + 2 * (k % 3)], None, &[600.0 + t % 7.0, -40.0, 30.0]).unwrap();
+                let points = [
+                    50.0,
+                    20.0,
+                    51.0,
+                    20.0,
+                    52.0,
+                    21.0,
+                    700.0 * turn.cos(),
+                    700.0 * turn.sin(),
+                    800.0 * turn.cos(),
+                    800.0 * turn.sin(),
+                    200.0 * t.cos(),
+                    300.0 * t.sin(),
+                    600.0 + t % 7.0,
+                    -40.0 * (t % 3.0),
+                    50.0,
+                    20.0,
+                ];
+                map.update(
+                    &pose,
+                    &points[..12 + 2 * (k % 3)],
+                    None,
+                    &[600.0 + t % 7.0, -40.0, 30.0],
+                )
+                .unwrap();
             }
             if weight.is_none() {
-                assert!(map.pool_spread.iter().any(|t| *t > 0.0), "the test exercises a spread: {:?} {:?}", map.pool_spread, map.apart);
+                assert!(
+                    map.pool_spread.iter().any(|t| *t > 0.0),
+                    "the test exercises a spread: {:?} {:?}",
+                    map.pool_spread,
+                    map.apart
+                );
                 assert!(map.apart.iter().any(|a| *a), "and a cell apart");
             }
             let (counts, deficit, exposure, scale) = map.state();
-            let restored = fresh().with_state(counts.to_vec(), deficit.to_vec(), exposure, scale).unwrap();
+            let restored = fresh()
+                .with_state(counts.to_vec(), deficit.to_vec(), exposure, scale)
+                .unwrap();
             assert_eq!(restored.intensities().unwrap(), map.intensities().unwrap());
             assert_eq!(restored, map);
         }
@@ -948,17 +1229,29 @@ mod tests {
         let points = [100.0, 1.0, 100.0, 2.0, 0.0, 700.0];
         let (mut plain, mut ones, mut half) = (radar(), radar(), radar());
         plain.update(&pose, &points, None, &[]).unwrap();
-        ones.update_weighted(&pose, &points, None, Some(&[1.0; 3]), &[]).unwrap();
-        half.update_weighted(&pose, &points, None, Some(&[0.5, 0.0, 0.25]), &[]).unwrap();
+        ones.update_weighted(&pose, &points, None, Some(&[1.0; 3]), &[])
+            .unwrap();
+        half.update_weighted(&pose, &points, None, Some(&[0.5, 0.0, 0.25]), &[])
+            .unwrap();
         assert_eq!(ones, plain);
         let (counts, ..) = half.state();
         let g = 1.0 / 0.9;
         assert_eq!((counts[4 * 2], counts[6 * 2 + 1]), (0.5 * g, 0.25 * g));
         let before = half.clone();
         for bad in [[0.5, 1.5, 0.0], [0.5, f64::NAN, 0.0], [-0.1, 0.0, 0.0]] {
-            assert_eq!(half.update_weighted(&pose, &points, None, Some(&bad), &[]).unwrap_err().argument(), "weights");
+            assert_eq!(
+                half.update_weighted(&pose, &points, None, Some(&bad), &[])
+                    .unwrap_err()
+                    .argument(),
+                "weights"
+            );
         }
-        assert_eq!(half.update_weighted(&pose, &points, None, Some(&[1.0]), &[]).unwrap_err().argument(), "weights");
+        assert_eq!(
+            half.update_weighted(&pose, &points, None, Some(&[1.0]), &[])
+                .unwrap_err()
+                .argument(),
+            "weights"
+        );
         assert_eq!(half, before, "a failed update changes nothing");
     }
 
@@ -966,30 +1259,116 @@ mod tests {
     fn bad_configuration_and_inputs_are_named() {
         let e = || [vec![0.0, 1.0], vec![0.0, 1.0]];
         let argument = |r: Result<ClutterMap>| r.unwrap_err().argument();
-        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.0)), "forgetting");
-        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 1.5)), "forgetting");
-        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, e(), 0.0, 1.0, 0.9)), "prior_intensity");
-        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, e(), 1.0, -1.0, 0.9)), "prior_scans");
-        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, [vec![0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
-        assert_eq!(argument(ClutterMap::new(MapSpace::WorldXY, [vec![1.0, 0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
-        assert_eq!(argument(ClutterMap::new(MapSpace::BearingRange, [vec![-4.0, 0.0], vec![0.0, 1.0]], 1.0, 1.0, 0.9)), "edges");
+        assert_eq!(
+            argument(ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.0)),
+            "forgetting"
+        );
+        assert_eq!(
+            argument(ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 1.5)),
+            "forgetting"
+        );
+        assert_eq!(
+            argument(ClutterMap::new(MapSpace::WorldXY, e(), 0.0, 1.0, 0.9)),
+            "prior_intensity"
+        );
+        assert_eq!(
+            argument(ClutterMap::new(MapSpace::WorldXY, e(), 1.0, -1.0, 0.9)),
+            "prior_scans"
+        );
+        assert_eq!(
+            argument(ClutterMap::new(
+                MapSpace::WorldXY,
+                [vec![0.0], vec![0.0, 1.0]],
+                1.0,
+                1.0,
+                0.9
+            )),
+            "edges"
+        );
+        assert_eq!(
+            argument(ClutterMap::new(
+                MapSpace::WorldXY,
+                [vec![1.0, 0.0], vec![0.0, 1.0]],
+                1.0,
+                1.0,
+                0.9
+            )),
+            "edges"
+        );
+        assert_eq!(
+            argument(ClutterMap::new(
+                MapSpace::BearingRange,
+                [vec![-4.0, 0.0], vec![0.0, 1.0]],
+                1.0,
+                1.0,
+                0.9
+            )),
+            "edges"
+        );
         let fresh = || ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.9).unwrap();
         assert_eq!(argument(fresh().with_pooling(Pooling::Range, Some(1.0))), "pooling");
-        assert_eq!(argument(fresh().with_pooling(Pooling::Grid, Some(0.0))), "pooling_scans");
-        assert_eq!(argument(fresh().with_pooling(Pooling::Grid, Some(f64::NAN))), "pooling_scans");
+        assert_eq!(
+            argument(fresh().with_pooling(Pooling::Grid, Some(0.0))),
+            "pooling_scans"
+        );
+        assert_eq!(
+            argument(fresh().with_pooling(Pooling::Grid, Some(f64::NAN))),
+            "pooling_scans"
+        );
         let mut map = ClutterMap::new(MapSpace::WorldXY, e(), 1.0, 1.0, 0.9).unwrap();
         let before = map.clone();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
-        assert_eq!(map.update(&pose, &[0.5, 0.5, f64::NAN, 0.0], None, &[]).unwrap_err().argument(), "positions");
-        assert_eq!(map.update(&pose, &[0.5, 0.5], Some(&[f64::INFINITY]), &[]).unwrap_err().argument(), "ranges");
+        assert_eq!(
+            map.update(&pose, &[0.5, 0.5, f64::NAN, 0.0], None, &[])
+                .unwrap_err()
+                .argument(),
+            "positions"
+        );
+        assert_eq!(
+            map.update(&pose, &[0.5, 0.5], Some(&[f64::INFINITY]), &[])
+                .unwrap_err()
+                .argument(),
+            "ranges"
+        );
         assert_eq!(map, before, "a failed update changes nothing");
-        assert_eq!(map.update(&pose, &[0.5, 0.5], None, &[0.0, 0.0, -1.0]).unwrap_err().argument(), "gates");
-        assert_eq!(map.update(&pose, &[0.5, 0.5], None, &[0.0, 0.0]).unwrap_err().argument(), "gates");
+        assert_eq!(
+            map.update(&pose, &[0.5, 0.5], None, &[0.0, 0.0, -1.0])
+                .unwrap_err()
+                .argument(),
+            "gates"
+        );
+        assert_eq!(
+            map.update(&pose, &[0.5, 0.5], None, &[0.0, 0.0])
+                .unwrap_err()
+                .argument(),
+            "gates"
+        );
         assert_eq!(map, before, "a failed update changes nothing");
-        assert_eq!(map.clone().with_state(vec![0.0; 2], vec![0.0], 0.0, 1.0).unwrap_err().argument(), "counts");
-        assert_eq!(map.clone().with_state(vec![-1.0], vec![0.0], 0.0, 1.0).unwrap_err().argument(), "counts");
-        assert_eq!(map.clone().with_state(vec![0.0], vec![2.0], 1.0, 1.0).unwrap_err().argument(), "deficit");
-        assert_eq!(map.with_state(vec![0.0], vec![0.0], 0.0, 0.0).unwrap_err().argument(), "scale");
+        assert_eq!(
+            map.clone()
+                .with_state(vec![0.0; 2], vec![0.0], 0.0, 1.0)
+                .unwrap_err()
+                .argument(),
+            "counts"
+        );
+        assert_eq!(
+            map.clone()
+                .with_state(vec![-1.0], vec![0.0], 0.0, 1.0)
+                .unwrap_err()
+                .argument(),
+            "counts"
+        );
+        assert_eq!(
+            map.clone()
+                .with_state(vec![0.0], vec![2.0], 1.0, 1.0)
+                .unwrap_err()
+                .argument(),
+            "deficit"
+        );
+        assert_eq!(
+            map.with_state(vec![0.0], vec![0.0], 0.0, 0.0).unwrap_err().argument(),
+            "scale"
+        );
     }
 
     #[test]
@@ -1008,33 +1387,72 @@ mod tests {
         for _ in 0..6 {
             map.update(&pose, &[], None, &[]).unwrap();
         }
-        assert!(map.intensities().unwrap().iter().all(|l| l.is_finite() && *l >= f64::MIN_POSITIVE));
+        assert!(map
+            .intensities()
+            .unwrap()
+            .iter()
+            .all(|l| l.is_finite() && *l >= f64::MIN_POSITIVE));
         // λ₀ s₀ overflowing f64
         let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), 1e300, 1e10, 0.9).unwrap();
         map.update(&pose, &[5.0, 5.0], None, &[]).unwrap();
-        assert!(map.intensities().unwrap().iter().all(|l| l.is_finite() && *l > 0.0), "{:?}", map.intensities());
+        assert!(
+            map.intensities().unwrap().iter().all(|l| l.is_finite() && *l > 0.0),
+            "{:?}",
+            map.intensities()
+        );
         // s₀ V_g overflowing f64
-        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), 1e-3, 1e308, 0.9).unwrap().with_pooling(Pooling::Grid, Some(10.0)).unwrap();
+        let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), 1e-3, 1e308, 0.9)
+            .unwrap()
+            .with_pooling(Pooling::Grid, Some(10.0))
+            .unwrap();
         map.update(&pose, &[5.0, 5.0], None, &[]).unwrap();
-        assert!(map.intensities().unwrap().iter().all(|l| l.is_finite() && *l > 0.0), "{:?}", map.intensities());
+        assert!(
+            map.intensities().unwrap().iter().all(|l| l.is_finite() && *l > 0.0),
+            "{:?}",
+            map.intensities()
+        );
         // a tiny λ₀ against many scans: floored at the smallest normal double
         let mut map = ClutterMap::new(MapSpace::WorldXY, grid(), f64::MIN_POSITIVE, 1e-300, 1.0).unwrap();
         map.update(&pose, &[], None, &[]).unwrap();
         assert_eq!(map.intensities().unwrap(), [f64::MIN_POSITIVE; 2]);
-        assert_eq!(ClutterMap::new(MapSpace::WorldXY, grid(), 1e-310, 1.0, 1.0).unwrap_err().argument(), "prior_intensity");
-        assert_eq!(ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 1e150], vec![0.0, 1e150]], 1.0, 1.0, 1.0).unwrap_err().argument(), "edges");
+        assert_eq!(
+            ClutterMap::new(MapSpace::WorldXY, grid(), 1e-310, 1.0, 1.0)
+                .unwrap_err()
+                .argument(),
+            "prior_intensity"
+        );
+        assert_eq!(
+            ClutterMap::new(MapSpace::WorldXY, [vec![0.0, 1e150], vec![0.0, 1e150]], 1.0, 1.0, 1.0)
+                .unwrap_err()
+                .argument(),
+            "edges"
+        );
     }
 
     #[test]
     fn intensity_at_refuses_positions_and_ranges_it_cannot_place() {
         let map = radar();
         let pose = Pose::new(0.0, 0.0, 0.0).unwrap();
-        assert_eq!(map.intensity_at(&pose, &[100.0, 1.0, 5000.0, 0.0], None).unwrap(), [1e-3, 1e-3]);
+        assert_eq!(
+            map.intensity_at(&pose, &[100.0, 1.0, 5000.0, 0.0], None).unwrap(),
+            [1e-3, 1e-3]
+        );
         for bad in [f64::NAN, f64::INFINITY] {
-            assert_eq!(map.intensity_at(&pose, &[100.0, 1.0, bad, 0.0], None).unwrap_err(), ModelError::non_finite("positions", 1, "position is NaN or infinite"));
+            assert_eq!(
+                map.intensity_at(&pose, &[100.0, 1.0, bad, 0.0], None).unwrap_err(),
+                ModelError::non_finite("positions", 1, "position is NaN or infinite")
+            );
         }
-        assert_eq!(map.intensity_at(&pose, &[100.0, 1.0], Some(&[-1.0])).unwrap_err().argument(), "ranges");
-        assert_eq!(map.intensity_at(&pose, &[100.0, 1.0], Some(&[f64::NAN])).unwrap(), [1e-3]);
+        assert_eq!(
+            map.intensity_at(&pose, &[100.0, 1.0], Some(&[-1.0]))
+                .unwrap_err()
+                .argument(),
+            "ranges"
+        );
+        assert_eq!(
+            map.intensity_at(&pose, &[100.0, 1.0], Some(&[f64::NAN])).unwrap(),
+            [1e-3]
+        );
     }
 
     mod finite {
@@ -1047,11 +1465,21 @@ mod tests {
         /// A positive double from the whole range: the extremes, or 10^e.
         fn anywhere(low: f64, high: f64) -> impl Strategy<Value = f64> {
             let (a, b) = (low.log10().max(-323.0), high.log10().min(308.2));
-            prop_oneof![Just(low), Just(high), (a..b).prop_map(move |e| 10f64.powf(e).clamp(low, high))]
+            prop_oneof![
+                Just(low),
+                Just(high),
+                (a..b).prop_map(move |e| 10f64.powf(e).clamp(low, high))
+            ]
         }
 
         fn forgetting() -> impl Strategy<Value = f64> {
-            prop_oneof![Just(1.0), Just(RESCALE), Just(f64::from_bits(1)), anywhere(f64::from_bits(1), 1.0), (0.5..1.0f64)]
+            prop_oneof![
+                Just(1.0),
+                Just(RESCALE),
+                Just(f64::from_bits(1)),
+                anywhere(f64::from_bits(1), 1.0),
+                (0.5..1.0f64)
+            ]
         }
 
         fn weight() -> impl Strategy<Value = f64> {
@@ -1070,12 +1498,23 @@ mod tests {
         fn scan() -> impl Strategy<Value = Scan> {
             let point = (-0.2..1.2f64, -0.2..1.2f64, weight());
             let gate = (0.0..1.0f64, 0.0..1.0f64, prop_oneof![Just(0.0), (0.0..2.0f64)]);
-            (prop::collection::vec(point, 0..8), prop::collection::vec(gate, 0..3), any::<bool>())
-                .prop_map(|(points, gates, weighted)| Scan { points, gates, weighted })
+            (
+                prop::collection::vec(point, 0..8),
+                prop::collection::vec(gate, 0..3),
+                any::<bool>(),
+            )
+                .prop_map(|(points, gates, weighted)| Scan {
+                    points,
+                    gates,
+                    weighted,
+                })
         }
 
         fn pooling() -> impl Strategy<Value = (u8, Option<f64>)> {
-            (0u8..3, prop_oneof![Just(None), anywhere(f64::from_bits(1), f64::MAX).prop_map(Some)])
+            (
+                0u8..3,
+                prop_oneof![Just(None), anywhere(f64::from_bits(1), f64::MAX).prop_map(Some)],
+            )
         }
 
         fn check(map: &ClutterMap, pose: &Pose) -> std::result::Result<(), TestCaseError> {
@@ -1083,8 +1522,14 @@ mod tests {
                 prop_assert!(l.is_finite() && l >= f64::MIN_POSITIVE, "λ {l:e}");
             }
             let (counts, deficit, exposure, scale) = map.state();
-            prop_assert!(counts.iter().chain(deficit).all(|v| v.is_finite() && *v >= 0.0), "{counts:?} {deficit:?}");
-            prop_assert!(exposure.is_finite() && scale.is_finite() && scale > 0.0 && scale <= LARGE, "{exposure:e} {scale:e}");
+            prop_assert!(
+                counts.iter().chain(deficit).all(|v| v.is_finite() && *v >= 0.0),
+                "{counts:?} {deficit:?}"
+            );
+            prop_assert!(
+                exposure.is_finite() && scale.is_finite() && scale > 0.0 && scale <= LARGE,
+                "{exposure:e} {scale:e}"
+            );
             prop_assert!(map.pool_level.iter().chain(&map.pool_spread).all(|v| v.is_finite()));
             let outside = map.value_at(pose, 1e300, 1e300, f64::NAN);
             prop_assert!(outside.is_finite() && outside >= f64::MIN_POSITIVE);

@@ -38,7 +38,11 @@ pub struct CoastalBand {
 fn nearest_on_segment([a, b]: [[f64; 2]; 2], p: [f64; 2]) -> [f64; 2] {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let length2 = dx * dx + dy * dy;
-    let t = if length2 > 0.0 { (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / length2).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if length2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / length2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     [a[0] + t * dx, a[1] + t * dy]
 }
 
@@ -47,12 +51,22 @@ impl CoastalBand {
     /// density trackers divide by); `seen_only`: only coast seen from the sensor.
     pub fn new(land: Arc<LandMask>, width: f64, inside: f64, seen_only: bool) -> Result<Self> {
         if !(width.is_finite() && width >= 0.0) {
-            return Err(ModelError::invalid("width", format!("must be finite and >= 0, got {width}")));
+            return Err(ModelError::invalid(
+                "width",
+                format!("must be finite and >= 0, got {width}"),
+            ));
         }
         if !(inside.is_finite() && inside > 0.0) {
-            return Err(ModelError::invalid("inside", format!("must be finite and > 0, got {inside}")));
+            return Err(ModelError::invalid(
+                "inside",
+                format!("must be finite and > 0, got {inside}"),
+            ));
         }
-        let count = land.polygons().iter().map(|p| p.shell.len() + p.holes.iter().map(Vec::len).sum::<usize>()).sum();
+        let count = land
+            .polygons()
+            .iter()
+            .map(|p| p.shell.len() + p.holes.iter().map(Vec::len).sum::<usize>())
+            .sum();
         let mut segments = memory::with_room("land", count)?;
         for polygon in land.polygons() {
             for ring in std::iter::once(&polygon.shell).chain(&polygon.holes) {
@@ -63,12 +77,27 @@ impl CoastalBand {
         }
         let boxes: Vec<Aabb> = memory::collected(
             "land",
-            segments.iter().map(|[a, b]| Aabb::new(Vector::new(a[0].min(b[0]), a[1].min(b[1])), Vector::new(a[0].max(b[0]), a[1].max(b[1])))),
+            segments.iter().map(|[a, b]| {
+                Aabb::new(
+                    Vector::new(a[0].min(b[0]), a[1].min(b[1])),
+                    Vector::new(a[0].max(b[0]), a[1].max(b[1])),
+                )
+            }),
         )?;
         // (parry's tree allocates infallibly: about as large as the boxes just allocated)
         let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &boxes);
-        let sight = if seen_only { Some(Arc::new(LineOfSight::new(land)?)) } else { None };
-        Ok(CoastalBand { width, inside, segments, bvh, sight })
+        let sight = if seen_only {
+            Some(Arc::new(LineOfSight::new(land)?))
+        } else {
+            None
+        };
+        Ok(CoastalBand {
+            width,
+            inside,
+            segments,
+            bvh,
+            sight,
+        })
     }
 
     /// The factor in the band.
@@ -101,10 +130,16 @@ impl CoastalBand {
         if !positions.len().is_multiple_of(2) {
             return Err(ModelError::shape("positions", "must be (M, 2)"));
         }
-        if let Some(row) = positions.chunks_exact(2).position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+        if let Some(row) = positions
+            .chunks_exact(2)
+            .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
             return Err(ModelError::non_finite("positions", row, "position is NaN or infinite"));
         }
-        memory::collected("positions", positions.chunks_exact(2).map(|p| self.value_at(sensor, p[0], p[1])))
+        memory::collected(
+            "positions",
+            positions.chunks_exact(2).map(|p| self.value_at(sensor, p[0], p[1])),
+        )
     }
 
     /// The factor at world (x, y) for a sensor at `sensor`: `inside` in the band, else 1
@@ -113,7 +148,9 @@ impl CoastalBand {
         if !(x.is_finite() && y.is_finite()) {
             return f64::NAN;
         }
-        let Some(q) = self.nearest_coast([x, y]) else { return 1.0 };
+        let Some(q) = self.nearest_coast([x, y]) else {
+            return 1.0;
+        };
         let seen = match &self.sight {
             None => true,
             Some(sight) => {
@@ -123,7 +160,11 @@ impl CoastalBand {
                 range <= SHORT || sight.visible(sensor, [q[0] + dx / range * SHORT, q[1] + dy / range * SHORT])
             }
         };
-        if seen { self.inside } else { 1.0 }
+        if seen {
+            self.inside
+        } else {
+            1.0
+        }
     }
 }
 
@@ -153,7 +194,10 @@ mod tests {
         assert_eq!(band.evaluate(origin, &[980.0, 0.0, 979.9, 0.0]).unwrap(), [7.0, 1.0]);
         for bad in [f64::NAN, f64::INFINITY] {
             let err = band.evaluate(origin, &[980.0, 0.0, bad, 0.0]).unwrap_err();
-            assert_eq!(err, ModelError::non_finite("positions", 1, "position is NaN or infinite"));
+            assert_eq!(
+                err,
+                ModelError::non_finite("positions", 1, "position is NaN or infinite")
+            );
         }
     }
 
@@ -168,8 +212,16 @@ mod tests {
 
     #[test]
     fn bad_configuration_names_the_argument() {
-        for (width, inside, argument) in [(-1.0, 2.0, "width"), (f64::NAN, 2.0, "width"), (1.0, 0.0, "inside"), (1.0, f64::INFINITY, "inside")] {
-            assert!(CoastalBand::new(island(), width, inside, false).unwrap_err().to_string().starts_with(argument));
+        for (width, inside, argument) in [
+            (-1.0, 2.0, "width"),
+            (f64::NAN, 2.0, "width"),
+            (1.0, 0.0, "inside"),
+            (1.0, f64::INFINITY, "inside"),
+        ] {
+            assert!(CoastalBand::new(island(), width, inside, false)
+                .unwrap_err()
+                .to_string()
+                .starts_with(argument));
         }
     }
 }

@@ -19,13 +19,19 @@ pub struct Rule {
 
 impl Rule {
     pub fn mean() -> Rule {
-        Rule { points: vec![[0.0, 0.0]], weights: vec![1.0] }
+        Rule {
+            points: vec![[0.0, 0.0]],
+            weights: vec![1.0],
+        }
     }
 
     pub fn cubature() -> Rule {
         let s = 2f64.sqrt();
         // (fixed sizes, as every rule's: at most 32² points, `order` being checked below)
-        Rule { points: vec![[s, 0.0], [-s, 0.0], [0.0, s], [0.0, -s]], weights: vec![0.25; 4] }
+        Rule {
+            points: vec![[s, 0.0], [-s, 0.0], [0.0, s], [0.0, -s]],
+            weights: vec![0.25; 4],
+        }
     }
 
     /// Unscented transform with κ = 1 (n + κ = 3): centre weight 1/3, four points at ±√3.
@@ -43,7 +49,10 @@ impl Rule {
     /// Golub–Welsch eigenproblem of the Jacobi matrix.
     pub fn gauss_hermite(order: usize) -> Result<Rule> {
         if !(1..=32).contains(&order) {
-            return Err(ModelError::invalid("order", format!("Gauss–Hermite order must be in 1..=32, got {order}")));
+            return Err(ModelError::invalid(
+                "order",
+                format!("Gauss–Hermite order must be in 1..=32, got {order}"),
+            ));
         }
         let mut jacobi = DMatrix::<f64>::zeros(order, order);
         for k in 1..order {
@@ -64,7 +73,10 @@ impl Rule {
             }
         }
         let total: f64 = w2.iter().sum();
-        Ok(Rule { points, weights: w2.into_iter().map(|w| w / total).collect() }) // (≤ 1024)
+        Ok(Rule {
+            points,
+            weights: w2.into_iter().map(|w| w / total).collect(),
+        }) // (≤ 1024)
     }
 
     pub fn points(&self) -> &[[f64; 2]] {
@@ -97,7 +109,13 @@ pub fn cholesky2(a: f64, b: f64, b_t: f64, c: f64) -> Option<[f64; 3]> {
         return None;
     }
     let l11 = positive_part(a).sqrt();
-    let l21 = if l11 > 0.0 { b / l11 } else if b.abs() <= 1e-12 * scale { 0.0 } else { return None };
+    let l21 = if l11 > 0.0 {
+        b / l11
+    } else if b.abs() <= 1e-12 * scale {
+        0.0
+    } else {
+        return None;
+    };
     let rest = c - l21 * l21;
     if rest < -1e-9 * scale {
         return None;
@@ -121,7 +139,10 @@ fn positive_part(v: f64) -> f64 {
 pub(crate) fn cholesky2_lanes<L: Lanes>(a: L, b: L, b_t: L, c: L) -> (L::Mask, [L; 3]) {
     let zero = L::splat(0.0);
     let scale = a.abs().max(c.abs()).max(L::splat(f64::MIN_POSITIVE));
-    let non_finite = L::or(L::or(a.non_finite(), b.non_finite()), L::or(b_t.non_finite(), c.non_finite()));
+    let non_finite = L::or(
+        L::or(a.non_finite(), b.non_finite()),
+        L::or(b_t.non_finite(), c.non_finite()),
+    );
     let asymmetric = (b - b_t).abs().gt(L::splat(1e-9) * scale);
     let tolerance = L::splat(-1e-12) * scale;
     let negative = L::or(a.lt(tolerance), c.lt(tolerance));
@@ -132,7 +153,10 @@ pub(crate) fn cholesky2_lanes<L: Lanes>(a: L, b: L, b_t: L, c: L) -> (L::Mask, [
     let unpivoted = L::and(l11.le(zero), b.abs().gt(L::splat(1e-12) * scale));
     let rest = c - l21 * l21;
     let indefinite = rest.lt(L::splat(-1e-9) * scale);
-    let bad = L::or(L::or(non_finite, asymmetric), L::or(L::or(negative, unpivoted), indefinite));
+    let bad = L::or(
+        L::or(non_finite, asymmetric),
+        L::or(L::or(negative, unpivoted), indefinite),
+    );
     (bad, [l11, l21, rest.max(zero).sqrt()])
 }
 
@@ -141,12 +165,21 @@ mod tests {
     use super::*;
 
     fn moment(rule: &Rule, f: impl Fn(f64, f64) -> f64) -> f64 {
-        rule.points().iter().zip(rule.weights()).map(|(p, w)| w * f(p[0], p[1])).sum()
+        rule.points()
+            .iter()
+            .zip(rule.weights())
+            .map(|(p, w)| w * f(p[0], p[1]))
+            .sum()
     }
 
     #[test]
     fn rules_match_standard_normal_moments() {
-        for rule in [Rule::cubature(), Rule::unscented(), Rule::gauss_hermite(3).unwrap(), Rule::gauss_hermite(8).unwrap()] {
+        for rule in [
+            Rule::cubature(),
+            Rule::unscented(),
+            Rule::gauss_hermite(3).unwrap(),
+            Rule::gauss_hermite(8).unwrap(),
+        ] {
             assert!((moment(&rule, |_, _| 1.0) - 1.0).abs() < 1e-12);
             assert!(moment(&rule, |x, _| x).abs() < 1e-12);
             assert!((moment(&rule, |x, _| x * x) - 1.0).abs() < 1e-12);

@@ -6,7 +6,9 @@
 //! The expected P_D of a Gaussian position, E[P_D(p)] with p ~ N(m, P), is evaluated with a
 //! [`Rule`](crate::cubature::Rule).
 
-use crate::batch::{check_columns, check_rows, for_each_chunk, Columns, CvRows, Layout, MemoryOrder, PositionMapping, Rows};
+use crate::batch::{
+    check_columns, check_rows, for_each_chunk, Columns, CvRows, Layout, MemoryOrder, PositionMapping, Rows,
+};
 use crate::cubature::Rule;
 use crate::detection_estimate::{read_estimate, SharedEstimate};
 use crate::error::{check_probability, ModelError, Result};
@@ -53,7 +55,10 @@ impl DetectionModel {
             };
             for &v in values {
                 check_probability("factors", v).map_err(|_| {
-                    ModelError::invalid("factors", format!("factor {i} holds {v}, but detection probabilities must lie in [0, 1]"))
+                    ModelError::invalid(
+                        "factors",
+                        format!("factor {i} holds {v}, but detection probabilities must lie in [0, 1]"),
+                    )
                 })?;
             }
         }
@@ -91,7 +96,12 @@ impl DetectionModel {
                 DetectionFactor::Sight(sight) => indexed.push(Indexed::Sight(Arc::clone(sight))),
             }
         }
-        ScanDetection { frame, steps, indexed, constant }
+        ScanDetection {
+            frame,
+            steps,
+            indexed,
+            constant,
+        }
     }
 }
 
@@ -169,10 +179,20 @@ impl ScanDetection {
     /// P_D at the position of each particle of `particles`, a (ndim, N) array (one column
     /// per particle, Stone Soup's `StateVectors`; N = `out.len()`) in memory order `order`,
     /// read in place: no transpose. Same kernel as [`Self::at_states`], so the same bits.
-    pub fn at_particles(&self, particles: &[f64], ndim: usize, order: MemoryOrder, mapping: PositionMapping, out: &mut [f64]) -> Result<()> {
+    pub fn at_particles(
+        &self,
+        particles: &[f64],
+        ndim: usize,
+        order: MemoryOrder,
+        mapping: PositionMapping,
+        out: &mut [f64],
+    ) -> Result<()> {
         check_columns(particles, ndim, out.len(), mapping, "particles")?;
         match self.at_layout(particles, order.layout(ndim, out.len()), mapping, out) {
-            Some(i) => Err(ModelError::invalid("particles", format!("particle {i} (column {i}) has a NaN or infinite position"))),
+            Some(i) => Err(ModelError::invalid(
+                "particles",
+                format!("particle {i} (column {i}) has a NaN or infinite position"),
+            )),
             None => Ok(()),
         }
     }
@@ -180,11 +200,33 @@ impl ScanDetection {
     /// P_D of every state of a checked array; the first state whose position is not finite.
     fn at_layout(&self, states: &[f64], layout: Layout, mapping: PositionMapping, out: &mut [f64]) -> Option<usize> {
         for_each_chunk(out, |first, chunk| match layout {
-            Layout::Rows { ncols: 4 } if mapping == PositionMapping::default() => dispatch(lanes::AtStates { scan: self, positions: CvRows(states), first, out: chunk }),
-            Layout::Rows { ncols } => dispatch(lanes::AtStates { scan: self, positions: Rows { data: states, ncols, mapping }, first, out: chunk }),
+            Layout::Rows { ncols: 4 } if mapping == PositionMapping::default() => dispatch(lanes::AtStates {
+                scan: self,
+                positions: CvRows(states),
+                first,
+                out: chunk,
+            }),
+            Layout::Rows { ncols } => dispatch(lanes::AtStates {
+                scan: self,
+                positions: Rows {
+                    data: states,
+                    ncols,
+                    mapping,
+                },
+                first,
+                out: chunk,
+            }),
             Layout::Columns { nstates } => {
-                let (xs, ys) = (&states[mapping.x * nstates..][..nstates], &states[mapping.y * nstates..][..nstates]);
-                dispatch(lanes::AtStates { scan: self, positions: Columns { xs, ys }, first, out: chunk })
+                let (xs, ys) = (
+                    &states[mapping.x * nstates..][..nstates],
+                    &states[mapping.y * nstates..][..nstates],
+                );
+                dispatch(lanes::AtStates {
+                    scan: self,
+                    positions: Columns { xs, ys },
+                    first,
+                    out: chunk,
+                })
             }
         })
     }
@@ -203,16 +245,38 @@ impl ScanDetection {
         mapping.check(ncols, "means")?;
         let n = check_rows(means, ncols, out.len(), "means")?;
         if covars.len() != n * ncols * ncols {
-            return Err(ModelError::shape("covars", format!("must be ({n}, {ncols}, {ncols}) to match means, got {} values", covars.len())));
+            return Err(ModelError::shape(
+                "covars",
+                format!(
+                    "must be ({n}, {ncols}, {ncols}) to match means, got {} values",
+                    covars.len()
+                ),
+            ));
         }
-        let gaussians = lanes::Gaussians { means: Rows { data: means, ncols, mapping }, covars };
+        let gaussians = lanes::Gaussians {
+            means: Rows {
+                data: means,
+                ncols,
+                mapping,
+            },
+            covars,
+        };
         // The first bad row of each chunk, with what is wrong with it.
         let problems = std::sync::Mutex::new(Vec::<(usize, lanes::BadGaussian)>::new());
         let bad = for_each_chunk(out, |first, chunk| {
-            let (i, kind) = dispatch(lanes::Expected { scan: self, gaussians, rule, first, out: chunk })?;
+            let (i, kind) = dispatch(lanes::Expected {
+                scan: self,
+                gaussians,
+                rule,
+                first,
+                out: chunk,
+            })?;
             // (one entry per chunk at most, so not user-sized beyond the output; a poisoned
             // lock still holds whole entries: the push is its only use)
-            problems.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push((first + i, kind));
+            problems
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .push((first + i, kind));
             Some(i)
         });
         let Some(row) = bad else { return Ok(()) };
@@ -239,7 +303,9 @@ mod tests {
 
     fn radar() -> DetectionModel {
         DetectionModel::new(vec![
-            DetectionFactor::Range(RangeBands::new(vec![50.0, 1612.0], vec![0.0, 0.4, 0.0], vec![false, true]).unwrap()),
+            DetectionFactor::Range(
+                RangeBands::new(vec![50.0, 1612.0], vec![0.0, 0.4, 0.0], vec![false, true]).unwrap(),
+            ),
             DetectionFactor::Sector(AngularSector::new(PI, 65f64.to_radians(), 0.0, 1.0).unwrap()),
         ])
         .unwrap()
@@ -252,11 +318,12 @@ mod tests {
         let scan = model.at_pose(&pose);
         // rows [x, vx, y, vy]: ahead 500 m, astern 500 m, abeam 1000 m, 40 m, 1700 m.
         let states = [
-            100.0, 0.0, 500.0, 0.0, 100.0, 0.0, -500.0, 0.0, 1100.0, 0.0, 0.0, 0.0, 140.0, 0.0, 0.0, 0.0, 100.0, 0.0, 1700.0,
-            0.0,
+            100.0, 0.0, 500.0, 0.0, 100.0, 0.0, -500.0, 0.0, 1100.0, 0.0, 0.0, 0.0, 140.0, 0.0, 0.0, 0.0, 100.0, 0.0,
+            1700.0, 0.0,
         ];
         let mut out = [9.0; 5];
-        scan.at_states(&states, 4, PositionMapping::default(), &mut out).unwrap();
+        scan.at_states(&states, 4, PositionMapping::default(), &mut out)
+            .unwrap();
         assert_eq!(out, [0.4, 0.0, 0.4, 0.0, 0.0]);
     }
 
@@ -267,10 +334,12 @@ mod tests {
         let n = 100_003;
         let states: Vec<f64> = (0..n * 4).map(|k| ((k as f64) * 0.618).sin() * 2000.0).collect();
         let mut out = vec![0.0; n];
-        scan.at_states(&states, 4, PositionMapping::default(), &mut out).unwrap();
+        scan.at_states(&states, 4, PositionMapping::default(), &mut out)
+            .unwrap();
         for i in (0..n).step_by(997) {
             let mut one = [0.0];
-            scan.at_states(&states[i * 4..i * 4 + 4], 4, PositionMapping::default(), &mut one).unwrap();
+            scan.at_states(&states[i * 4..i * 4 + 4], 4, PositionMapping::default(), &mut one)
+                .unwrap();
             assert_eq!(one[0], out[i]);
         }
     }
@@ -284,9 +353,16 @@ mod tests {
         states[50_001 * 4 + 2] = f64::NAN;
         states[60_000 * 4] = f64::INFINITY;
         let mut out = vec![0.0; n];
-        let err = scan.at_states(&states, 4, PositionMapping::default(), &mut out).unwrap_err();
-        assert_eq!(err, ModelError::non_finite("states", 50_001, "position is NaN or infinite"));
-        let err = scan.at_states(&states, 2, PositionMapping::default(), &mut vec![0.0; n * 2]).unwrap_err();
+        let err = scan
+            .at_states(&states, 4, PositionMapping::default(), &mut out)
+            .unwrap_err();
+        assert_eq!(
+            err,
+            ModelError::non_finite("states", 50_001, "position is NaN or infinite")
+        );
+        let err = scan
+            .at_states(&states, 2, PositionMapping::default(), &mut vec![0.0; n * 2])
+            .unwrap_err();
         assert_eq!(err.argument(), "states");
     }
 
@@ -303,7 +379,15 @@ mod tests {
         let means = [300.0, 1.0, 20.0, 1.0];
         let covars = [0.0; 16];
         let mut out = [0.0];
-        scan.expected_at_gaussians(&means, &covars, 4, PositionMapping::default(), &Rule::gauss_hermite(5).unwrap(), &mut out).unwrap();
+        scan.expected_at_gaussians(
+            &means,
+            &covars,
+            4,
+            PositionMapping::default(),
+            &Rule::gauss_hermite(5).unwrap(),
+            &mut out,
+        )
+        .unwrap();
         assert!((out[0] - 0.4).abs() < 1e-12);
     }
 
@@ -321,10 +405,27 @@ mod tests {
         covars[0] = 100.0;
         covars[10] = 1e-6;
         let mut out = [0.0];
-        scan.expected_at_gaussians(&means, &covars, 4, PositionMapping::default(), &Rule::gauss_hermite(20).unwrap(), &mut out).unwrap();
+        scan.expected_at_gaussians(
+            &means,
+            &covars,
+            4,
+            PositionMapping::default(),
+            &Rule::gauss_hermite(20).unwrap(),
+            &mut out,
+        )
+        .unwrap();
         assert!((out[0] - 0.5).abs() < 0.05, "{}", out[0]);
         covars[2] = 1e3; // not symmetric
-        let err = scan.expected_at_gaussians(&means, &covars, 4, PositionMapping::default(), &Rule::cubature(), &mut out).unwrap_err();
+        let err = scan
+            .expected_at_gaussians(
+                &means,
+                &covars,
+                4,
+                PositionMapping::default(),
+                &Rule::cubature(),
+                &mut out,
+            )
+            .unwrap_err();
         assert_eq!(err.argument(), "covars");
     }
 }

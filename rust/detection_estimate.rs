@@ -52,10 +52,17 @@ pub fn read_estimate(estimate: &SharedEstimate) -> RwLockReadGuard<'_, Detection
 }
 
 fn probability(argument: &'static str, value: f64, open: bool) -> Result<()> {
-    let inside = if open { value > 0.0 && value < 1.0 } else { (0.0..=1.0).contains(&value) };
+    let inside = if open {
+        value > 0.0 && value < 1.0
+    } else {
+        (0.0..=1.0).contains(&value)
+    };
     if !inside {
         let interval = if open { "(0, 1)" } else { "[0, 1]" };
-        return Err(ModelError::invalid(argument, format!("must lie in {interval}, got {value}")));
+        return Err(ModelError::invalid(
+            argument,
+            format!("must lie in {interval}, got {value}"),
+        ));
     }
     Ok(())
 }
@@ -63,37 +70,76 @@ fn probability(argument: &'static str, value: f64, open: bool) -> Result<()> {
 impl DetectionEstimate {
     /// A fresh estimate (the prior in every band). `edges`: at least 2, strictly increasing,
     /// finite, ≥ 0 (metres of range).
-    pub fn new(edges: Vec<f64>, prior_probability: f64, prior_trials: f64, forgetting: f64, outside: f64) -> Result<Self> {
+    pub fn new(
+        edges: Vec<f64>,
+        prior_probability: f64,
+        prior_trials: f64,
+        forgetting: f64,
+        outside: f64,
+    ) -> Result<Self> {
         if edges.len() < 2 {
-            return Err(ModelError::invalid("edges", format!("needs at least 2 edges (one band), got {}", edges.len())));
+            return Err(ModelError::invalid(
+                "edges",
+                format!("needs at least 2 edges (one band), got {}", edges.len()),
+            ));
         }
         if let Some(e) = edges.iter().find(|e| !(e.is_finite() && **e >= 0.0)) {
-            return Err(ModelError::invalid("edges", format!("edges must be finite and >= 0, got {e}")));
+            return Err(ModelError::invalid(
+                "edges",
+                format!("edges must be finite and >= 0, got {e}"),
+            ));
         }
         if edges.windows(2).any(|w| w[0] >= w[1]) {
             return Err(ModelError::invalid("edges", "edges must be strictly increasing"));
         }
         probability("prior_probability", prior_probability, true)?;
         if !(prior_trials.is_finite() && prior_trials > 0.0) {
-            return Err(ModelError::invalid("prior_trials", format!("must be finite and > 0, got {prior_trials}")));
+            return Err(ModelError::invalid(
+                "prior_trials",
+                format!("must be finite and > 0, got {prior_trials}"),
+            ));
         }
         if !(forgetting > 0.0 && forgetting <= 1.0) {
-            return Err(ModelError::invalid("forgetting", format!("must be in (0, 1], got {forgetting}")));
+            return Err(ModelError::invalid(
+                "forgetting",
+                format!("must be in (0, 1], got {forgetting}"),
+            ));
         }
         probability("outside", outside, false)?;
         let bands = edges.len() - 1;
-        let (hits, trials) = (memory::filled("edges", bands, 0.0)?, memory::filled("edges", bands, 0.0)?);
-        Ok(DetectionEstimate { edges, prior_probability, prior_trials, forgetting, outside, hits, trials })
+        let (hits, trials) = (
+            memory::filled("edges", bands, 0.0)?,
+            memory::filled("edges", bands, 0.0)?,
+        );
+        Ok(DetectionEstimate {
+            edges,
+            prior_probability,
+            prior_trials,
+            forgetting,
+            outside,
+            hits,
+            trials,
+        })
     }
 
     /// The estimate with a saved state (see [`state`](Self::state)).
     pub fn with_state(mut self, hits: Vec<f64>, trials: Vec<f64>) -> Result<Self> {
         for (argument, values) in [("hits", &hits), ("trials", &trials)] {
             if values.len() != self.hits.len() {
-                return Err(ModelError::shape(argument, format!("must have one entry per band ({}), got {}", self.hits.len(), values.len())));
+                return Err(ModelError::shape(
+                    argument,
+                    format!(
+                        "must have one entry per band ({}), got {}",
+                        self.hits.len(),
+                        values.len()
+                    ),
+                ));
             }
             if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
-                return Err(ModelError::invalid(argument, format!("must be finite and >= 0, got {v}")));
+                return Err(ModelError::invalid(
+                    argument,
+                    format!("must be finite and >= 0, got {v}"),
+                ));
             }
         }
         self.hits = hits;
@@ -124,8 +170,22 @@ impl DetectionEstimate {
         }
         // (s0 + t > 0: s0 > 0, t >= 0; at f64's limit it is MAX or inf, never NaN)
         let total = s0 + t;
-        let share = if total.is_infinite() { if t.is_infinite() { 0.0 } else { 1.0 } } else { s0 / total };
-        let rate = if h.is_infinite() { 1.0 } else if total.is_infinite() { 0.0 } else { h / total };
+        let share = if total.is_infinite() {
+            if t.is_infinite() {
+                0.0
+            } else {
+                1.0
+            }
+        } else {
+            s0 / total
+        };
+        let rate = if h.is_infinite() {
+            1.0
+        } else if total.is_infinite() {
+            0.0
+        } else {
+            h / total
+        };
         (p0 * share + rate).clamp(0.0, 1.0)
     }
 
@@ -144,7 +204,8 @@ impl DetectionEstimate {
         values.extend((0..self.hits.len()).map(|b| self.probability(b)));
         values.push(self.outside);
         // (the edges were checked at construction, every value is in [0, 1]: valid bands)
-        RangeBands::new(self.edges.clone(), values, vec![true; self.edges.len()]).expect("checked edges and probabilities make valid bands")
+        RangeBands::new(self.edges.clone(), values, vec![true; self.edges.len()])
+            .expect("checked edges and probabilities make valid bands")
     }
 
     /// One scan's trials: tracks at world `positions` (x, y pairs, row-major), whether each
@@ -157,7 +218,10 @@ impl DetectionEstimate {
         }
         for (argument, values) in [("detected", detected), ("weights", weights)] {
             if values.len() != n {
-                return Err(ModelError::shape(argument, format!("must have one entry per position ({n}), got {}", values.len())));
+                return Err(ModelError::shape(
+                    argument,
+                    format!("must have one entry per position ({n}), got {}", values.len()),
+                ));
             }
         }
         if let Some(i) = (0..n).find(|&i| !(positions[2 * i].is_finite() && positions[2 * i + 1].is_finite())) {
@@ -207,7 +271,9 @@ mod tests {
     fn beta_posterior_mean_without_forgetting() {
         let mut e = DetectionEstimate::new(vec![0.0, 100.0, 200.0], 0.5, 2.0, 1.0, 0.0).unwrap();
         // band 0: 3 hits of 4; band 1: 0 of 2; one trial out of the bands; one with weight 0
-        let positions = [10.0, 0.0, 20.0, 0.0, 0.0, 30.0, 40.0, 0.0, 150.0, 0.0, 0.0, -150.0, 500.0, 0.0, 60.0, 0.0];
+        let positions = [
+            10.0, 0.0, 20.0, 0.0, 0.0, 30.0, 40.0, 0.0, 150.0, 0.0, 0.0, -150.0, 500.0, 0.0, 60.0, 0.0,
+        ];
         let detected = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
         let weights = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0];
         e.update(&origin(), &positions, &detected, &weights).unwrap();
@@ -256,7 +322,8 @@ mod tests {
         }
         assert_eq!(e.probabilities().unwrap(), [0.5]);
         assert_eq!(e.state(), (&[0.0][..], &[0.0][..]));
-        e.update(&origin(), &[5.0, 0.0, 6.0, 0.0], &[1.0, 0.0], &[0.5, 0.0]).unwrap();
+        e.update(&origin(), &[5.0, 0.0, 6.0, 0.0], &[1.0, 0.0], &[0.5, 0.0])
+            .unwrap();
         assert_eq!(e.state(), (&[1.0][..], &[0.5][..]));
     }
 
@@ -272,7 +339,11 @@ mod tests {
 
         fn anywhere(low: f64, high: f64) -> impl Strategy<Value = f64> {
             let (a, b) = (low.log10().max(-323.0), high.log10().min(308.2));
-            prop_oneof![Just(low), Just(high), (a..b).prop_map(move |e| 10f64.powf(e).clamp(low, high))]
+            prop_oneof![
+                Just(low),
+                Just(high),
+                (a..b).prop_map(move |e| 10f64.powf(e).clamp(low, high))
+            ]
         }
 
         fn weight() -> impl Strategy<Value = f64> {

@@ -110,7 +110,14 @@ impl Distinct {
     /// error naming it (the elements before it may have been replaced).
     pub fn apply(&self, values: &mut [f64], image: &[f64]) -> Result<()> {
         if image.len() != self.values.len() {
-            return Err(ModelError::shape("image", format!("must have {} entries (one per table value), got {}", self.values.len(), image.len())));
+            return Err(ModelError::shape(
+                "image",
+                format!(
+                    "must have {} entries (one per table value), got {}",
+                    self.values.len(),
+                    image.len()
+                ),
+            ));
         }
         let missing = for_each_chunk(values, |_, chunk| {
             let mut out = [0.0; CHUNK];
@@ -129,7 +136,10 @@ impl Distinct {
             None
         });
         match missing {
-            Some(i) => Err(ModelError::invalid("values", format!("element {i} is not in the table"))),
+            Some(i) => Err(ModelError::invalid(
+                "values",
+                format!("element {i} is not in the table"),
+            )),
             None => Ok(()),
         }
     }
@@ -194,12 +204,18 @@ mod tests {
         let data = [0.4, 0.0, 0.4, 1.0, -0.0, 0.0, 0.38, 0.4];
         let table = Distinct::of(&data, 10).unwrap();
         let bits: Vec<u64> = table.values().iter().map(|v| v.to_bits()).collect();
-        assert_eq!(bits, [-0.0f64, 0.0, 0.38, 0.4, 1.0].iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        assert_eq!(
+            bits,
+            [-0.0f64, 0.0, 0.38, 0.4, 1.0]
+                .iter()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>()
+        );
         assert_eq!(table.index(-0.0), Some(0));
         assert_eq!(table.index(0.0), Some(1));
         assert_eq!(table.index(0.5), None);
         assert_eq!(Distinct::of(&data, 4), None); // five distinct values
-        // -0.0 and 0.0 compare equal: the exact search tells them apart.
+                                                  // -0.0 and 0.0 compare equal: the exact search tells them apart.
         let mut out = data;
         table.apply(&mut out, &[1.0, 2.0, 3.0, 4.0, 5.0]).unwrap();
         assert_eq!(out, [4.0, 2.0, 4.0, 5.0, 1.0, 2.0, 3.0, 4.0]);
@@ -244,7 +260,9 @@ mod tests {
         // Few distinct values (the table), then many (the per-element fallback), over enough
         // elements to run in parallel chunks.
         for distinct in [5usize, 1000] {
-            let data: Vec<f64> = (0..100_003).map(|k| ((k * 31) % distinct) as f64 / distinct as f64).collect();
+            let data: Vec<f64> = (0..100_003)
+                .map(|k| ((k * 31) % distinct) as f64 / distinct as f64)
+                .collect();
             let mut got = data.clone();
             ln_in_place(&mut got);
             for (d, g) in data.iter().zip(&got) {

@@ -10,7 +10,11 @@ pub enum ModelError {
     InvalidArgument { argument: &'static str, message: String },
     /// An input row holds NaN or infinity where a finite number is needed.
     #[error("{argument}: row {row} is not finite ({message})")]
-    NonFinite { argument: &'static str, row: usize, message: String },
+    NonFinite {
+        argument: &'static str,
+        row: usize,
+        message: String,
+    },
     /// Array shapes do not fit together.
     #[error("{argument}: {message}")]
     Shape { argument: &'static str, message: String },
@@ -25,15 +29,25 @@ pub enum ModelError {
 
 impl ModelError {
     pub fn invalid(argument: &'static str, message: impl Into<String>) -> Self {
-        ModelError::InvalidArgument { argument, message: message.into() }
+        ModelError::InvalidArgument {
+            argument,
+            message: message.into(),
+        }
     }
 
     pub fn shape(argument: &'static str, message: impl Into<String>) -> Self {
-        ModelError::Shape { argument, message: message.into() }
+        ModelError::Shape {
+            argument,
+            message: message.into(),
+        }
     }
 
     pub fn non_finite(argument: &'static str, row: usize, message: impl Into<String>) -> Self {
-        ModelError::NonFinite { argument, row, message: message.into() }
+        ModelError::NonFinite {
+            argument,
+            row,
+            message: message.into(),
+        }
     }
 
     pub fn memory(argument: &'static str, bytes: u128) -> Self {
@@ -41,7 +55,10 @@ impl ModelError {
     }
 
     pub fn not_positive_definite(argument: &'static str, message: impl Into<String>) -> Self {
-        ModelError::NotPositiveDefinite { argument, message: message.into() }
+        ModelError::NotPositiveDefinite {
+            argument,
+            message: message.into(),
+        }
     }
 
     /// The argument the error is about.
@@ -61,7 +78,10 @@ pub type Result<T> = std::result::Result<T, ModelError>;
 /// Checks that `value` is a finite probability.
 pub(crate) fn check_probability(argument: &'static str, value: f64) -> Result<()> {
     if !(0.0..=1.0).contains(&value) {
-        return Err(ModelError::invalid(argument, format!("must be a probability in [0, 1], got {value}")));
+        return Err(ModelError::invalid(
+            argument,
+            format!("must be a probability in [0, 1], got {value}"),
+        ));
     }
     Ok(())
 }

@@ -70,8 +70,10 @@ fn star_ring() -> impl Strategy<Value = Vec<[f64; 2]>> {
     )
         .prop_map(|((cx, cy), mut spokes, scale, duplicate, collinear, close)| {
             spokes.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let mut ring: Vec<[f64; 2]> =
-                spokes.iter().map(|&(t, r)| [cx + scale * r * t.cos(), cy + scale * r * t.sin()]).collect();
+            let mut ring: Vec<[f64; 2]> = spokes
+                .iter()
+                .map(|&(t, r)| [cx + scale * r * t.cos(), cy + scale * r * t.sin()])
+                .collect();
             if duplicate {
                 let p = ring[ring.len() / 2];
                 ring.insert(ring.len() / 2, p);
@@ -174,7 +176,11 @@ pub(crate) fn pose() -> impl Strategy<Value = (f64, f64, f64)> {
 pub(crate) fn states() -> impl Strategy<Value = (Vec<f64>, usize, usize)> {
     (0usize..7, 0usize..80, any::<bool>()).prop_flat_map(|(ncols, n, ragged)| {
         let len = n * ncols + usize::from(ragged && ncols > 1);
-        (prop::collection::vec(prop_oneof![9 => coord(), 1 => wild()], len), Just(ncols), Just(n))
+        (
+            prop::collection::vec(prop_oneof![9 => coord(), 1 => wild()], len),
+            Just(ncols),
+            Just(n),
+        )
     })
 }
 
@@ -386,10 +392,17 @@ fn lambda_that_underflows_is_an_error() {
 #[test]
 #[should_panic(expected = "index and ray cast disagree")]
 fn known_issue_sight_of_overflowing_segment() {
-    let square = Polygon { shell: vec![[-100.0, -100.0], [100.0, -100.0], [100.0, 100.0], [-100.0, 100.0]], holes: vec![] };
+    let square = Polygon {
+        shell: vec![[-100.0, -100.0], [100.0, -100.0], [100.0, 100.0], [-100.0, 100.0]],
+        holes: vec![],
+    };
     let sight = LineOfSight::new(Arc::new(LandMask::new(vec![square]).unwrap())).unwrap();
     let (sensor, target) = ([-1e300, 0.0], [f64::MAX, 0.0]);
-    assert_eq!(sight.from_point(sensor).visible(target), sight.visible(sensor, target), "index and ray cast disagree");
+    assert_eq!(
+        sight.from_point(sensor).visible(target),
+        sight.visible(sensor, target),
+        "index and ray cast disagree"
+    );
 }
 
 /// Known issue, pinned: with an edge whose square underflows (1e-200 m) the squared-range
@@ -399,5 +412,9 @@ fn known_issue_sight_of_overflowing_segment() {
 fn known_issue_squared_bands_with_subnormal_squares() {
     let bands = RangeBands::new(vec![1e-200], vec![1.0, 0.0], vec![true]).unwrap();
     let r = 5e-324;
-    assert_eq!(bands.squared().unwrap().at_squared(r * r), bands.at(r), "squared path disagrees");
+    assert_eq!(
+        bands.squared().unwrap().at_squared(r * r),
+        bands.at(r),
+        "squared path disagrees"
+    );
 }

@@ -118,21 +118,33 @@ fn scale_polygon(polygon: &Polygon, scale: f64) -> Result<Polygon> {
     for h in &polygon.holes {
         holes.push(scale_ring(h, scale)?);
     }
-    Ok(Polygon { shell: scale_ring(&polygon.shell, scale)?, holes })
+    Ok(Polygon {
+        shell: scale_ring(&polygon.shell, scale)?,
+        holes,
+    })
 }
 
 impl LandMask {
     /// Builds and validates a mask. `polygons` as given by the user: rings of (x, y).
     pub fn new(polygons: Vec<Polygon>) -> Result<Self> {
         if polygons.is_empty() {
-            return Err(ModelError::invalid("polygons", "a land mask needs at least one polygon"));
+            return Err(ModelError::invalid(
+                "polygons",
+                "a land mask needs at least one polygon",
+            ));
         }
         // NaN/inf fail validation below; unscaled, so its message quotes the vertex as given.
         let size = polygons
             .iter()
             .flat_map(|p| p.shell.iter().chain(p.holes.iter().flatten()))
             .flat_map(|v| [v[0].abs(), v[1].abs()])
-            .fold(0.0f64, |m, c| if c.is_finite() && m.is_finite() { m.max(c) } else { f64::INFINITY });
+            .fold(0.0f64, |m, c| {
+                if c.is_finite() && m.is_finite() {
+                    m.max(c)
+                } else {
+                    f64::INFINITY
+                }
+            });
         let scale = scale_for(size);
         let polygons: Vec<Polygon> = if scale == 1.0 {
             polygons
@@ -143,10 +155,13 @@ impl LandMask {
             }
             scaled
         };
-        let vertices = polygons.iter().map(|p| p.shell.len() + p.holes.iter().map(Vec::len).sum::<usize>()).sum();
+        let vertices = polygons
+            .iter()
+            .map(|p| p.shell.len() + p.holes.iter().map(Vec::len).sum::<usize>())
+            .sum();
         let mut cleaned = memory::with_room("polygons", polygons.len())?;
         let mut edges = memory::with_room("polygons", vertices)?; // (at most one edge per vertex)
-        // (polygon index, ring index within polygon, first edge, edge count) per ring.
+                                                                  // (polygon index, ring index within polygon, first edge, edge count) per ring.
         let mut rings = memory::with_room("polygons", polygons.iter().map(|p| 1 + p.holes.len()).sum())?;
         for (pi, polygon) in polygons.iter().enumerate() {
             let shell = clean_ring(&polygon.shell, pi, None)?;
@@ -157,7 +172,10 @@ impl LandMask {
             for (ri, ring) in std::iter::once(&shell).chain(holes.iter()).enumerate() {
                 let first = edges.len();
                 for k in 0..ring.len() {
-                    edges.push(Edge { a: ring[k], b: ring[(k + 1) % ring.len()] });
+                    edges.push(Edge {
+                        a: ring[k],
+                        b: ring[(k + 1) % ring.len()],
+                    });
                 }
                 rings.push((pi, ri, first, ring.len()));
             }
@@ -169,13 +187,21 @@ impl LandMask {
         if scale != 1.0 {
             // Back to world coordinates: dividing by a power of two undoes the scaling
             // exactly (in place: nothing to allocate).
-            for ring in cleaned.iter_mut().flat_map(|p| std::iter::once(&mut p.shell).chain(p.holes.iter_mut())) {
+            for ring in cleaned
+                .iter_mut()
+                .flat_map(|p| std::iter::once(&mut p.shell).chain(p.holes.iter_mut()))
+            {
                 for v in ring.iter_mut() {
                     *v = [v[0] / scale, v[1] / scale];
                 }
             }
         }
-        Ok(LandMask { polygons: cleaned, edges, grid, scale })
+        Ok(LandMask {
+            polygons: cleaned,
+            edges,
+            grid,
+            scale,
+        })
     }
 
     pub fn polygons(&self) -> &[Polygon] {
@@ -241,7 +267,10 @@ fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) -> Result<Vec
     let mut out: Vec<Point> = memory::with_room("polygons", ring.len())?;
     for (k, p) in ring.iter().enumerate() {
         if !p[0].is_finite() || !p[1].is_finite() {
-            return Err(ModelError::invalid("polygons", format!("{name}: vertex {k} is not finite ({}, {})", p[0], p[1])));
+            return Err(ModelError::invalid(
+                "polygons",
+                format!("{name}: vertex {k} is not finite ({}, {})", p[0], p[1]),
+            ));
         }
         if out.last() != Some(p) {
             out.push(*p);
@@ -252,7 +281,10 @@ fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) -> Result<Vec
         out.pop();
     }
     if out.len() < 3 {
-        return Err(ModelError::invalid("polygons", format!("{name}: needs at least 3 distinct vertices, got {}", out.len())));
+        return Err(ModelError::invalid(
+            "polygons",
+            format!("{name}: needs at least 3 distinct vertices, got {}", out.len()),
+        ));
     }
     let area = signed_area(&out);
     if area == 0.0 {
@@ -260,7 +292,10 @@ fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) -> Result<Vec
         // its area underflows: tell which, from the area at the ring's own scale.
         let own = signed_area(&scale_ring(&out, scale_for(ring_size(&out)))?);
         if own == 0.0 {
-            return Err(ModelError::invalid("polygons", format!("{name}: has zero area (all vertices on a line)")));
+            return Err(ModelError::invalid(
+                "polygons",
+                format!("{name}: has zero area (all vertices on a line)"),
+            ));
         }
         return Err(ModelError::invalid(
             "polygons",
@@ -268,7 +303,10 @@ fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) -> Result<Vec
         ));
     }
     if !area.is_finite() {
-        return Err(ModelError::invalid("polygons", format!("{name}: its area overflows (coordinates too large)")));
+        return Err(ModelError::invalid(
+            "polygons",
+            format!("{name}: its area overflows (coordinates too large)"),
+        ));
     }
     Ok(out)
 }
@@ -337,7 +375,8 @@ fn check_no_crossings(edges: &[Edge], rings: &[(usize, usize, usize, usize)]) ->
                 // Neighbours share one vertex; they are wrong only if they fold back over
                 // each other (collinear and overlapping beyond the shared vertex).
                 let (shared, p, q) = if e.b == f.a { (e.b, e.a, f.b) } else { (e.a, e.b, f.a) };
-                orientation(p, shared, q) == 0.0 && ((q[0] - shared[0]) * (p[0] - shared[0]) + (q[1] - shared[1]) * (p[1] - shared[1])) > 0.0
+                orientation(p, shared, q) == 0.0
+                    && ((q[0] - shared[0]) * (p[0] - shared[0]) + (q[1] - shared[1]) * (p[1] - shared[1])) > 0.0
             } else {
                 segments_meet(e.a, e.b, f.a, f.b)
             };
@@ -359,7 +398,13 @@ fn check_no_crossings(edges: &[Edge], rings: &[(usize, usize, usize, usize)]) ->
 }
 
 fn ring_edges(ring: &[Point]) -> Result<Vec<Edge>> {
-    memory::collected("polygons", (0..ring.len()).map(|k| Edge { a: ring[k], b: ring[(k + 1) % ring.len()] }))
+    memory::collected(
+        "polygons",
+        (0..ring.len()).map(|k| Edge {
+            a: ring[k],
+            b: ring[(k + 1) % ring.len()],
+        }),
+    )
 }
 
 /// Holes inside their shell and not inside each other; no polygon on another's land.
@@ -369,7 +414,8 @@ fn check_nesting(polygons: &[Polygon]) -> Result<()> {
     for p in polygons {
         let mut e = ring_edges(&p.shell)?;
         for h in &p.holes {
-            e.try_reserve_exact(h.len()).map_err(|_| ModelError::memory("polygons", (e.len() + h.len()) as u128 * 32))?;
+            e.try_reserve_exact(h.len())
+                .map_err(|_| ModelError::memory("polygons", (e.len() + h.len()) as u128 * 32))?;
             e.extend(ring_edges(h)?);
         }
         land_edges.push(e);
@@ -379,11 +425,17 @@ fn check_nesting(polygons: &[Polygon]) -> Result<()> {
         let shell_edges = ring_edges(&polygon.shell)?;
         for (hi, hole) in polygon.holes.iter().enumerate() {
             if !contains_exact(&shell_edges, hole[0]) {
-                return Err(ModelError::invalid("polygons", format!("polygon {pi} hole {hi} lies outside its shell")));
+                return Err(ModelError::invalid(
+                    "polygons",
+                    format!("polygon {pi} hole {hi} lies outside its shell"),
+                ));
             }
             for (hj, other) in polygon.holes.iter().enumerate() {
                 if hj != hi && contains_exact(&ring_edges(other)?, hole[0]) {
-                    return Err(ModelError::invalid("polygons", format!("polygon {pi} hole {hi} lies inside hole {hj}")));
+                    return Err(ModelError::invalid(
+                        "polygons",
+                        format!("polygon {pi} hole {hi} lies inside hole {hj}"),
+                    ));
                 }
             }
         }
@@ -391,7 +443,10 @@ fn check_nesting(polygons: &[Polygon]) -> Result<()> {
         for (pj, b) in bounds.iter().enumerate() {
             let in_box = v[0] >= b[0] && v[0] <= b[2] && v[1] >= b[1] && v[1] <= b[3];
             if pj != pi && in_box && contains_exact(&land_edges[pj], v) {
-                return Err(ModelError::invalid("polygons", format!("polygon {pi} lies on the land of polygon {pj} (overlapping polygons: merge them)")));
+                return Err(ModelError::invalid(
+                    "polygons",
+                    format!("polygon {pi} lies on the land of polygon {pj} (overlapping polygons: merge them)"),
+                ));
             }
         }
     }
@@ -426,7 +481,10 @@ const SUBDIVIDED: u32 = 2;
 
 impl Slot {
     fn leaf(start: usize, count: usize, centre_on_land: bool) -> Slot {
-        Slot { start: start as u32, meta: ((count as u32) << 2) | centre_on_land as u32 }
+        Slot {
+            start: start as u32,
+            meta: ((count as u32) << 2) | centre_on_land as u32,
+        }
     }
 
     #[inline(always)]
@@ -488,20 +546,40 @@ fn edge_bounds(edges: &[Edge]) -> (Point, Point) {
 /// `origin`, cell size `cell`) that its segment touches. Boxes are grown by `margin`, so
 /// rounding in the query's cell lookup never loses an edge from the cell a point lands in.
 /// Returns (cell id, edge) pairs sorted by cell.
-fn register(edges: &[Edge], candidates: &[u32], origin: Point, cell: [f64; 2], n: [usize; 2], margin: [f64; 2]) -> Result<Vec<(u32, u32)>> {
+fn register(
+    edges: &[Edge],
+    candidates: &[u32],
+    origin: Point,
+    cell: [f64; 2],
+    n: [usize; 2],
+    margin: [f64; 2],
+) -> Result<Vec<(u32, u32)>> {
     let index = |v: f64, axis: usize| (((v - origin[axis]) / cell[axis]).floor().max(0.0) as usize).min(n[axis] - 1);
     let mut pairs = memory::with_room("polygons", memory::product("polygons", &[candidates.len(), 3])?)?;
     for &k in candidates {
         let e = &edges[k as usize];
-        let (i0, i1) = (index(e.a[0].min(e.b[0]) - margin[0], 0), index(e.a[0].max(e.b[0]) + margin[0], 0));
-        let (j0, j1) = (index(e.a[1].min(e.b[1]) - margin[1], 1), index(e.a[1].max(e.b[1]) + margin[1], 1));
+        let (i0, i1) = (
+            index(e.a[0].min(e.b[0]) - margin[0], 0),
+            index(e.a[0].max(e.b[0]) + margin[0], 0),
+        );
+        let (j0, j1) = (
+            index(e.a[1].min(e.b[1]) - margin[1], 1),
+            index(e.a[1].max(e.b[1]) + margin[1], 1),
+        );
         let most = (i1 - i0 + 1) * (j1 - j0 + 1); // (cells within 2^14 × 2^14: no overflow)
-        pairs.try_reserve(most).map_err(|_| ModelError::memory("polygons", (pairs.len() + most) as u128 * 8))?;
+        pairs
+            .try_reserve(most)
+            .map_err(|_| ModelError::memory("polygons", (pairs.len() + most) as u128 * 8))?;
         for j in j0..=j1 {
             for i in i0..=i1 {
                 let x0 = origin[0] + i as f64 * cell[0];
                 let y0 = origin[1] + j as f64 * cell[1];
-                let grown = [x0 - margin[0], y0 - margin[1], x0 + cell[0] + margin[0], y0 + cell[1] + margin[1]];
+                let grown = [
+                    x0 - margin[0],
+                    y0 - margin[1],
+                    x0 + cell[0] + margin[0],
+                    y0 + cell[1] + margin[1],
+                ];
                 if segment_touches_box(e, grown) {
                     pairs.push(((j * n[0] + i) as u32, k));
                 }
@@ -535,7 +613,10 @@ impl Grid {
         // About one level-0 cell per edge keeps that table small (it is touched by every
         // query); dense cells are split below.
         let target_cells = edges.len().clamp(1 << 12, 1 << 22) as f64;
-        let (w, h) = ((max[0] - min[0]).max(f64::MIN_POSITIVE), (max[1] - min[1]).max(f64::MIN_POSITIVE));
+        let (w, h) = (
+            (max[0] - min[0]).max(f64::MIN_POSITIVE),
+            (max[1] - min[1]).max(f64::MIN_POSITIVE),
+        );
         let nx = ((target_cells * w / h).sqrt().round() as usize).clamp(1, 1 << 14);
         let ny = ((target_cells / nx as f64).round() as usize).clamp(1, 1 << 14);
         let cell = [w / nx as f64, h / ny as f64];
@@ -564,7 +645,11 @@ impl Grid {
             let budget = (8 * edges.len()).max(1 << 12) as f64;
             ((budget / dense as f64).sqrt() as usize).clamp(2, MAX_SPLIT)
         };
-        let sub_cell = if split > 0 { [cell[0] / split as f64, cell[1] / split as f64] } else { cell };
+        let sub_cell = if split > 0 {
+            [cell[0] / split as f64, cell[1] / split as f64]
+        } else {
+            cell
+        };
         let mut grid = Grid {
             min,
             max,
@@ -611,9 +696,14 @@ impl Grid {
             row_parities(edges, &row, grid.centre(0, j)[1], &xs, &mut crossings, &mut parities);
             let level0_land = parities.clone();
 
-            let dense_in_row: Vec<usize> = memory::collected("polygons", (0..nx).filter(|&i| cell_list(j * nx + i).len() > DENSE))?;
+            let dense_in_row: Vec<usize> =
+                memory::collected("polygons", (0..nx).filter(|&i| cell_list(j * nx + i).len() > DENSE))?;
             // Sub-cell centre parities of this row's split cells, one sweep per sub-row.
-            let mut sub_land = memory::filled("polygons", memory::product("polygons", &[dense_in_row.len(), split, split])?, false)?;
+            let mut sub_land = memory::filled(
+                "polygons",
+                memory::product("polygons", &[dense_in_row.len(), split, split])?,
+                false,
+            )?;
             if !dense_in_row.is_empty() {
                 for sj in 0..split {
                     xs.clear();
@@ -636,7 +726,9 @@ impl Grid {
                     let origin = [min[0] + i as f64 * cell[0], min[1] + j as f64 * cell[1]];
                     let sub_pairs = register(edges, list, origin, sub_cell, [split, split], margin_for(sub_cell))?;
                     let room = sub_pairs.len();
-                    grid.cell_edges.try_reserve(room).map_err(|_| ModelError::memory("polygons", (grid.cell_edges.len() + room) as u128 * 4))?;
+                    grid.cell_edges
+                        .try_reserve(room)
+                        .map_err(|_| ModelError::memory("polygons", (grid.cell_edges.len() + room) as u128 * 4))?;
                     let first_slot = grid.sub_slots.len();
                     let mut p = 0;
                     for s in 0..split * split {
@@ -647,13 +739,19 @@ impl Grid {
                         }
                         let (sj, si) = (s / split, s % split);
                         let land = sub_land[(d * split + sj) * split + si];
-                        grid.sub_slots.push(Slot::leaf(start, grid.cell_edges.len() - start, land));
+                        grid.sub_slots
+                            .push(Slot::leaf(start, grid.cell_edges.len() - start, land));
                     }
-                    grid.slots[c] = Slot { start: first_slot as u32, meta: SUBDIVIDED };
+                    grid.slots[c] = Slot {
+                        start: first_slot as u32,
+                        meta: SUBDIVIDED,
+                    };
                     d += 1;
                 } else {
                     let start = grid.cell_edges.len();
-                    grid.cell_edges.try_reserve(list.len()).map_err(|_| ModelError::memory("polygons", (start + list.len()) as u128 * 4))?;
+                    grid.cell_edges
+                        .try_reserve(list.len())
+                        .map_err(|_| ModelError::memory("polygons", (start + list.len()) as u128 * 4))?;
                     grid.cell_edges.extend_from_slice(list);
                     grid.slots[c] = Slot::leaf(start, list.len(), centre_land);
                 }
@@ -661,18 +759,30 @@ impl Grid {
         }
         for c in 0..nx * ny {
             let slot = grid.slots[c];
-            let kind = if slot.meta == 0 { WATER } else if slot.meta == CENTRE_ON_LAND { LAND } else { EDGES };
+            let kind = if slot.meta == 0 {
+                WATER
+            } else if slot.meta == CENTRE_ON_LAND {
+                LAND
+            } else {
+                EDGES
+            };
             grid.kinds[c / 32] |= kind << (2 * (c % 32));
         }
         if !(grid.cell_edges.len() < u32::MAX as usize && grid.sub_slots.len() < u32::MAX as usize) {
-            return Err(ModelError::invalid("polygons", "the land index would need more than 2^32 entries (too many edges)"));
+            return Err(ModelError::invalid(
+                "polygons",
+                "the land index would need more than 2^32 entries (too many edges)",
+            ));
         }
         Ok(grid)
     }
 
     #[inline(always)]
     fn centre(&self, i: usize, j: usize) -> Point {
-        [self.min[0] + (i as f64 + 0.5) * self.cell[0], self.min[1] + (j as f64 + 0.5) * self.cell[1]]
+        [
+            self.min[0] + (i as f64 + 0.5) * self.cell[0],
+            self.min[1] + (j as f64 + 0.5) * self.cell[1],
+        ]
     }
 
     #[inline(always)]
@@ -720,7 +830,14 @@ impl Grid {
             centre = self.centre(i, j);
             tol = self.cell[1] * 1e-9;
         }
-        walk(edges, &self.cell_edges[slot.range()], centre, slot.meta & CENTRE_ON_LAND != 0, p, tol)
+        walk(
+            edges,
+            &self.cell_edges[slot.range()],
+            centre,
+            slot.meta & CENTRE_ON_LAND != 0,
+            p,
+            tol,
+        )
     }
 
     /// Exact even–odd count for `p`, using only the edges of its row (every edge that can
@@ -749,8 +866,16 @@ impl Grid {
 /// needed).
 #[inline(always)]
 fn walk(edges: &[Edge], list: &[u32], centre: Point, centre_on_land: bool, p: Point, tol: f64) -> Option<bool> {
-    let (lo, hi) = if p[0] < centre[0] { (p[0], centre[0]) } else { (centre[0], p[0]) };
-    let (ylo, yhi) = if p[1] < centre[1] { (p[1], centre[1]) } else { (centre[1], p[1]) };
+    let (lo, hi) = if p[0] < centre[0] {
+        (p[0], centre[0])
+    } else {
+        (centre[0], p[0])
+    };
+    let (ylo, yhi) = if p[1] < centre[1] {
+        (p[1], centre[1])
+    } else {
+        (centre[1], p[1])
+    };
     let mut flips = false;
     let mut touch = false;
     let mut degenerate = false;
@@ -780,7 +905,8 @@ fn walk(edges: &[Edge], list: &[u32], centre: Point, centre_on_land: bool, p: Po
 }
 
 fn segment_touches_box(e: &Edge, b: [f64; 4]) -> bool {
-    if e.a[0].max(e.b[0]) < b[0] || e.a[0].min(e.b[0]) > b[2] || e.a[1].max(e.b[1]) < b[1] || e.a[1].min(e.b[1]) > b[3] {
+    if e.a[0].max(e.b[0]) < b[0] || e.a[0].min(e.b[0]) > b[2] || e.a[1].max(e.b[1]) < b[1] || e.a[1].min(e.b[1]) > b[3]
+    {
         return false;
     }
     // The segment's line must not leave all four corners strictly on one side.
@@ -788,7 +914,6 @@ fn segment_touches_box(e: &Edge, b: [f64; 4]) -> bool {
     let signs = corners.map(|c| orientation(e.a, e.b, c));
     !(signs.iter().all(|&s| s > 0.0) || signs.iter().all(|&s| s < 0.0))
 }
-
 
 #[cfg(test)]
 mod tests {
@@ -800,7 +925,11 @@ mod tests {
 
     #[test]
     fn square_with_hole() {
-        let mask = LandMask::new(vec![Polygon { shell: square(0.0, 0.0, 10.0), holes: vec![square(4.0, 4.0, 2.0)] }]).unwrap();
+        let mask = LandMask::new(vec![Polygon {
+            shell: square(0.0, 0.0, 10.0),
+            holes: vec![square(4.0, 4.0, 2.0)],
+        }])
+        .unwrap();
         assert!(mask.contains([1.0, 1.0]));
         assert!(!mask.contains([5.0, 5.0]));
         assert!(!mask.contains([11.0, 5.0]));
@@ -814,7 +943,11 @@ mod tests {
         let mut cw = square(0.0, 0.0, 10.0);
         cw.reverse();
         cw.push(cw[0]);
-        let mask = LandMask::new(vec![Polygon { shell: cw, holes: vec![] }]).unwrap();
+        let mask = LandMask::new(vec![Polygon {
+            shell: cw,
+            holes: vec![],
+        }])
+        .unwrap();
         assert!(mask.contains([3.0, 3.0]));
         assert_eq!(mask.polygons()[0].shell.len(), 4);
     }
@@ -856,8 +989,15 @@ mod tests {
         }
         shell.push([0.0, 60.0]);
         let hole = vec![[10.0, 10.0], [30.0, 10.0], [30.0, 30.0], [10.0, 30.0]];
-        let mask = LandMask::new(vec![Polygon { shell, holes: vec![hole] }]).unwrap();
-        assert!(mask.grid.split > 0 && !mask.grid.sub_slots.is_empty(), "the comb should split cells");
+        let mask = LandMask::new(vec![Polygon {
+            shell,
+            holes: vec![hole],
+        }])
+        .unwrap();
+        assert!(
+            mask.grid.split > 0 && !mask.grid.sub_slots.is_empty(),
+            "the comb should split cells"
+        );
         let mut land = 0;
         for xi in -2..=402 {
             for yi in -2..=410 {
@@ -868,7 +1008,14 @@ mod tests {
             }
         }
         assert!(land > 80_000, "{land}");
-        for p in [[-1e9, 5.0], [5.0, 1e9], [1e300, -1e300], [f64::INFINITY, 5.0], [f64::NAN, 5.0], [5.0, f64::NAN]] {
+        for p in [
+            [-1e9, 5.0],
+            [5.0, 1e9],
+            [1e300, -1e300],
+            [f64::INFINITY, 5.0],
+            [f64::NAN, 5.0],
+            [5.0, f64::NAN],
+        ] {
             assert!(!mask.contains(p), "{p:?}");
         }
     }
@@ -876,31 +1023,79 @@ mod tests {
     #[test]
     fn invalid_polygons_are_rejected() {
         let bowtie = vec![[0.0, 0.0], [10.0, 10.0], [10.0, 0.0], [0.0, 6.0]];
-        let err = LandMask::new(vec![Polygon { shell: bowtie, holes: vec![] }]).unwrap_err();
+        let err = LandMask::new(vec![Polygon {
+            shell: bowtie,
+            holes: vec![],
+        }])
+        .unwrap_err();
         assert_eq!(err.argument(), "polygons");
         assert!(err.to_string().contains("cross"));
         let two = vec![[0.0, 0.0], [1.0, 1.0], [0.0, 0.0]];
-        assert!(LandMask::new(vec![Polygon { shell: two, holes: vec![] }]).unwrap_err().to_string().contains("3 distinct"));
+        assert!(LandMask::new(vec![Polygon {
+            shell: two,
+            holes: vec![]
+        }])
+        .unwrap_err()
+        .to_string()
+        .contains("3 distinct"));
         let line = vec![[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]];
-        assert!(LandMask::new(vec![Polygon { shell: line, holes: vec![] }]).unwrap_err().to_string().contains("zero area"));
-        let touching_hole = Polygon { shell: square(0.0, 0.0, 10.0), holes: vec![square(0.0, 4.0, 2.0)] };
+        assert!(LandMask::new(vec![Polygon {
+            shell: line,
+            holes: vec![]
+        }])
+        .unwrap_err()
+        .to_string()
+        .contains("zero area"));
+        let touching_hole = Polygon {
+            shell: square(0.0, 0.0, 10.0),
+            holes: vec![square(0.0, 4.0, 2.0)],
+        };
         assert!(LandMask::new(vec![touching_hole]).is_err());
-        let outside_hole = Polygon { shell: square(0.0, 0.0, 10.0), holes: vec![square(20.0, 4.0, 2.0)] };
-        assert!(LandMask::new(vec![outside_hole]).unwrap_err().to_string().contains("outside its shell"));
+        let outside_hole = Polygon {
+            shell: square(0.0, 0.0, 10.0),
+            holes: vec![square(20.0, 4.0, 2.0)],
+        };
+        assert!(LandMask::new(vec![outside_hole])
+            .unwrap_err()
+            .to_string()
+            .contains("outside its shell"));
         let overlapping = vec![
-            Polygon { shell: square(0.0, 0.0, 10.0), holes: vec![] },
-            Polygon { shell: square(2.0, 2.0, 2.0), holes: vec![] },
+            Polygon {
+                shell: square(0.0, 0.0, 10.0),
+                holes: vec![],
+            },
+            Polygon {
+                shell: square(2.0, 2.0, 2.0),
+                holes: vec![],
+            },
         ];
-        assert!(LandMask::new(overlapping).unwrap_err().to_string().contains("lies on the land"));
+        assert!(LandMask::new(overlapping)
+            .unwrap_err()
+            .to_string()
+            .contains("lies on the land"));
         let nan = vec![[0.0, 0.0], [f64::NAN, 1.0], [2.0, 0.0]];
-        assert!(LandMask::new(vec![Polygon { shell: nan, holes: vec![] }]).unwrap_err().to_string().contains("not finite"));
+        assert!(LandMask::new(vec![Polygon {
+            shell: nan,
+            holes: vec![]
+        }])
+        .unwrap_err()
+        .to_string()
+        .contains("not finite"));
     }
 
     #[test]
     fn tiny_rings_are_valid_land() {
         for size in [1e-200, 1e-300, 5e-320, 2.0 * TINY] {
-            let mask = LandMask::new(vec![Polygon { shell: vec![[0.0, 0.0], [size, 0.0], [0.0, size]], holes: vec![] }]).unwrap();
-            assert_eq!(mask.polygons()[0].shell, vec![[0.0, 0.0], [size, 0.0], [0.0, size]], "world coordinates kept");
+            let mask = LandMask::new(vec![Polygon {
+                shell: vec![[0.0, 0.0], [size, 0.0], [0.0, size]],
+                holes: vec![],
+            }])
+            .unwrap();
+            assert_eq!(
+                mask.polygons()[0].shell,
+                vec![[0.0, 0.0], [size, 0.0], [0.0, size]],
+                "world coordinates kept"
+            );
             assert!(mask.contains([size / 4.0, size / 4.0]));
             assert!(mask.contains([size, 0.0]), "vertex is land");
             assert!(!mask.contains([0.75 * size, 0.75 * size]));
@@ -908,32 +1103,66 @@ mod tests {
             assert!(!mask.contains([1.0, 1.0]) && !mask.contains([1e300, 0.0]));
         }
         let line = vec![[0.0, 0.0], [1e-200, 1e-200], [2e-200, 2e-200]];
-        assert!(LandMask::new(vec![Polygon { shell: line, holes: vec![] }]).unwrap_err().to_string().contains("zero area"));
+        assert!(LandMask::new(vec![Polygon {
+            shell: line,
+            holes: vec![]
+        }])
+        .unwrap_err()
+        .to_string()
+        .contains("zero area"));
         // Next to a 1 km island a 1e-200 m rock cannot be represented: said so, not "zero area".
-        let rock = Polygon { shell: vec![[0.0, 0.0], [1e-200, 0.0], [0.0, 1e-200]], holes: vec![] };
-        let err = LandMask::new(vec![Polygon { shell: square(500.0, 500.0, 1000.0), holes: vec![] }, rock]).unwrap_err();
+        let rock = Polygon {
+            shell: vec![[0.0, 0.0], [1e-200, 0.0], [0.0, 1e-200]],
+            holes: vec![],
+        };
+        let err = LandMask::new(vec![
+            Polygon {
+                shell: square(500.0, 500.0, 1000.0),
+                holes: vec![],
+            },
+            rock,
+        ])
+        .unwrap_err();
         assert!(err.to_string().contains("too small"), "{err}");
     }
 
     #[test]
     fn huge_rings_are_valid_land() {
         for size in [1e160, 1e300, f64::MAX / 2.0, 2.0 * HUGE] {
-            let mask = LandMask::new(vec![Polygon { shell: vec![[0.0, 0.0], [size, 0.0], [0.0, size]], holes: vec![] }]).unwrap();
-            assert_eq!(mask.polygons()[0].shell, vec![[0.0, 0.0], [size, 0.0], [0.0, size]], "world coordinates kept");
+            let mask = LandMask::new(vec![Polygon {
+                shell: vec![[0.0, 0.0], [size, 0.0], [0.0, size]],
+                holes: vec![],
+            }])
+            .unwrap();
+            assert_eq!(
+                mask.polygons()[0].shell,
+                vec![[0.0, 0.0], [size, 0.0], [0.0, size]],
+                "world coordinates kept"
+            );
             assert!(mask.contains([size / 4.0, size / 4.0]));
             assert!(mask.contains([size, 0.0]), "vertex is land");
             assert!(!mask.contains([0.75 * size, 0.75 * size]));
             assert!(!mask.contains([-size, 0.0]) && !mask.contains([1.0, -1.0]));
         }
         let bowtie = vec![[0.0, 0.0], [1e300, 1e300], [1e300, 0.0], [0.0, 1e300]];
-        assert!(LandMask::new(vec![Polygon { shell: bowtie, holes: vec![] }]).is_err());
+        assert!(LandMask::new(vec![Polygon {
+            shell: bowtie,
+            holes: vec![]
+        }])
+        .is_err());
     }
 
     #[test]
     fn island_in_a_lake_is_land() {
         let polygons = vec![
-            Polygon { shell: square(0.0, 0.0, 10.0), holes: vec![square(2.0, 2.0, 6.0)] },
-            Polygon { shell: square(4.0, 4.0, 2.0), holes: vec![] },
+            Polygon {
+                shell: square(0.0, 0.0, 10.0),
+                holes: vec![square(2.0, 2.0, 6.0)],
+            },
+            Polygon {
+                shell: square(4.0, 4.0, 2.0),
+                holes: vec![],
+            },
         ];
         let mask = LandMask::new(polygons).unwrap();
         assert!(mask.contains([5.0, 5.0]));

@@ -14,6 +14,8 @@ pub mod detection;
 pub mod detection_estimate;
 pub mod distinct;
 pub mod error;
+#[cfg(test)]
+mod fuzz;
 pub mod gmphd;
 pub mod jpda;
 pub mod land;
@@ -23,7 +25,6 @@ pub mod range_bands;
 pub mod sector;
 pub mod sight;
 pub(crate) mod simd;
-#[cfg(test)] mod fuzz;
 
 #[cfg(feature = "python")]
 mod python;

@@ -13,7 +13,9 @@ fn bytes_of<T>(n: usize) -> u128 {
 /// An empty vector with room for exactly `n` values.
 pub(crate) fn with_room<T>(argument: &'static str, n: usize) -> Result<Vec<T>> {
     let mut values = Vec::new();
-    values.try_reserve_exact(n).map_err(|_| ModelError::memory(argument, bytes_of::<T>(n)))?;
+    values
+        .try_reserve_exact(n)
+        .map_err(|_| ModelError::memory(argument, bytes_of::<T>(n)))?;
     Ok(values)
 }
 
@@ -44,10 +46,13 @@ pub(crate) fn copied<T: Clone>(argument: &'static str, values: &[T]) -> Result<V
 
 /// The product of `factors` (a buffer's length), refused when it overflows usize.
 pub(crate) fn product(argument: &'static str, factors: &[usize]) -> Result<usize> {
-    factors.iter().try_fold(1usize, |total, f| total.checked_mul(*f)).ok_or_else(|| {
-        let bytes = factors.iter().fold(1u128, |total, f| total.saturating_mul(*f as u128));
-        ModelError::memory(argument, bytes.saturating_mul(8))
-    })
+    factors
+        .iter()
+        .try_fold(1usize, |total, f| total.checked_mul(*f))
+        .ok_or_else(|| {
+            let bytes = factors.iter().fold(1u128, |total, f| total.saturating_mul(*f as u128));
+            ModelError::memory(argument, bytes.saturating_mul(8))
+        })
 }
 
 #[cfg(test)]

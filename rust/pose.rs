@@ -18,7 +18,11 @@ pub struct Mounting {
 
 impl Mounting {
     pub fn new(forward: f64, left: f64, yaw: f64) -> Result<Self> {
-        for (name, v) in [("mounting.forward", forward), ("mounting.left", left), ("mounting.yaw", yaw)] {
+        for (name, v) in [
+            ("mounting.forward", forward),
+            ("mounting.left", left),
+            ("mounting.yaw", yaw),
+        ] {
             if !v.is_finite() {
                 return Err(ModelError::invalid(name, format!("must be finite, got {v}")));
             }
@@ -49,7 +53,10 @@ impl Pose {
     /// sum overflows (finite inputs near the largest float can make an infinite pose).
     pub fn mount(&self, mounting: &Mounting) -> Result<Pose> {
         let (s, c) = self.heading.sin_cos();
-        let (x, y) = (self.x + c * mounting.forward - s * mounting.left, self.y + s * mounting.forward + c * mounting.left);
+        let (x, y) = (
+            self.x + c * mounting.forward - s * mounting.left,
+            self.y + s * mounting.forward + c * mounting.left,
+        );
         let heading = self.heading + mounting.yaw;
         if !(x.is_finite() && y.is_finite() && heading.is_finite()) {
             return Err(ModelError::invalid("mounting", format!("the mounted sensor pose ({x}, {y}, {heading}) is not finite: the lever arm or yaw overflows the platform's pose")));
@@ -60,7 +67,11 @@ impl Pose {
     /// The precomputed world→sensor transform of this pose.
     pub fn frame(&self) -> SensorFrame {
         let (sin, cos) = self.heading.sin_cos();
-        SensorFrame { origin: [self.x, self.y], cos, sin }
+        SensorFrame {
+            origin: [self.x, self.y],
+            cos,
+            sin,
+        }
     }
 }
 

@@ -18,7 +18,8 @@ use crate::sector::AngularSector;
 use crate::sight::LineOfSight;
 use numpy::ndarray::Dimension;
 use numpy::{
-    BorrowError, PyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadwriteArray1, PyUntypedArrayMethods,
+    BorrowError, PyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadwriteArray1,
+    PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -63,14 +64,19 @@ fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> crate::Result<T> + Send
 fn guarded<T>(f: impl FnOnce() -> crate::Result<T>) -> PyResult<T> {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(inner) => inner.map_err(to_py),
-        Err(_) => Err(PyRuntimeError::new_err("ctxmodels internal error (a bug: please report it with the inputs)")),
+        Err(_) => Err(PyRuntimeError::new_err(
+            "ctxmodels internal error (a bug: please report it with the inputs)",
+        )),
     }
 }
 
 /// A shared borrow of a float64 input array. numpy's borrow tracker refuses it while another
 /// call (GIL released) writes the same memory as its `out=`: that is a ValueError naming the
 /// argument, never a panic. Unaligned arrays are copied: the kernels read `&[f64]`.
-fn borrow<'py, D: Dimension>(array: &Bound<'py, PyArray<f64, D>>, argument: &str) -> PyResult<PyReadonlyArray<'py, f64, D>> {
+fn borrow<'py, D: Dimension>(
+    array: &Bound<'py, PyArray<f64, D>>,
+    argument: &str,
+) -> PyResult<PyReadonlyArray<'py, f64, D>> {
     // as_slice would also accept Fortran order, which would be read as rows: wrong numbers.
     if !array.is_c_contiguous() {
         return Err(value_error(argument, "must be C-contiguous"));
@@ -79,13 +85,19 @@ fn borrow<'py, D: Dimension>(array: &Bound<'py, PyArray<f64, D>>, argument: &str
 }
 
 /// [`borrow`] for callers that read the memory order (C or Fortran) from the borrowed array.
-fn borrow_contiguous<'py, D: Dimension>(array: &Bound<'py, PyArray<f64, D>>, argument: &str) -> PyResult<PyReadonlyArray<'py, f64, D>> {
+fn borrow_contiguous<'py, D: Dimension>(
+    array: &Bound<'py, PyArray<f64, D>>,
+    argument: &str,
+) -> PyResult<PyReadonlyArray<'py, f64, D>> {
     if !array.is_contiguous() {
         return Err(value_error(argument, "must be C- or Fortran-contiguous"));
     }
-    let view = array
-        .try_readonly()
-        .map_err(|_| value_error(argument, "is being written by another call (it is, or overlaps, an out= buffer in use)"))?;
+    let view = array.try_readonly().map_err(|_| {
+        value_error(
+            argument,
+            "is being written by another call (it is, or overlaps, an out= buffer in use)",
+        )
+    })?;
     if array.is_aligned() {
         return Ok(view);
     }
@@ -93,22 +105,32 @@ fn borrow_contiguous<'py, D: Dimension>(array: &Bound<'py, PyArray<f64, D>>, arg
     // order "K" keeps a Fortran-ordered array Fortran-ordered.
     let copy = array.call_method1("copy", ("K",))?.cast_into::<PyArray<f64, D>>()?;
     drop(view);
-    copy.try_readonly().map_err(|_| value_error(argument, "could not borrow an aligned copy"))
+    copy.try_readonly()
+        .map_err(|_| value_error(argument, "could not borrow an aligned copy"))
 }
 
 /// A new array holding a copy of `values` (MemoryError naming `argument` when it cannot be
 /// allocated: numpy's own copy would panic).
-fn array_of<'py, T: numpy::Element + Clone>(py: Python<'py>, argument: &'static str, values: &[T]) -> PyResult<Bound<'py, PyArray1<T>>> {
-    Ok(PyArray1::from_vec(py, crate::memory::copied(argument, values).map_err(to_py)?))
+fn array_of<'py, T: numpy::Element + Clone>(
+    py: Python<'py>,
+    argument: &'static str,
+    values: &[T],
+) -> PyResult<Bound<'py, PyArray1<T>>> {
+    Ok(PyArray1::from_vec(
+        py,
+        crate::memory::copied(argument, values).map_err(to_py)?,
+    ))
 }
 
 fn slice<'a, D: Dimension>(a: &'a PyReadonlyArray<'_, f64, D>, argument: &str) -> PyResult<&'a [f64]> {
-    a.as_slice().map_err(|_| value_error(argument, "must be C-contiguous and aligned"))
+    a.as_slice()
+        .map_err(|_| value_error(argument, "must be C-contiguous and aligned"))
 }
 
 /// The first row of `rows` (of `width` values) holding NaN or ±inf.
 fn first_non_finite(rows: &[f64], width: usize) -> Option<usize> {
-    rows.chunks_exact(width).position(|row| row.iter().any(|v| !v.is_finite()))
+    rows.chunks_exact(width)
+        .position(|row| row.iter().any(|v| !v.is_finite()))
 }
 
 fn pose_of(pose: (f64, f64, f64)) -> PyResult<Pose> {
@@ -116,19 +138,34 @@ fn pose_of(pose: (f64, f64, f64)) -> PyResult<Pose> {
 }
 
 fn mapping_of(mapping: (i64, i64)) -> PyResult<PositionMapping> {
-    let index = |i: i64| usize::try_from(i).map_err(|_| value_error("position_mapping", format_args!("indices must be >= 0, got {mapping:?}")));
+    let index = |i: i64| {
+        usize::try_from(i).map_err(|_| {
+            value_error(
+                "position_mapping",
+                format_args!("indices must be >= 0, got {mapping:?}"),
+            )
+        })
+    };
     PositionMapping::new(index(mapping.0)?, index(mapping.1)?).map_err(to_py)
 }
 
 /// The output buffer, borrowed for writing: the caller's `out` (checked) or a new array.
 /// `inputs` are this call's input slices: Rust must never write memory it also reads.
-fn output<'py>(py: Python<'py>, out: Option<Bound<'py, PyArray1<f64>>>, n: usize, inputs: &[(&str, &[f64])]) -> PyResult<PyReadwriteArray1<'py, f64>> {
+fn output<'py>(
+    py: Python<'py>,
+    out: Option<Bound<'py, PyArray1<f64>>>,
+    n: usize,
+    inputs: &[(&str, &[f64])],
+) -> PyResult<PyReadwriteArray1<'py, f64>> {
     let array = match out {
         // (numpy's own allocation would panic on failure: a Vec that can fail, then handed over)
         None => PyArray1::from_vec(py, crate::memory::filled("out", n, 0.0).map_err(to_py)?),
         Some(out) => {
             if out.len() != n {
-                return Err(value_error("out", format_args!("must have {n} entries, got {}", out.len())));
+                return Err(value_error(
+                    "out",
+                    format_args!("must have {n} entries, got {}", out.len()),
+                ));
             }
             if !out.is_c_contiguous() {
                 return Err(value_error("out", "must be C-contiguous"));
@@ -141,9 +178,15 @@ fn output<'py>(py: Python<'py>, out: Option<Bound<'py, PyArray1<f64>>>, n: usize
             let start = out.data() as usize;
             let end = start + n * std::mem::size_of::<f64>();
             for (name, data) in inputs {
-                let (s, e) = (data.as_ptr() as usize, data.as_ptr() as usize + std::mem::size_of_val(*data));
+                let (s, e) = (
+                    data.as_ptr() as usize,
+                    data.as_ptr() as usize + std::mem::size_of_val(*data),
+                );
                 if n > 0 && !data.is_empty() && s < end && start < e {
-                    return Err(value_error("out", format_args!("overlaps {name}, an input of the same call; pass a separate buffer")));
+                    return Err(value_error(
+                        "out",
+                        format_args!("overlaps {name}, an input of the same call; pass a separate buffer"),
+                    ));
                 }
             }
             out
@@ -151,7 +194,10 @@ fn output<'py>(py: Python<'py>, out: Option<Bound<'py, PyArray1<f64>>>, n: usize
     };
     array.try_readwrite().map_err(|err| match err {
         BorrowError::NotWriteable => value_error("out", "must be writeable"),
-        _ => value_error("out", "is in use by another call or overlaps one of this call's inputs; give each concurrent call its own buffer"),
+        _ => value_error(
+            "out",
+            "is in use by another call or overlaps one of this call's inputs; give each concurrent call its own buffer",
+        ),
     })
 }
 
@@ -173,7 +219,10 @@ impl PyRangeBands {
         if let Some(row) = r.iter().position(|x| x.is_nan()) {
             return Err(to_py(ModelError::non_finite("ranges", row, "NaN")));
         }
-        Ok(PyArray1::from_vec(py, crate::memory::collected("ranges", r.iter().map(|&x| self.0.at(x))).map_err(to_py)?))
+        Ok(PyArray1::from_vec(
+            py,
+            crate::memory::collected("ranges", r.iter().map(|&x| self.0.at(x))).map_err(to_py)?,
+        ))
     }
 }
 
@@ -184,7 +233,9 @@ pub struct PyAngularSector(AngularSector);
 impl PyAngularSector {
     #[new]
     fn new(centre: f64, width: f64, inside: f64, outside: f64) -> PyResult<Self> {
-        Ok(PyAngularSector(AngularSector::new(centre, width, inside, outside).map_err(to_py)?))
+        Ok(PyAngularSector(
+            AngularSector::new(centre, width, inside, outside).map_err(to_py)?,
+        ))
     }
 }
 
@@ -196,10 +247,17 @@ fn ring_of(ring: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 2]>> {
         .cast::<PyArray2<f64>>()
         .map_err(|_| PyTypeError::new_err("polygons: every ring must be a (K, 2) float64 array"))?;
     if array.shape()[1] != 2 {
-        return Err(value_error("polygons", format_args!("every ring must have shape (K, 2), got {:?}", array.shape())));
+        return Err(value_error(
+            "polygons",
+            format_args!("every ring must have shape (K, 2), got {:?}", array.shape()),
+        ));
     }
     let array = borrow(array, "polygons")?;
-    Ok(crate::memory::collected("polygons", slice(&array, "polygons")?.chunks_exact(2).map(|r| [r[0], r[1]])).map_err(to_py)?)
+    Ok(crate::memory::collected(
+        "polygons",
+        slice(&array, "polygons")?.chunks_exact(2).map(|r| [r[0], r[1]]),
+    )
+    .map_err(to_py)?)
 }
 
 #[pymethods]
@@ -210,17 +268,26 @@ impl PyLandMask {
         // (one entry per polygon of the Python list, which exists)
         let mut converted = Vec::with_capacity(polygons.len());
         for (shell, holes) in &polygons {
-            converted.push(Polygon { shell: ring_of(shell)?, holes: holes.iter().map(ring_of).collect::<PyResult<_>>()? });
+            converted.push(Polygon {
+                shell: ring_of(shell)?,
+                holes: holes.iter().map(ring_of).collect::<PyResult<_>>()?,
+            });
         }
         Ok(PyLandMask(Arc::new(detached(py, || LandMask::new(converted))?)))
     }
 
     /// Whether each (x, y) row of `points` is on land (boundary included).
-    fn contains<'py>(&self, py: Python<'py>, points: Bound<'py, PyArray2<f64>>) -> PyResult<Bound<'py, PyArray1<bool>>> {
+    fn contains<'py>(
+        &self,
+        py: Python<'py>,
+        points: Bound<'py, PyArray2<f64>>,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let points = borrow(&points, "points")?;
         let p = finite_points(&points, "points")?;
         let land = &self.0;
-        let inside = detached(py, || crate::memory::collected("points", p.chunks_exact(2).map(|q| land.contains([q[0], q[1]]))))?;
+        let inside = detached(py, || {
+            crate::memory::collected("points", p.chunks_exact(2).map(|q| land.contains([q[0], q[1]])))
+        })?;
         Ok(PyArray1::from_vec(py, inside))
     }
 
@@ -233,7 +300,10 @@ impl PyLandMask {
 /// (M, 2) rows of `points` as a slice.
 fn points_slice<'a>(points: &'a PyReadonlyArray<'_, f64, numpy::Ix2>, argument: &'static str) -> PyResult<&'a [f64]> {
     if points.shape()[1] != 2 {
-        return Err(value_error(argument, format_args!("must have shape (M, 2), got {:?}", points.shape())));
+        return Err(value_error(
+            argument,
+            format_args!("must have shape (M, 2), got {:?}", points.shape()),
+        ));
     }
     slice(points, argument)
 }
@@ -243,7 +313,11 @@ fn points_slice<'a>(points: &'a PyReadonlyArray<'_, f64, numpy::Ix2>, argument: 
 fn finite_points<'a>(points: &'a PyReadonlyArray<'_, f64, numpy::Ix2>, argument: &'static str) -> PyResult<&'a [f64]> {
     let p = points_slice(points, argument)?;
     match first_non_finite(p, 2) {
-        Some(row) => Err(to_py(ModelError::non_finite(argument, row, "x or y is NaN or infinite"))),
+        Some(row) => Err(to_py(ModelError::non_finite(
+            argument,
+            row,
+            "x or y is NaN or infinite",
+        ))),
         None => Ok(p),
     }
 }
@@ -260,15 +334,25 @@ impl PyLineOfSight {
     }
 
     /// Whether each target row of `targets` (M, 2) is visible from `sensor` (x, y).
-    fn visible<'py>(&self, py: Python<'py>, sensor: (f64, f64), targets: Bound<'py, PyArray2<f64>>) -> PyResult<Bound<'py, PyArray1<bool>>> {
+    fn visible<'py>(
+        &self,
+        py: Python<'py>,
+        sensor: (f64, f64),
+        targets: Bound<'py, PyArray2<f64>>,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         if !(sensor.0.is_finite() && sensor.1.is_finite()) {
-            return Err(value_error("sensor", format_args!("must be a finite (x, y) position, got {sensor:?}")));
+            return Err(value_error(
+                "sensor",
+                format_args!("must be a finite (x, y) position, got {sensor:?}"),
+            ));
         }
         let targets = borrow(&targets, "targets")?;
         let t = finite_points(&targets, "targets")?;
         let sight = &self.0;
         let s = [sensor.0, sensor.1];
-        let visible = detached(py, || crate::memory::collected("targets", t.chunks_exact(2).map(|q| sight.visible(s, [q[0], q[1]]))))?;
+        let visible = detached(py, || {
+            crate::memory::collected("targets", t.chunks_exact(2).map(|q| sight.visible(s, [q[0], q[1]])))
+        })?;
         Ok(PyArray1::from_vec(py, visible))
     }
 }
@@ -284,7 +368,12 @@ fn rule_of(rule: &str, order: i64) -> PyResult<Rule> {
     let order = usize::try_from(order)
         .ok()
         .filter(|o| (1..=MAX_ORDER).contains(o))
-        .ok_or_else(|| value_error("order", format_args!("must be an integer in 1..{MAX_ORDER}, got {order}")))?;
+        .ok_or_else(|| {
+            value_error(
+                "order",
+                format_args!("must be an integer in 1..{MAX_ORDER}, got {order}"),
+            )
+        })?;
     match rule {
         "mean" => Ok(Rule::mean()),
         "cubature" => Ok(Rule::cubature()),
@@ -345,7 +434,9 @@ impl PyDetectionModel {
         let data = slice(&states, "states")?;
         let mut out = output(py, out, n, &[("states", data)])?;
         let result = Bound::clone(&out);
-        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
+        let buffer = out
+            .as_slice_mut()
+            .map_err(|_| value_error("out", "must be C-contiguous"))?;
         let model = &self.0;
         detached(py, || {
             if n == 0 {
@@ -392,7 +483,10 @@ impl PyDetectionModel {
         let (n, ncols) = (means.shape()[0], means.shape()[1]);
         let cshape = covars.shape();
         if cshape[0] != n || cshape[1] != ncols || cshape[2] != ncols {
-            return Err(value_error("covars", format_args!("must have shape ({n}, {ncols}, {ncols}) to match means, got {cshape:?}")));
+            return Err(value_error(
+                "covars",
+                format_args!("must have shape ({n}, {ncols}, {ncols}) to match means, got {cshape:?}"),
+            ));
         }
         let means = borrow(&means, "means")?;
         let m = slice(&means, "means")?;
@@ -400,13 +494,17 @@ impl PyDetectionModel {
         let c = slice(&covars, "covars")?;
         let mut out = output(py, out, n, &[("means", m), ("covars", c)])?;
         let result = Bound::clone(&out);
-        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
+        let buffer = out
+            .as_slice_mut()
+            .map_err(|_| value_error("out", "must be C-contiguous"))?;
         let model = &self.0;
         detached(py, || {
             if n == 0 {
                 return Ok(());
             }
-            model.at_pose(&pose).expected_at_gaussians(m, c, ncols, mapping, &rule, buffer)
+            model
+                .at_pose(&pose)
+                .expected_at_gaussians(m, c, ncols, mapping, &rule, buffer)
         })?;
         Ok(result)
     }
@@ -422,11 +520,18 @@ impl PyCoastalBand {
     #[new]
     fn new(land: &Bound<'_, PyLandMask>, width: f64, inside: f64, seen_only: bool) -> PyResult<Self> {
         let land = land.get().0.clone();
-        Ok(PyCoastalBand(Arc::new(guarded(|| CoastalBand::new(land, width, inside, seen_only))?)))
+        Ok(PyCoastalBand(Arc::new(guarded(|| {
+            CoastalBand::new(land, width, inside, seen_only)
+        })?)))
     }
 
     /// The factor at world `positions` (M, 2) for a sensor at `pose`.
-    fn evaluate<'py>(&self, py: Python<'py>, pose: (f64, f64, f64), positions: Bound<'py, PyArray2<f64>>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        pose: (f64, f64, f64),
+        positions: Bound<'py, PyArray2<f64>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
         let positions = borrow(&positions, "positions")?;
         let p = points_slice(&positions, "positions")?;
@@ -443,7 +548,13 @@ impl PyMetadataThreshold {
     #[new]
     #[pyo3(signature = (column, threshold, below, at_or_above, missing = None))]
     fn new(column: usize, threshold: f64, below: f64, at_or_above: f64, missing: Option<f64>) -> Self {
-        PyMetadataThreshold(MetadataThreshold { column, threshold, below, at_or_above, missing })
+        PyMetadataThreshold(MetadataThreshold {
+            column,
+            threshold,
+            below,
+            at_or_above,
+            missing,
+        })
     }
 }
 
@@ -513,7 +624,9 @@ impl PyClutterModel {
         inputs.extend(r.map(|r| ("ranges", r)));
         let mut out = output(py, out, n, &inputs)?;
         let result = Bound::clone(&out);
-        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
+        let buffer = out
+            .as_slice_mut()
+            .map_err(|_| value_error("out", "must be C-contiguous"))?;
         let model = &self.0;
         detached(py, || model.evaluate_with_ranges(&pose, p, m, r, buffer))?;
         Ok(result)
@@ -523,7 +636,9 @@ impl PyClutterModel {
 /// The pose (x, y, heading) of a sensor mounted on a platform at `pose`.
 #[pyfunction]
 fn mount(pose: (f64, f64, f64), forward: f64, left: f64, yaw: f64) -> PyResult<(f64, f64, f64)> {
-    let mounted = pose_of(pose)?.mount(&Mounting::new(forward, left, yaw).map_err(to_py)?).map_err(to_py)?;
+    let mounted = pose_of(pose)?
+        .mount(&Mounting::new(forward, left, yaw).map_err(to_py)?)
+        .map_err(to_py)?;
     Ok((mounted.x, mounted.y, mounted.heading))
 }
 
@@ -560,7 +675,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mount, m)?)?;
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;
     m.add_function(wrap_pyfunction!(simd_backend, m)?)?;
-    m.add("NotPositiveDefiniteError", m.py().get_type::<NotPositiveDefiniteError>())?;
+    m.add(
+        "NotPositiveDefiniteError",
+        m.py().get_type::<NotPositiveDefiniteError>(),
+    )?;
     mixture::register(m)?;
     jpda::register(m)?;
     initiation::register(m)?;

@@ -25,7 +25,12 @@ impl RangeBands {
         if values.len() != edges.len() + 1 {
             return Err(ModelError::shape(
                 "values",
-                format!("needs one more entry than edges ({} edges → {} values), got {}", edges.len(), edges.len() + 1, values.len()),
+                format!(
+                    "needs one more entry than edges ({} edges → {} values), got {}",
+                    edges.len(),
+                    edges.len() + 1,
+                    values.len()
+                ),
             ));
         }
         if upper_owns.len() != edges.len() {
@@ -36,19 +41,40 @@ impl RangeBands {
         }
         for (i, &e) in edges.iter().enumerate() {
             if !e.is_finite() || e < 0.0 {
-                return Err(ModelError::invalid("edges", format!("edge {i} must be finite and >= 0, got {e}")));
+                return Err(ModelError::invalid(
+                    "edges",
+                    format!("edge {i} must be finite and >= 0, got {e}"),
+                ));
             }
             if i > 0 && e <= edges[i - 1] {
-                return Err(ModelError::invalid("edges", format!("must be strictly increasing, but edge {i} ({e}) <= edge {} ({})", i - 1, edges[i - 1])));
+                return Err(ModelError::invalid(
+                    "edges",
+                    format!(
+                        "must be strictly increasing, but edge {i} ({e}) <= edge {} ({})",
+                        i - 1,
+                        edges[i - 1]
+                    ),
+                ));
             }
         }
         for (i, &v) in values.iter().enumerate() {
             if !v.is_finite() {
-                return Err(ModelError::invalid("values", format!("value {i} must be finite, got {v}")));
+                return Err(ModelError::invalid(
+                    "values",
+                    format!("value {i} must be finite, got {v}"),
+                ));
             }
         }
-        let root_thresholds = memory::collected("edges", edges.iter().zip(&upper_owns).map(|(&e, &owns)| root_threshold(e, owns)))?;
-        Ok(RangeBands { edges, values, upper_owns, root_thresholds })
+        let root_thresholds = memory::collected(
+            "edges",
+            edges.iter().zip(&upper_owns).map(|(&e, &owns)| root_threshold(e, owns)),
+        )?;
+        Ok(RangeBands {
+            edges,
+            values,
+            upper_owns,
+            root_thresholds,
+        })
     }
 
     /// All values (for checks such as "every value is a probability").
@@ -74,7 +100,11 @@ impl RangeBands {
     pub(crate) fn lanes_at<L: Lanes>(&self, r: L) -> L {
         let mut value = L::splat(self.values[0]);
         for (i, &edge) in self.edges.iter().enumerate() {
-            value = L::select(passed(r, L::splat(edge), self.upper_owns[i]), L::splat(self.values[i + 1]), value);
+            value = L::select(
+                passed(r, L::splat(edge), self.upper_owns[i]),
+                L::splat(self.values[i + 1]),
+                value,
+            );
         }
         value
     }
@@ -249,11 +279,36 @@ mod tests {
 
     #[test]
     fn rejects_bad_configuration() {
-        assert_eq!(RangeBands::new(vec![80.0, 50.0], vec![1.0, 0.5, 0.0], vec![true, true]).unwrap_err().argument(), "edges");
-        assert_eq!(RangeBands::new(vec![-1.0], vec![1.0, 0.5], vec![true]).unwrap_err().argument(), "edges");
-        assert_eq!(RangeBands::new(vec![1.0], vec![1.0], vec![true]).unwrap_err().argument(), "values");
-        assert_eq!(RangeBands::new(vec![1.0], vec![1.0, f64::NAN], vec![true]).unwrap_err().argument(), "values");
-        assert_eq!(RangeBands::new(vec![1.0], vec![1.0, 0.0], vec![]).unwrap_err().argument(), "upper_owns");
+        assert_eq!(
+            RangeBands::new(vec![80.0, 50.0], vec![1.0, 0.5, 0.0], vec![true, true])
+                .unwrap_err()
+                .argument(),
+            "edges"
+        );
+        assert_eq!(
+            RangeBands::new(vec![-1.0], vec![1.0, 0.5], vec![true])
+                .unwrap_err()
+                .argument(),
+            "edges"
+        );
+        assert_eq!(
+            RangeBands::new(vec![1.0], vec![1.0], vec![true])
+                .unwrap_err()
+                .argument(),
+            "values"
+        );
+        assert_eq!(
+            RangeBands::new(vec![1.0], vec![1.0, f64::NAN], vec![true])
+                .unwrap_err()
+                .argument(),
+            "values"
+        );
+        assert_eq!(
+            RangeBands::new(vec![1.0], vec![1.0, 0.0], vec![])
+                .unwrap_err()
+                .argument(),
+            "upper_owns"
+        );
     }
 
     #[test]
@@ -273,10 +328,26 @@ mod tests {
     /// squares, both owners, zero and edges whose square overflows.
     #[test]
     fn root_thresholds_decide_as_the_square_root_does() {
-        let mut edges = vec![0.0, f64::MIN_POSITIVE, 1e-160, 0.1, 1.0, 3.0, 50.0, 80.0, 1000.0, 1612.0, 1e154, 1.5e154, f64::MAX];
+        let mut edges = vec![
+            0.0,
+            f64::MIN_POSITIVE,
+            1e-160,
+            0.1,
+            1.0,
+            3.0,
+            50.0,
+            80.0,
+            1000.0,
+            1612.0,
+            1e154,
+            1.5e154,
+            f64::MAX,
+        ];
         let mut state = 0x9e37_79b9_7f4a_7c15_u64;
         for _ in 0..2000 {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             edges.push((state >> 11) as f64 / (1u64 << 53) as f64 * 5000.0);
         }
         for &e in &edges {
@@ -292,7 +363,11 @@ mod tests {
                 }
                 for s in probes {
                     let lanes = bands.lanes_at_root(crate::simd::Portable::splat(s)).to_array()[0];
-                    assert_eq!(lanes.to_bits(), bands.at(s.sqrt()).to_bits(), "edge {e}, upper owns {owns}, s {s:e}");
+                    assert_eq!(
+                        lanes.to_bits(),
+                        bands.at(s.sqrt()).to_bits(),
+                        "edge {e}, upper owns {owns}, s {s:e}"
+                    );
                 }
             }
         }

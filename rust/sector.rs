@@ -26,7 +26,9 @@ impl AngularSector {
         if !centre.is_finite() || centre.abs() > 2.0 * TAU {
             return Err(ModelError::invalid(
                 "centre",
-                format!("must be a finite angle in radians within ±4π, got {centre} (pass degrees through math.radians)"),
+                format!(
+                    "must be a finite angle in radians within ±4π, got {centre} (pass degrees through math.radians)"
+                ),
             ));
         }
         if !(width > 0.0 && width <= TAU) {
@@ -41,8 +43,18 @@ impl AngularSector {
             }
         }
         // A full circle must be inside everywhere: cos(π) = -1 exactly keeps it so.
-        let cos_half = if width >= TAU { -1.0 } else { (width / 2.0).min(PI).cos() };
-        Ok(AngularSector { centre, width, inside, outside, cos_half })
+        let cos_half = if width >= TAU {
+            -1.0
+        } else {
+            (width / 2.0).min(PI).cos()
+        };
+        Ok(AngularSector {
+            centre,
+            width,
+            inside,
+            outside,
+            cos_half,
+        })
     }
 
     pub fn values(&self) -> [f64; 2] {
@@ -169,12 +181,18 @@ mod tests {
     fn squared_test_matches_range_test() {
         let frame = Pose::new(0.0, 0.0, 0.4).unwrap().frame();
         for width_deg in [10.0, 65.0, 179.0, 181.0, 300.0, 360.0] {
-            let s = AngularSector::new(2.0, f64::to_radians(width_deg), 0.25, 0.75).unwrap().in_frame(&frame);
+            let s = AngularSector::new(2.0, f64::to_radians(width_deg), 0.25, 0.75)
+                .unwrap()
+                .in_frame(&frame);
             for k in 0..3600 {
                 let b = k as f64 * 0.1f64.to_radians() + 0.00037;
                 let (dx, dy) = (250.0 * b.cos(), 250.0 * b.sin());
                 let r2 = dx * dx + dy * dy;
-                assert_eq!(s.at_squared(dx, dy, r2), s.at(dx, dy, r2.sqrt()), "width {width_deg} bearing {b}");
+                assert_eq!(
+                    s.at_squared(dx, dy, r2),
+                    s.at(dx, dy, r2.sqrt()),
+                    "width {width_deg} bearing {b}"
+                );
             }
             assert_eq!(s.at_squared(0.0, 0.0, 0.0), 0.25, "the sensor's own position is inside");
         }
@@ -184,6 +202,9 @@ mod tests {
     fn degrees_are_rejected() {
         assert_eq!(AngularSector::new(PI, 65.0, 0.0, 1.0).unwrap_err().argument(), "width");
         assert_eq!(AngularSector::new(PI, 0.0, 0.0, 1.0).unwrap_err().argument(), "width");
-        assert_eq!(AngularSector::new(f64::NAN, 1.0, 0.0, 1.0).unwrap_err().argument(), "centre");
+        assert_eq!(
+            AngularSector::new(f64::NAN, 1.0, 0.0, 1.0).unwrap_err().argument(),
+            "centre"
+        );
     }
 }

@@ -41,7 +41,10 @@ pub struct LineOfSight {
 impl LineOfSight {
     pub fn new(land: Arc<LandMask>) -> Result<Self> {
         let edges: Vec<[[f64; 2]; 2]> = memory::collected("land", land.edges().iter().map(|e| [e.a, e.b]))?;
-        let scale = edges.iter().flatten().fold(0.0f64, |m, p| m.max(p[0].abs()).max(p[1].abs()));
+        let scale = edges
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, p| m.max(p[0].abs()).max(p[1].abs()));
         let boxes: Vec<Aabb> = memory::collected(
             "land",
             edges.iter().map(|[a, b]| {
@@ -55,7 +58,12 @@ impl LineOfSight {
         // (parry's tree allocates infallibly: about as large as the boxes just allocated)
         let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &boxes);
         let scale = land.scale();
-        Ok(LineOfSight { land, edges, scale, bvh })
+        Ok(LineOfSight {
+            land,
+            edges,
+            scale,
+            bvh,
+        })
     }
 
     pub fn land(&self) -> &Arc<LandMask> {
@@ -109,7 +117,10 @@ impl LineOfSight {
 fn segment_may_touch_box(origin: [f64; 2], d: [f64; 2], inv: [f64; 2], mins: Vector, maxs: Vector) -> bool {
     const SLACK: f64 = 1e-9;
     let (mut t0, mut t1) = (-SLACK, 1.0 + SLACK);
-    for (o, d, inv, lo, hi) in [(origin[0], d[0], inv[0], mins.x, maxs.x), (origin[1], d[1], inv[1], mins.y, maxs.y)] {
+    for (o, d, inv, lo, hi) in [
+        (origin[0], d[0], inv[0], mins.x, maxs.x),
+        (origin[1], d[1], inv[1], mins.y, maxs.y),
+    ] {
         if d == 0.0 {
             if o < lo || o > hi {
                 return false;
@@ -173,8 +184,16 @@ impl<'a> VisibilityIndex<'a> {
     fn new(sight: &'a LineOfSight, origin: [f64; 2]) -> Self {
         let edges = &sight.edges;
         let sensor = sight.to_index(origin);
-        let mut index =
-            VisibilityIndex { sight, sensor: origin, sensor_scaled: sensor, on_coast: false, dense: false, bins: 1, bin_start: vec![0, 0], entries: Vec::new() };
+        let mut index = VisibilityIndex {
+            sight,
+            sensor: origin,
+            sensor_scaled: sensor,
+            on_coast: false,
+            dense: false,
+            bins: 1,
+            bin_start: vec![0, 0],
+            entries: Vec::new(),
+        };
         let s = sensor;
         let s_size = s[0].abs().max(s[1].abs());
 
@@ -235,7 +254,12 @@ impl<'a> VisibilityIndex<'a> {
             };
             coverage += hi - lo;
             let near_low = (near - fuzz).max(0.0) * (1.0 - 1e-9);
-            spans.push(Span { edge: k as u32, near2: near_low * near_low, lo, hi });
+            spans.push(Span {
+                edge: k as u32,
+                near2: near_low * near_low,
+                lo,
+                hi,
+            });
         }
 
         // Bins: about one per edge, fewer when the coastline is so folded (a direction
@@ -277,13 +301,24 @@ impl<'a> VisibilityIndex<'a> {
         }
         // (bins ≤ 2^16; the entries as bounded above)
         let mut fill: Vec<u32> = index.bin_start[..bins].to_vec();
-        index.entries = vec![BinEdge { a: [0.0; 2], b: [0.0; 2], near2: 0.0 }; index.bin_start[bins] as usize];
+        index.entries = vec![
+            BinEdge {
+                a: [0.0; 2],
+                b: [0.0; 2],
+                near2: 0.0
+            };
+            index.bin_start[bins] as usize
+        ];
         for span in &spans {
             let [a, b] = edges[span.edge as usize];
             let (first, count) = bin_range(span);
             for i in 0..count {
                 let bin = (first + i) % bins;
-                index.entries[fill[bin] as usize] = BinEdge { a, b, near2: span.near2 };
+                index.entries[fill[bin] as usize] = BinEdge {
+                    a,
+                    b,
+                    near2: span.near2,
+                };
                 fill[bin] += 1;
             }
         }
@@ -344,7 +379,11 @@ impl<'a> VisibilityIndex<'a> {
 fn distance_to_segment(a: [f64; 2], b: [f64; 2]) -> f64 {
     let ab = [b[0] - a[0], b[1] - a[1]];
     let len2 = ab[0] * ab[0] + ab[1] * ab[1];
-    let t = if len2 > 0.0 { (-(a[0] * ab[0] + a[1] * ab[1]) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if len2 > 0.0 {
+        (-(a[0] * ab[0] + a[1] * ab[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let p = [a[0] + t * ab[0], a[1] + t * ab[1]];
     let exact_end = (a[0] * a[0] + a[1] * a[1]).min(b[0] * b[0] + b[1] * b[1]).sqrt();
     (p[0] * p[0] + p[1] * p[1]).sqrt().min(exact_end)
@@ -364,12 +403,23 @@ mod tests {
     fn tiny_island_shadows_like_a_large_one() {
         // The island above shrunk by 1e-202: validated and cast in a scaled frame.
         let k = 1e-202;
-        let shell = vec![[100.0 * k, -10.0 * k], [120.0 * k, -10.0 * k], [120.0 * k, 10.0 * k], [100.0 * k, 10.0 * k]];
+        let shell = vec![
+            [100.0 * k, -10.0 * k],
+            [120.0 * k, -10.0 * k],
+            [120.0 * k, 10.0 * k],
+            [100.0 * k, 10.0 * k],
+        ];
         let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap())).unwrap();
         let sensor = [0.0, 0.0];
         let index = sight.from_point(sensor);
         assert_eq!(index.sensor(), sensor);
-        for (target, visible) in [([200.0, 0.0], false), ([200.0, 30.0], true), ([110.0, 0.0], false), ([90.0, 0.0], true), ([-200.0, 0.0], true)] {
+        for (target, visible) in [
+            ([200.0, 0.0], false),
+            ([200.0, 30.0], true),
+            ([110.0, 0.0], false),
+            ([90.0, 0.0], true),
+            ([-200.0, 0.0], true),
+        ] {
             let t = [target[0] * k, target[1] * k];
             assert_eq!(sight.visible(sensor, t), visible, "{target:?}");
             assert_eq!(index.visible(t), visible, "{target:?}");
@@ -396,7 +446,17 @@ mod tests {
     fn index_agrees_on_the_island() {
         let sight = island();
         let index = sight.from_point([0.0, 0.0]);
-        for t in [[200.0, 0.0], [50.0, 0.0], [200.0, 40.0], [110.0, 0.0], [100.0, 0.0], [200.0, 20.0], [99.999, 0.0], [0.0, 0.0], [-50.0, 3.0]] {
+        for t in [
+            [200.0, 0.0],
+            [50.0, 0.0],
+            [200.0, 40.0],
+            [110.0, 0.0],
+            [100.0, 0.0],
+            [200.0, 20.0],
+            [99.999, 0.0],
+            [0.0, 0.0],
+            [-50.0, 3.0],
+        ] {
             assert_eq!(index.visible(t), sight.visible([0.0, 0.0], t), "target {t:?}");
         }
         assert!(!sight.from_point([0.0, 10.0]).visible([200.0, 10.0]));
@@ -427,15 +487,22 @@ mod tests {
             })
             .collect();
         let ring = |r: f64, cx: f64, cy: f64, m: usize| -> Vec<[f64; 2]> {
-            (0..m).map(|k| {
-                let t = k as f64 / m as f64 * std::f64::consts::TAU;
-                [cx + r * t.cos(), cy + r * t.sin()]
-            })
-            .collect()
+            (0..m)
+                .map(|k| {
+                    let t = k as f64 / m as f64 * std::f64::consts::TAU;
+                    [cx + r * t.cos(), cy + r * t.sin()]
+                })
+                .collect()
         };
         let land = LandMask::new(vec![
-            Polygon { shell: star.clone(), holes: vec![] },
-            Polygon { shell: ring(120.0, 900.0, 100.0, 64), holes: vec![ring(80.0, 900.0, 100.0, 48)] },
+            Polygon {
+                shell: star.clone(),
+                holes: vec![],
+            },
+            Polygon {
+                shell: ring(120.0, 900.0, 100.0, 64),
+                holes: vec![ring(80.0, 900.0, 100.0, 48)],
+            },
         ])
         .unwrap();
         let sight = LineOfSight::new(Arc::new(land)).unwrap();
@@ -446,10 +513,16 @@ mod tests {
             state ^= state << 17;
             lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
         };
-        let mut targets: Vec<[f64; 2]> = (0..20_000).map(|_| [uniform(-1500.0, 1500.0), uniform(-1500.0, 1500.0)]).collect();
+        let mut targets: Vec<[f64; 2]> = (0..20_000)
+            .map(|_| [uniform(-1500.0, 1500.0), uniform(-1500.0, 1500.0)])
+            .collect();
         for sensor in [[-700.0, 50.0], [900.0, 100.0], [0.0, 900.0], [-650.0, -650.0]] {
             // Targets exactly through vertices (grazing) at twice the vertex's distance.
-            let mut extra: Vec<[f64; 2]> = star.iter().step_by(7).map(|v| [2.0 * v[0] - sensor[0], 2.0 * v[1] - sensor[1]]).collect();
+            let mut extra: Vec<[f64; 2]> = star
+                .iter()
+                .step_by(7)
+                .map(|v| [2.0 * v[0] - sensor[0], 2.0 * v[1] - sensor[1]])
+                .collect();
             extra.extend(star.iter().step_by(11).copied());
             targets.extend_from_slice(&extra);
             let index = sight.from_point(sensor);
@@ -466,7 +539,10 @@ mod tests {
             }
             // From inside the lagoon only the lagoon is visible.
             let min_seen = if sensor == [900.0, 100.0] { 10 } else { 1000 };
-            assert!(seen >= min_seen && hidden > 1000, "{sensor:?}: {seen} seen, {hidden} hidden");
+            assert!(
+                seen >= min_seen && hidden > 1000,
+                "{sensor:?}: {seen} seen, {hidden} hidden"
+            );
             targets.truncate(20_000);
         }
         // Inside the atoll's lagoon: water, but walled in by land on every side.
@@ -490,7 +566,11 @@ mod tests {
             })
             .collect();
         let sight = LineOfSight::new(Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap())).unwrap();
-        let vertices: Vec<Vector> = sight.edges.iter().flat_map(|[a, b]| [Vector::new(a[0], a[1]), Vector::new(b[0], b[1])]).collect();
+        let vertices: Vec<Vector> = sight
+            .edges
+            .iter()
+            .flat_map(|[a, b]| [Vector::new(a[0], a[1]), Vector::new(b[0], b[1])])
+            .collect();
         let indices: Vec<[u32; 2]> = (0..sight.edges.len() as u32).map(|k| [2 * k, 2 * k + 1]).collect();
         let coast = Polyline::new(vertices, Some(indices));
         let sensor = [-1700.0, 300.0];
@@ -498,12 +578,19 @@ mod tests {
         let mut state = 12345u64;
         let mut hidden = 0;
         for _ in 0..20_000 {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let x = ((state >> 11) as f64 / (1u64 << 53) as f64) * 3600.0 - 1800.0;
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let y = ((state >> 11) as f64 / (1u64 << 53) as f64) * 3600.0 - 1800.0;
             let t = [x, y];
-            let ray = Ray::new(Vector::new(sensor[0], sensor[1]), Vector::new(x - sensor[0], y - sensor[1]));
+            let ray = Ray::new(
+                Vector::new(sensor[0], sensor[1]),
+                Vector::new(x - sensor[0], y - sensor[1]),
+            );
             let reference = !coast.intersects_local_ray(&ray, 1.0) && !sight.land().contains(t);
             assert_eq!(sight.visible(sensor, t), reference, "{t:?}");
             assert_eq!(index.visible(t), reference, "{t:?}");
@@ -543,7 +630,8 @@ mod tests {
         for i in 0..80 {
             for j in 0..80 {
                 let t = [i as f64 * 3.0 - 20.0, j as f64 * 1.0 - 40.0];
-                let brute = !sight.edges.iter().any(|&[a, b]| segments_meet(sensor, t, a, b)) && !sight.land.contains(t);
+                let brute =
+                    !sight.edges.iter().any(|&[a, b]| segments_meet(sensor, t, a, b)) && !sight.land.contains(t);
                 assert_eq!(sight.visible(sensor, t), brute, "{t:?}");
             }
         }

@@ -191,7 +191,10 @@ impl Lanes for Portable {
     #[inline(always)]
     fn rows4_columns02(rows: &[f64]) -> (Self, Self) {
         let r = &rows[..16];
-        (Portable([r[0], r[4], r[8], r[12]]), Portable([r[2], r[6], r[10], r[14]]))
+        (
+            Portable([r[0], r[4], r[8], r[12]]),
+            Portable([r[2], r[6], r[10], r[14]]),
+        )
     }
     #[inline(always)]
     fn pairs(xy: &[f64]) -> (Self, Self) {
@@ -212,7 +215,9 @@ impl Lanes for Portable {
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
-        Portable(std::array::from_fn(|i| if self.0[i] > o.0[i] { self.0[i] } else { o.0[i] }))
+        Portable(std::array::from_fn(
+            |i| if self.0[i] > o.0[i] { self.0[i] } else { o.0[i] },
+        ))
     }
     #[inline(always)]
     fn gt(self, o: Self) -> [bool; 4] {
@@ -288,7 +293,17 @@ mod tests {
                 for lanes in [a + b, a - b, a * b, a.div(b), a.sqrt(), a.abs(), L::max(a, b), x, y] {
                     bits.extend(lanes.to_array().map(f64::to_bits));
                 }
-                for m in [a.gt(b), a.ge(b), a.lt(b), a.le(b), a.is_nan(), a.non_finite(), L::and(a.gt(b), b.non_finite()), L::or(a.lt(b), a.is_nan()), L::none()] {
+                for m in [
+                    a.gt(b),
+                    a.ge(b),
+                    a.lt(b),
+                    a.le(b),
+                    a.is_nan(),
+                    a.non_finite(),
+                    L::and(a.gt(b), b.non_finite()),
+                    L::or(a.lt(b), a.is_nan()),
+                    L::none(),
+                ] {
                     bits.extend(mask_bits(m).map(f64::to_bits));
                     bits.push(L::any(m) as u64);
                 }
@@ -302,7 +317,20 @@ mod tests {
     }
 
     fn awkward_values() -> Vec<f64> {
-        let special = [0.0, -0.0, 1.0, -1.0, f64::INFINITY, f64::NEG_INFINITY, f64::NAN, f64::MIN_POSITIVE / 8.0, 1e308, -3.5, 2.0, 2.0];
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MIN_POSITIVE / 8.0,
+            1e308,
+            -3.5,
+            2.0,
+            2.0,
+        ];
         let mut v: Vec<f64> = special.to_vec();
         v.extend((0..200).map(|k| ((k as f64) * 0.618_033_988_749_895).sin() * 1e3));
         v.extend(special.iter().rev());

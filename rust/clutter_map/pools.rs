@@ -23,13 +23,20 @@ impl Cells<'_> {
     /// A cell's discounted count n and exposed volume e = V_c S_c.
     #[inline(always)]
     pub fn at(&self, c: usize) -> (f64, f64) {
-        (self.counts[c] * self.inverse, (self.exposure - self.deficit[c]) * self.inverse * self.volumes[c])
+        (
+            self.counts[c] * self.inverse,
+            (self.exposure - self.deficit[c]) * self.inverse * self.volumes[c],
+        )
     }
 
     /// Per column, the sums Σ n, Σ e, Σ n², Σ n e, Σ e² over its cells in row order, into
     /// `out` (one entry per column), with `running` (five buffers of a column each) as room.
     pub fn moments(self, running: &mut [Vec<f64>; 5], out: &mut [[f64; 5]]) {
-        dispatch(Moments { cells: self, running, out })
+        dispatch(Moments {
+            cells: self,
+            running,
+            out,
+        })
     }
 
     /// The same sums for column `j` over the cells `keep` holds, in row order.
@@ -47,7 +54,11 @@ impl Cells<'_> {
     /// Per row, whether a cell of it may leave its pool ([`may_leave`]), into `out` (one
     /// entry per row).
     pub fn rows_to_test(self, tests: Tests, out: &mut [bool]) {
-        dispatch(RowsToTest { cells: self, tests, out })
+        dispatch(RowsToTest {
+            cells: self,
+            tests,
+            out,
+        })
     }
 }
 
@@ -93,14 +104,25 @@ impl LaneKernel for Moments<'_> {
 
     #[inline(always)]
     fn run<L: Lanes>(self) {
-        let Cells { counts, deficit, volumes, columns, exposure, inverse } = self.cells;
+        let Cells {
+            counts,
+            deficit,
+            volumes,
+            columns,
+            exposure,
+            inverse,
+        } = self.cells;
         let full = columns / 4 * 4;
         let sums = self.running;
         for s in sums.iter_mut() {
             s.fill(0.0);
         }
         let (s, i) = (L::splat(exposure), L::splat(inverse));
-        for ((n, d), v) in counts.chunks_exact(columns).zip(deficit.chunks_exact(columns)).zip(volumes.chunks_exact(columns)) {
+        for ((n, d), v) in counts
+            .chunks_exact(columns)
+            .zip(deficit.chunks_exact(columns))
+            .zip(volumes.chunks_exact(columns))
+        {
             for j in (0..full).step_by(4) {
                 let (n, e) = (L::load(&n[j..]) * i, (s - L::load(&d[j..])) * i * L::load(&v[j..]));
                 // (written out: a closure or iterator here could be compiled outside the
@@ -136,12 +158,32 @@ impl LaneKernel for RowsToTest<'_> {
 
     #[inline(always)]
     fn run<L: Lanes>(self) {
-        let Cells { counts, deficit, volumes, columns, exposure, inverse } = self.cells;
-        let Tests { levels, effective, threshold } = self.tests;
+        let Cells {
+            counts,
+            deficit,
+            volumes,
+            columns,
+            exposure,
+            inverse,
+        } = self.cells;
+        let Tests {
+            levels,
+            effective,
+            threshold,
+        } = self.tests;
         let full = columns / 4 * 4;
-        let (s, i, k, t, zero) = (L::splat(exposure), L::splat(inverse), L::splat(effective), L::splat(threshold), L::splat(0.0));
+        let (s, i, k, t, zero) = (
+            L::splat(exposure),
+            L::splat(inverse),
+            L::splat(effective),
+            L::splat(threshold),
+            L::splat(0.0),
+        );
         let twice = L::splat(2.0 * threshold);
-        let rows = counts.chunks_exact(columns).zip(deficit.chunks_exact(columns)).zip(volumes.chunks_exact(columns));
+        let rows = counts
+            .chunks_exact(columns)
+            .zip(deficit.chunks_exact(columns))
+            .zip(volumes.chunks_exact(columns));
         for ((row, ((n, d), v)), test) in rows.enumerate().zip(self.out.iter_mut()) {
             let mut flagged = L::none();
             for j in (0..full).step_by(4) {
@@ -170,7 +212,15 @@ mod tests {
         let cells = 9 * 7;
         let deficit: Vec<f64> = (0..cells).map(|c| if c % 5 == 0 { 1.5 } else { 0.0 }).collect();
         let volumes: Vec<f64> = (0..cells).map(|c| 1.0 + (c % 7) as f64 * 0.25).collect();
-        let counts = (0..cells).map(|c| if c < 4 * 7 { levels[c % 7] * (6.0 - deficit[c]) * volumes[c] } else { ((c * 37 % 11) as f64).powi(2) / 10.0 * 3.0 }).collect();
+        let counts = (0..cells)
+            .map(|c| {
+                if c < 4 * 7 {
+                    levels[c % 7] * (6.0 - deficit[c]) * volumes[c]
+                } else {
+                    ((c * 37 % 11) as f64).powi(2) / 10.0 * 3.0
+                }
+            })
+            .collect();
         (counts, deficit, volumes)
     }
 
@@ -178,16 +228,47 @@ mod tests {
     fn the_lanes_give_the_scalar_sums_and_tests_on_every_backend() {
         let levels: Vec<f64> = (0..7).map(|j| 0.4 + 0.1 * j as f64).collect();
         let (counts, deficit, volumes) = grid(&levels);
-        let cells = Cells { counts: &counts, deficit: &deficit, volumes: &volumes, columns: 7, exposure: 6.0, inverse: 0.5 };
-        let tests = Tests { levels: &levels, effective: 1.7, threshold: 4.0 };
+        let cells = Cells {
+            counts: &counts,
+            deficit: &deficit,
+            volumes: &volumes,
+            columns: 7,
+            exposure: 6.0,
+            inverse: 0.5,
+        };
+        let tests = Tests {
+            levels: &levels,
+            effective: 1.7,
+            threshold: 4.0,
+        };
         let scalar_sums: Vec<[f64; 5]> = (0..7).map(|j| cells.column_moments(j, |_| true)).collect();
-        let scalar_rows: Vec<bool> = (0..9).map(|r| (0..7).any(|j| tests.may_leave(cells.at(r * 7 + j), j))).collect();
-        assert!(scalar_rows.iter().any(|r| *r) && !scalar_rows.iter().all(|r| *r), "{scalar_rows:?}");
+        let scalar_rows: Vec<bool> = (0..9)
+            .map(|r| (0..7).any(|j| tests.may_leave(cells.at(r * 7 + j), j)))
+            .collect();
+        assert!(
+            scalar_rows.iter().any(|r| *r) && !scalar_rows.iter().all(|r| *r),
+            "{scalar_rows:?}"
+        );
         for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
             // (the buffers start dirty: a pass must not depend on what they held)
-            let (mut running, mut sums, mut rows) = (std::array::from_fn(|_| vec![9.0; 7]), vec![[9.0; 5]; 7], vec![true; 9]);
-            run_on(backend, Moments { cells, running: &mut running, out: &mut sums });
-            run_on(backend, RowsToTest { cells, tests, out: &mut rows });
+            let (mut running, mut sums, mut rows) =
+                (std::array::from_fn(|_| vec![9.0; 7]), vec![[9.0; 5]; 7], vec![true; 9]);
+            run_on(
+                backend,
+                Moments {
+                    cells,
+                    running: &mut running,
+                    out: &mut sums,
+                },
+            );
+            run_on(
+                backend,
+                RowsToTest {
+                    cells,
+                    tests,
+                    out: &mut rows,
+                },
+            );
             assert_eq!(sums, scalar_sums, "{backend:?}");
             assert_eq!(rows, scalar_rows, "{backend:?}");
         }
@@ -197,7 +278,11 @@ mod tests {
     fn the_bound_never_keeps_a_cell_that_leaves() {
         let levels = [1.0];
         for threshold in [0.5, 3.0, 9.2] {
-            let tests = Tests { levels: &levels, effective: 1.0, threshold };
+            let tests = Tests {
+                levels: &levels,
+                effective: 1.0,
+                threshold,
+            };
             for k in 0..4000 {
                 let n = k as f64 * 0.01; // counts 0 to 40 against a mean of 1 (exposure 1)
                 if tests.leaves((n, 1.0), 0) {

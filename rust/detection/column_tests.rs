@@ -16,19 +16,29 @@ fn bands(edges: &[f64], values: &[f64]) -> DetectionFactor {
 /// (the square-root band path); a constant.
 fn models() -> Vec<DetectionModel> {
     let island = Arc::new(
-        LandMask::new(vec![Polygon { shell: vec![[300.0, -200.0], [600.0, -200.0], [600.0, 200.0], [300.0, 200.0]], holes: vec![] }])
-            .unwrap(),
+        LandMask::new(vec![Polygon {
+            shell: vec![[300.0, -200.0], [600.0, -200.0], [600.0, 200.0], [300.0, 200.0]],
+            holes: vec![],
+        }])
+        .unwrap(),
     );
     vec![
-        DetectionModel::new(vec![bands(&[50.0, 1612.0], &[0.0, 0.4, 0.0]), DetectionFactor::Sector(AngularSector::new(PI, 1.1, 0.0, 1.0).unwrap())])
-            .unwrap(),
+        DetectionModel::new(vec![
+            bands(&[50.0, 1612.0], &[0.0, 0.4, 0.0]),
+            DetectionFactor::Sector(AngularSector::new(PI, 1.1, 0.0, 1.0).unwrap()),
+        ])
+        .unwrap(),
         DetectionModel::new(vec![
             DetectionFactor::Constant(0.9),
             DetectionFactor::Land(island.clone()),
             DetectionFactor::Sight(Arc::new(LineOfSight::new(island).unwrap())),
         ])
         .unwrap(),
-        DetectionModel::new(vec![bands(&[100.0, 200.0, 300.0, 400.0, 500.0, 600.0], &[0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.0])]).unwrap(),
+        DetectionModel::new(vec![bands(
+            &[100.0, 200.0, 300.0, 400.0, 500.0, 600.0],
+            &[0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.0],
+        )])
+        .unwrap(),
         DetectionModel::new(vec![DetectionFactor::Constant(0.917)]).unwrap(),
     ]
 }
@@ -57,20 +67,28 @@ fn particles(n: usize, ndim: usize) -> (Vec<f64>, Vec<f64>) {
 fn columns_give_the_row_bits() {
     // One chunk, a ragged last chunk, and enough particles for the parallel split.
     for n in [1, 1500, 70_001] {
-        for (ndim, mapping) in [(4, PositionMapping::default()), (6, PositionMapping::new(4, 1).unwrap())] {
+        for (ndim, mapping) in [
+            (4, PositionMapping::default()),
+            (6, PositionMapping::new(4, 1).unwrap()),
+        ] {
             let (columns, rows) = particles(n, ndim);
             for (m, model) in models().iter().enumerate() {
                 let scan = model.at_pose(&Pose::new(-20.0, 15.0, 0.4).unwrap());
                 let (mut by_column, mut by_row, mut fortran) = (vec![9.0; n], vec![7.0; n], vec![5.0; n]);
-                scan.at_particles(&columns, ndim, MemoryOrder::C, mapping, &mut by_column).unwrap();
+                scan.at_particles(&columns, ndim, MemoryOrder::C, mapping, &mut by_column)
+                    .unwrap();
                 scan.at_states(&rows, ndim, mapping, &mut by_row).unwrap();
                 // An F-ordered (D, N) array is the row array's memory.
-                scan.at_particles(&rows, ndim, MemoryOrder::F, mapping, &mut fortran).unwrap();
+                scan.at_particles(&rows, ndim, MemoryOrder::F, mapping, &mut fortran)
+                    .unwrap();
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&by_column), bits(&by_row), "model {m}, n {n}, ndim {ndim}");
                 assert_eq!(bits(&fortran), bits(&by_row), "model {m}, n {n}, ndim {ndim}");
                 if n > 1000 && m < 3 {
-                    assert!(by_column.contains(&0.0) && by_column.iter().any(|&p| p > 0.0), "model {m}, n {n}, ndim {ndim}: P_D 0 and > 0 regions");
+                    assert!(
+                        by_column.contains(&0.0) && by_column.iter().any(|&p| p > 0.0),
+                        "model {m}, n {n}, ndim {ndim}: P_D 0 and > 0 regions"
+                    );
                 }
             }
         }
@@ -83,7 +101,8 @@ fn log_of_columns_is_ln_with_minus_infinity_where_pd_is_zero() {
     let radar = models().swap_remove(0);
     let scan = radar.at_pose(&Pose::new(0.0, 0.0, 0.0).unwrap());
     let mut pd = vec![0.0; 5000];
-    scan.at_particles(&columns, 4, MemoryOrder::C, PositionMapping::default(), &mut pd).unwrap();
+    scan.at_particles(&columns, 4, MemoryOrder::C, PositionMapping::default(), &mut pd)
+        .unwrap();
     let mut log_pd = pd.clone();
     ln_in_place(&mut log_pd);
     for (p, l) in pd.iter().zip(&log_pd) {
@@ -101,21 +120,48 @@ fn column_errors_name_particles() {
     columns[2 * n + 50_001] = f64::NAN; // y of particle 50 001
     columns[60_000] = f64::INFINITY; // x of particle 60 000
     let mut out = vec![0.0; n];
-    let err = scan.at_particles(&columns, 4, MemoryOrder::C, PositionMapping::default(), &mut out).unwrap_err();
-    assert_eq!(err, ModelError::invalid("particles", "particle 50001 (column 50001) has a NaN or infinite position"));
+    let err = scan
+        .at_particles(&columns, 4, MemoryOrder::C, PositionMapping::default(), &mut out)
+        .unwrap_err();
+    assert_eq!(
+        err,
+        ModelError::invalid(
+            "particles",
+            "particle 50001 (column 50001) has a NaN or infinite position"
+        )
+    );
     let (_, mut rows) = particles(n, 4);
     rows[40_000 * 4] = f64::NAN;
-    let err = scan.at_particles(&rows, 4, MemoryOrder::F, PositionMapping::default(), &mut out).unwrap_err();
-    assert_eq!(err, ModelError::invalid("particles", "particle 40000 (column 40000) has a NaN or infinite position"));
+    let err = scan
+        .at_particles(&rows, 4, MemoryOrder::F, PositionMapping::default(), &mut out)
+        .unwrap_err();
+    assert_eq!(
+        err,
+        ModelError::invalid(
+            "particles",
+            "particle 40000 (column 40000) has a NaN or infinite position"
+        )
+    );
     // A NaN velocity is not read: no error.
     let (mut columns, _) = particles(10, 4);
     columns[3 * 10 + 4] = f64::NAN;
-    scan.at_particles(&columns, 4, MemoryOrder::C, PositionMapping::default(), &mut [0.0; 10]).unwrap();
+    scan.at_particles(&columns, 4, MemoryOrder::C, PositionMapping::default(), &mut [0.0; 10])
+        .unwrap();
     // Too few rows for the mapping, or a length that is not ndim × N.
-    let err = scan.at_particles(&columns[..20], 2, MemoryOrder::C, PositionMapping::default(), &mut [0.0; 10]).unwrap_err();
+    let err = scan
+        .at_particles(
+            &columns[..20],
+            2,
+            MemoryOrder::C,
+            PositionMapping::default(),
+            &mut [0.0; 10],
+        )
+        .unwrap_err();
     assert_eq!(err.argument(), "particles");
     assert!(err.to_string().contains("2 rows"), "{err}");
-    let err = scan.at_particles(&columns, 4, MemoryOrder::F, PositionMapping::default(), &mut [0.0; 9]).unwrap_err();
+    let err = scan
+        .at_particles(&columns, 4, MemoryOrder::F, PositionMapping::default(), &mut [0.0; 9])
+        .unwrap_err();
     assert_eq!(err.argument(), "particles");
 }
 

@@ -13,7 +13,10 @@ use std::f64::consts::PI;
 /// tests check the portable build alone; tests/test_simd_dispatch.py checks that a CPU
 /// with AVX2 runs the AVX2 build).
 fn backends() -> Vec<Backend> {
-    [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()).collect()
+    [Backend::Portable, Backend::Avx2]
+        .into_iter()
+        .filter(|b| b.available())
+        .collect()
 }
 
 fn bands(edges: &[f64], values: &[f64], upper_owns: &[bool]) -> DetectionFactor {
@@ -25,29 +28,52 @@ fn bands(edges: &[f64], values: &[f64], upper_owns: &[bool]) -> DetectionFactor 
 /// depend on the factor order.
 fn models() -> Vec<DetectionModel> {
     let island = Arc::new(
-        LandMask::new(vec![Polygon { shell: vec![[300.0, -200.0], [600.0, -200.0], [600.0, 200.0], [300.0, 200.0]], holes: vec![] }])
-            .unwrap(),
+        LandMask::new(vec![Polygon {
+            shell: vec![[300.0, -200.0], [600.0, -200.0], [600.0, 200.0], [300.0, 200.0]],
+            holes: vec![],
+        }])
+        .unwrap(),
     );
-    let sector = |centre: f64, width: f64, inside: f64, outside: f64| DetectionFactor::Sector(AngularSector::new(centre, width, inside, outside).unwrap());
+    let sector = |centre: f64, width: f64, inside: f64, outside: f64| {
+        DetectionFactor::Sector(AngularSector::new(centre, width, inside, outside).unwrap())
+    };
     [
-        vec![bands(&[50.0, 1612.0], &[0.0, 0.4, 0.0], &[false, true]), sector(PI, 65f64.to_radians(), 0.0, 1.0)],
+        vec![
+            bands(&[50.0, 1612.0], &[0.0, 0.4, 0.0], &[false, true]),
+            sector(PI, 65f64.to_radians(), 0.0, 1.0),
+        ],
         vec![bands(&[50.0, 80.0], &[0.95, 0.2, 0.0], &[true, true])],
-        vec![DetectionFactor::Constant(0.9), sector(1.0, 300f64.to_radians(), 0.7, 0.1), sector(-2.0, 2.0 * PI, 0.3, 0.0)],
-        vec![bands(&[100.0, 200.0, 300.0, 400.0, 500.0, 600.0], &[0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3], &[true, false, true, false, true, false])],
+        vec![
+            DetectionFactor::Constant(0.9),
+            sector(1.0, 300f64.to_radians(), 0.7, 0.1),
+            sector(-2.0, 2.0 * PI, 0.3, 0.0),
+        ],
+        vec![bands(
+            &[100.0, 200.0, 300.0, 400.0, 500.0, 600.0],
+            &[0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3],
+            &[true, false, true, false, true, false],
+        )],
         vec![
             DetectionFactor::Constant(0.9),
             DetectionFactor::Land(island.clone()),
             bands(&[700.0], &[0.93, 0.11], &[true]),
             DetectionFactor::Sight(Arc::new(LineOfSight::new(island).unwrap())),
         ],
-        vec![DetectionFactor::Constant(0.3), sector(0.4, 2.5, 0.7, 0.9), bands(&[10.0, 1e3], &[0.7, 0.9, 0.1], &[false, false])],
+        vec![
+            DetectionFactor::Constant(0.3),
+            sector(0.4, 2.5, 0.7, 0.9),
+            bands(&[10.0, 1e3], &[0.7, 0.9, 0.1], &[false, false]),
+        ],
         // Every specialised step sequence of the kernels (lanes::with_fixed_steps) is here:
         // none, one sector, bands then a narrow or a wide sector, sector then bands, one set
         // of bands.
         vec![DetectionFactor::Constant(0.6)],
         vec![sector(2.0, 1.0, 0.2, 0.8)],
         // bands then a sector wider than a half-plane (the radar's is narrower)
-        vec![bands(&[50.0, 1612.0], &[0.0, 0.4, 0.0], &[false, true]), sector(0.5, 250f64.to_radians(), 0.3, 0.9)],
+        vec![
+            bands(&[50.0, 1612.0], &[0.0, 0.4, 0.0], &[false, true]),
+            sector(0.5, 250f64.to_radians(), 0.3, 0.9),
+        ],
     ]
     .into_iter()
     .map(|f| DetectionModel::new(f).unwrap())
@@ -79,15 +105,31 @@ fn rows(n: usize, ncols: usize, mapping: PositionMapping) -> Vec<f64> {
 }
 
 fn reference(scan: &ScanDetection, positions: impl Positions, n: usize) -> Vec<u64> {
-    (0..n).map(|i| {
-        let [x, y] = positions.one(i);
-        scan.at_point(x, y).to_bits()
-    }).collect()
+    (0..n)
+        .map(|i| {
+            let [x, y] = positions.one(i);
+            scan.at_point(x, y).to_bits()
+        })
+        .collect()
 }
 
-fn lanes(scan: &ScanDetection, backend: Backend, positions: impl Positions, first: usize, n: usize) -> (Vec<u64>, Option<usize>) {
+fn lanes(
+    scan: &ScanDetection,
+    backend: Backend,
+    positions: impl Positions,
+    first: usize,
+    n: usize,
+) -> (Vec<u64>, Option<usize>) {
     let mut out = vec![f64::NAN; n];
-    let bad = run_on(backend, AtStates { scan, positions, first, out: &mut out });
+    let bad = run_on(
+        backend,
+        AtStates {
+            scan,
+            positions,
+            first,
+            out: &mut out,
+        },
+    );
     (out.into_iter().map(f64::to_bits).collect(), bad)
 }
 
@@ -101,13 +143,35 @@ fn every_layout_and_backend_gives_the_reference_bits() {
             let cv = rows(n, 4, default);
             let other = PositionMapping::new(4, 1).unwrap();
             let wide = rows(n, 6, other);
-            let columns: Vec<f64> = (0..2).flat_map(|j| (0..n).map(move |i| (i, j))).map(|(i, j)| cv[i * 4 + 2 * j]).collect();
-            let cols = Columns { xs: &columns[..n], ys: &columns[n..] };
+            let columns: Vec<f64> = (0..2)
+                .flat_map(|j| (0..n).map(move |i| (i, j)))
+                .map(|(i, j)| cv[i * 4 + 2 * j])
+                .collect();
+            let cols = Columns {
+                xs: &columns[..n],
+                ys: &columns[n..],
+            };
             for backend in backends() {
-                assert_eq!(lanes(&scan, backend, CvRows(&cv), 0, n), (reference(&scan, CvRows(&cv), n), None), "{backend:?} n={n}");
-                let wide_rows = Rows { data: &wide, ncols: 6, mapping: other };
-                assert_eq!(lanes(&scan, backend, wide_rows, 0, n), (reference(&scan, wide_rows, n), None), "{backend:?} n={n}");
-                assert_eq!(lanes(&scan, backend, cols, 0, n), (reference(&scan, cols, n), None), "{backend:?} n={n}");
+                assert_eq!(
+                    lanes(&scan, backend, CvRows(&cv), 0, n),
+                    (reference(&scan, CvRows(&cv), n), None),
+                    "{backend:?} n={n}"
+                );
+                let wide_rows = Rows {
+                    data: &wide,
+                    ncols: 6,
+                    mapping: other,
+                };
+                assert_eq!(
+                    lanes(&scan, backend, wide_rows, 0, n),
+                    (reference(&scan, wide_rows, n), None),
+                    "{backend:?} n={n}"
+                );
+                assert_eq!(
+                    lanes(&scan, backend, cols, 0, n),
+                    (reference(&scan, cols, n), None),
+                    "{backend:?} n={n}"
+                );
             }
         }
     }
@@ -118,7 +182,10 @@ fn a_chunk_starting_mid_array_reads_its_own_rows() {
     let scan = models().remove(0).at_pose(&Pose::new(10.0, -4.0, 2.0).unwrap());
     let cv = rows(40, 4, PositionMapping::default());
     for backend in backends() {
-        assert_eq!(lanes(&scan, backend, CvRows(&cv), 13, 27), (reference(&scan, CvRows(&cv[13 * 4..]), 27), None));
+        assert_eq!(
+            lanes(&scan, backend, CvRows(&cv), 13, 27),
+            (reference(&scan, CvRows(&cv[13 * 4..]), 27), None)
+        );
     }
 }
 
@@ -142,12 +209,31 @@ fn the_first_non_finite_position_is_found_in_any_lane() {
                     [wide[6 * i + 4], wide[6 * i + 1]] = [cv[4 * i], cv[4 * i + 2]];
                     [columns[i], columns[n + i]] = [cv[4 * i], cv[4 * i + 2]];
                 }
-                let wide_rows = Rows { data: &wide, ncols: 6, mapping: other };
-                let cols = Columns { xs: &columns[..n], ys: &columns[n..] };
+                let wide_rows = Rows {
+                    data: &wide,
+                    ncols: 6,
+                    mapping: other,
+                };
+                let cols = Columns {
+                    xs: &columns[..n],
+                    ys: &columns[n..],
+                };
                 for backend in backends() {
-                    assert_eq!(lanes(&scan, backend, CvRows(&cv), 0, n).1, Some(bad), "{backend:?} n={n} bad={bad} {value}");
-                    assert_eq!(lanes(&scan, backend, wide_rows, 0, n).1, Some(bad), "{backend:?} rows n={n} bad={bad} {value}");
-                    assert_eq!(lanes(&scan, backend, cols, 0, n).1, Some(bad), "{backend:?} columns n={n} bad={bad} {value}");
+                    assert_eq!(
+                        lanes(&scan, backend, CvRows(&cv), 0, n).1,
+                        Some(bad),
+                        "{backend:?} n={n} bad={bad} {value}"
+                    );
+                    assert_eq!(
+                        lanes(&scan, backend, wide_rows, 0, n).1,
+                        Some(bad),
+                        "{backend:?} rows n={n} bad={bad} {value}"
+                    );
+                    assert_eq!(
+                        lanes(&scan, backend, cols, 0, n).1,
+                        Some(bad),
+                        "{backend:?} columns n={n} bad={bad} {value}"
+                    );
                 }
             }
         }
@@ -157,7 +243,12 @@ fn the_first_non_finite_position_is_found_in_any_lane() {
 #[test]
 fn expected_pd_gives_the_reference_bits() {
     let pose = Pose::new(-20.0, 35.0, 1.1).unwrap();
-    let rules = [Rule::mean(), Rule::cubature(), Rule::unscented(), Rule::gauss_hermite(4).unwrap()];
+    let rules = [
+        Rule::mean(),
+        Rule::cubature(),
+        Rule::unscented(),
+        Rule::gauss_hermite(4).unwrap(),
+    ];
     for model in models() {
         let scan = model.at_pose(&pose);
         // Stone Soup's [x, vx, y, vy] rows (read as vectors) and any other layout.
@@ -167,11 +258,23 @@ fn expected_pd_gives_the_reference_bits() {
                 let mut covars = vec![0.0; k * k * n];
                 let (ix, iy) = (mapping.x, mapping.y);
                 for i in 0..n {
-                    let (sx, sy, rho) = (5.0 + (i % 7) as f64 * 9.0, 3.0 + (i % 5) as f64 * 13.0, ((i % 9) as f64 - 4.0) / 5.0);
+                    let (sx, sy, rho) = (
+                        5.0 + (i % 7) as f64 * 9.0,
+                        3.0 + (i % 5) as f64 * 13.0,
+                        ((i % 9) as f64 - 4.0) / 5.0,
+                    );
                     let c = &mut covars[k * k * i..k * k * (i + 1)];
-                    [c[ix * k + ix], c[ix * k + iy], c[iy * k + ix], c[iy * k + iy]] = [sx * sx, rho * sx * sy, rho * sx * sy, sy * sy];
+                    [c[ix * k + ix], c[ix * k + iy], c[iy * k + ix], c[iy * k + iy]] =
+                        [sx * sx, rho * sx * sy, rho * sx * sy, sy * sy];
                 }
-                let gaussians = Gaussians { means: Rows { data: &means, ncols: k, mapping }, covars: &covars };
+                let gaussians = Gaussians {
+                    means: Rows {
+                        data: &means,
+                        ncols: k,
+                        mapping,
+                    },
+                    covars: &covars,
+                };
                 for rule in &rules {
                     let expected: Vec<u64> = (0..n)
                         .map(|i| {
@@ -182,9 +285,22 @@ fn expected_pd_gives_the_reference_bits() {
                         .collect();
                     for backend in backends() {
                         let mut out = vec![f64::NAN; n];
-                        let bad = run_on(backend, Expected { scan: &scan, gaussians, rule, first: 0, out: &mut out });
+                        let bad = run_on(
+                            backend,
+                            Expected {
+                                scan: &scan,
+                                gaussians,
+                                rule,
+                                first: 0,
+                                out: &mut out,
+                            },
+                        );
                         assert_eq!(bad, None);
-                        assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), expected, "{backend:?} n={n} k={k}");
+                        assert_eq!(
+                            out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                            expected,
+                            "{backend:?} n={n} k={k}"
+                        );
                     }
                 }
             }
@@ -212,16 +328,36 @@ fn cholesky_lanes_match_the_scalar_factor() {
             all
         }
     }
-    let values = [0.0, -0.0, 1e-300, 4.0, 9.0, -1e-13, -1.0, 1e300, f64::NAN, f64::INFINITY, 2.0 + 1e-10, 6.0];
+    let values = [
+        0.0,
+        -0.0,
+        1e-300,
+        4.0,
+        9.0,
+        -1e-13,
+        -1.0,
+        1e300,
+        f64::NAN,
+        f64::INFINITY,
+        2.0 + 1e-10,
+        6.0,
+    ];
     let matrices: Vec<[f64; 4]> = (0..values.len().pow(3))
         .map(|k| {
             let (a, b, c) = (values[k % 12], values[k / 12 % 12], values[k / 144]);
             // Symmetric most of the time; sometimes a hair or a lot off.
-            let b_t = match k % 5 { 3 => b * (1.0 + 1e-12), 4 => b + 1.0, _ => b };
+            let b_t = match k % 5 {
+                3 => b * (1.0 + 1e-12),
+                4 => b + 1.0,
+                _ => b,
+            };
             [a, b, b_t, c]
         })
         .collect();
-    let reference: Vec<Option<[u64; 3]>> = matrices.iter().map(|m| cholesky2(m[0], m[1], m[2], m[3]).map(|l| l.map(f64::to_bits))).collect();
+    let reference: Vec<Option<[u64; 3]>> = matrices
+        .iter()
+        .map(|m| cholesky2(m[0], m[1], m[2], m[3]).map(|l| l.map(f64::to_bits)))
+        .collect();
     assert!(reference.iter().any(Option::is_some) && reference.iter().any(Option::is_none));
     for backend in backends() {
         assert_eq!(run_on(backend, Factors(matrices.clone())), reference, "{backend:?}");
@@ -241,11 +377,31 @@ fn the_first_bad_gaussian_is_named_with_its_reason() {
             covars[bad * 16 + 2] = 5.0; // asymmetric position block
         }
         covars[(n - 1) * 16] = -1.0; // a later one is not reported first
-        let gaussians = Gaussians { means: Rows { data: &means, ncols: 4, mapping: PositionMapping::default() }, covars: &covars };
-        let kind = if mean_bad { lanes::BadGaussian::Mean } else { lanes::BadGaussian::Covar };
+        let gaussians = Gaussians {
+            means: Rows {
+                data: &means,
+                ncols: 4,
+                mapping: PositionMapping::default(),
+            },
+            covars: &covars,
+        };
+        let kind = if mean_bad {
+            lanes::BadGaussian::Mean
+        } else {
+            lanes::BadGaussian::Covar
+        };
         for backend in backends() {
             let mut out = vec![0.0; n];
-            let found = run_on(backend, Expected { scan: &scan, gaussians, rule: &Rule::cubature(), first: 0, out: &mut out });
+            let found = run_on(
+                backend,
+                Expected {
+                    scan: &scan,
+                    gaussians,
+                    rule: &Rule::cubature(),
+                    first: 0,
+                    out: &mut out,
+                },
+            );
             assert_eq!(found, Some((bad, kind)), "{backend:?}");
         }
     }

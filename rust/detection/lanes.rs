@@ -6,9 +6,9 @@
 
 use super::{ScanDetection, Step};
 use crate::batch::{CvRows, PositionMapping, Positions, Rows};
+use crate::cubature::{cholesky2_lanes, Rule};
 use crate::range_bands::SquaredBands;
 use crate::sector::FramedSector;
-use crate::cubature::{cholesky2_lanes, Rule};
 use crate::simd::{LaneKernel, Lanes};
 
 impl Step {
@@ -171,7 +171,12 @@ impl<P: Positions> LaneKernel for AtStates<'_, P> {
 impl<P: Positions> AtStates<'_, P> {
     #[inline(always)]
     fn run_with<L: Lanes, S: FixedSteps, const INDEXED: bool>(self, steps: S) -> Option<usize> {
-        let AtStates { scan, positions, first, out } = self;
+        let AtStates {
+            scan,
+            positions,
+            first,
+            out,
+        } = self;
         let n = out.len();
         let full = n - n % 4;
         // A non-finite position makes r² non-finite: noted in one branch-free mask, and
@@ -224,7 +229,13 @@ impl Gaussians<'_> {
             let c = &self.covars[first * size..(first + 4) * size];
             return L::from_array([c[e], c[size + e], c[2 * size + e], c[3 * size + e]]);
         }
-        let at = |i: usize| if i < count { self.covars[(first + i) * size + e] } else { 0.0 };
+        let at = |i: usize| {
+            if i < count {
+                self.covars[(first + i) * size + e]
+            } else {
+                0.0
+            }
+        };
         L::from_array([at(0), at(1), at(2), at(3)])
     }
 
@@ -236,12 +247,20 @@ impl Gaussians<'_> {
         let k = self.means.ncols;
         let (ix, iy) = (self.means.mapping.x, self.means.mapping.y);
         let (mx, my) = match count {
-            4 if k == 4 && self.means.mapping == PositionMapping::default() => CvRows(self.means.data).lanes::<L>(first),
+            4 if k == 4 && self.means.mapping == PositionMapping::default() => {
+                CvRows(self.means.data).lanes::<L>(first)
+            }
             4 => self.means.lanes::<L>(first),
             _ => self.means.partial::<L>(first, count),
         };
-        let (a, b) = (self.entry::<L>(first, count, ix * k + ix), self.entry::<L>(first, count, ix * k + iy));
-        let (b_t, c) = (self.entry::<L>(first, count, iy * k + ix), self.entry::<L>(first, count, iy * k + iy));
+        let (a, b) = (
+            self.entry::<L>(first, count, ix * k + ix),
+            self.entry::<L>(first, count, ix * k + iy),
+        );
+        let (b_t, c) = (
+            self.entry::<L>(first, count, iy * k + ix),
+            self.entry::<L>(first, count, iy * k + iy),
+        );
         let (bad_covar, l) = cholesky2_lanes(a, b, b_t, c);
         (mx, my, l, L::or(mx.non_finite(), my.non_finite()), bad_covar)
     }
@@ -270,7 +289,13 @@ impl LaneKernel for Expected<'_> {
 impl Expected<'_> {
     #[inline(always)]
     fn run_with<L: Lanes, S: FixedSteps, const INDEXED: bool>(self, steps: S) -> <Self as LaneKernel>::Output {
-        let Expected { scan, gaussians, rule, first, out } = self;
+        let Expected {
+            scan,
+            gaussians,
+            rule,
+            first,
+            out,
+        } = self;
         let mut bad = None;
         let (zero, one) = (L::splat(0.0), L::splat(1.0));
         // Factors for GROUP blocks first, then their points: each Cholesky factor is a chain
@@ -281,17 +306,32 @@ impl Expected<'_> {
         for (g, group) in out.chunks_mut(4 * GROUP).enumerate() {
             let start = 4 * GROUP * g;
             for (j, block) in group.chunks(4).enumerate() {
-                let (mut mx, mut my, mut l, bad_mean, bad_covar) = gaussians.lanes::<L>(first + start + 4 * j, block.len());
+                let (mut mx, mut my, mut l, bad_mean, bad_covar) =
+                    gaussians.lanes::<L>(first + start + 4 * j, block.len());
                 let unusable = L::or(bad_mean, bad_covar);
                 if L::any(unusable) {
                     // Said for the first such Gaussian; evaluated as a point mass at the
                     // origin in its place.
-                    let (mean, either) = (L::select(bad_mean, one, zero).to_array(), L::select(unusable, one, zero).to_array());
+                    let (mean, either) = (
+                        L::select(bad_mean, one, zero).to_array(),
+                        L::select(unusable, one, zero).to_array(),
+                    );
                     if let Some(i) = (0..block.len()).find(|&i| either[i] != 0.0) {
-                        bad = bad.or(Some((start + 4 * j + i, if mean[i] != 0.0 { BadGaussian::Mean } else { BadGaussian::Covar })));
+                        bad = bad.or(Some((
+                            start + 4 * j + i,
+                            if mean[i] != 0.0 {
+                                BadGaussian::Mean
+                            } else {
+                                BadGaussian::Covar
+                            },
+                        )));
                     }
                     (mx, my) = (L::select(unusable, zero, mx), L::select(unusable, zero, my));
-                    l = [L::select(unusable, zero, l[0]), L::select(unusable, zero, l[1]), L::select(unusable, zero, l[2])];
+                    l = [
+                        L::select(unusable, zero, l[0]),
+                        L::select(unusable, zero, l[1]),
+                        L::select(unusable, zero, l[2]),
+                    ];
                 }
                 factors[j] = [mx, my, l[0], l[1], l[2]];
             }

@@ -144,9 +144,15 @@ pub fn inverse_from_cholesky(l: &[f64], n: usize, inverse: &mut [f64], scratch: 
 pub fn general_inverse_into(a: &[f64], n: usize, inverse: &mut [f64], scratch: &mut [f64]) -> bool {
     let work = &mut scratch[..n * n];
     work.copy_from_slice(&a[..n * n]);
-    inverse.iter_mut().take(n * n).enumerate().for_each(|(k, v)| *v = if k / n == k % n { 1.0 } else { 0.0 });
+    inverse
+        .iter_mut()
+        .take(n * n)
+        .enumerate()
+        .for_each(|(k, v)| *v = if k / n == k % n { 1.0 } else { 0.0 });
     for col in 0..n {
-        let pivot = (col..n).max_by(|&x, &y| work[x * n + col].abs().total_cmp(&work[y * n + col].abs())).unwrap_or(col);
+        let pivot = (col..n)
+            .max_by(|&x, &y| work[x * n + col].abs().total_cmp(&work[y * n + col].abs()))
+            .unwrap_or(col);
         let value = work[pivot * n + col];
         if !(value.abs() > 0.0) || !value.is_finite() {
             inverse.iter_mut().take(n * n).for_each(|v| *v = f64::NAN);

@@ -20,9 +20,19 @@ pub enum Jacobian {
 #[derive(Debug, Clone)]
 pub enum MeasurementModel {
     /// `z = H x + v`, `v ~ N(0, R)`; `matrix` is (m×D) row-major, `noise` (m×m).
-    Linear { matrix: Vec<f64>, noise: Vec<f64>, ndim_meas: usize },
+    Linear {
+        matrix: Vec<f64>,
+        noise: Vec<f64>,
+        ndim_meas: usize,
+    },
     /// `z = (φ, ρ)` of `r = R·[x_{m0} − t0, x_{m1} − t1, 0]`; `noise` (2×2).
-    BearingRange { mapping: [usize; 2], offset: [f64; 2], rotation: [f64; 9], noise: [f64; 4], jacobian: Jacobian },
+    BearingRange {
+        mapping: [usize; 2],
+        offset: [f64; 2],
+        rotation: [f64; 9],
+        noise: [f64; 4],
+        jacobian: Jacobian,
+    },
 }
 
 /// Python's float `%` (the result takes the divisor's sign), as NumPy and Stone Soup use it.
@@ -77,18 +87,36 @@ impl MeasurementModel {
         match self {
             MeasurementModel::Linear { matrix, noise, .. } => {
                 if m == 0 || matrix.len() != m * ndim_state || noise.len() != m * m {
-                    return Err(ModelError::shape("measurement_model", format!("a linear model needs an (m, {ndim_state}) matrix and an (m, m) covariance")));
+                    return Err(ModelError::shape(
+                        "measurement_model",
+                        format!("a linear model needs an (m, {ndim_state}) matrix and an (m, m) covariance"),
+                    ));
                 }
                 if !finite(matrix) || !finite(noise) {
-                    return Err(ModelError::invalid("measurement_model", "matrix and covariance must be finite"));
+                    return Err(ModelError::invalid(
+                        "measurement_model",
+                        "matrix and covariance must be finite",
+                    ));
                 }
             }
-            MeasurementModel::BearingRange { mapping, offset, rotation, noise, .. } => {
+            MeasurementModel::BearingRange {
+                mapping,
+                offset,
+                rotation,
+                noise,
+                ..
+            } => {
                 if mapping[0] >= ndim_state || mapping[1] >= ndim_state || mapping[0] == mapping[1] {
-                    return Err(ModelError::invalid("measurement_model", format!("mapping {mapping:?} must be two different indices < {ndim_state}")));
+                    return Err(ModelError::invalid(
+                        "measurement_model",
+                        format!("mapping {mapping:?} must be two different indices < {ndim_state}"),
+                    ));
                 }
                 if !finite(offset) || !finite(rotation) || !finite(noise) {
-                    return Err(ModelError::invalid("measurement_model", "offset, rotation and covariance must be finite"));
+                    return Err(ModelError::invalid(
+                        "measurement_model",
+                        "offset, rotation and covariance must be finite",
+                    ));
                 }
             }
         }
@@ -118,7 +146,13 @@ impl MeasurementModel {
     /// `(φ, ρ)` of `x` with `step` added to element `index` (as Stone Soup's function sees
     /// the perturbed state: every element gets `x + 0·δ` or `x + 1·δ`).
     fn bearing_range(&self, x: &[f64], index: usize, step: f64) -> (f64, f64) {
-        let MeasurementModel::BearingRange { mapping, offset, rotation, .. } = self else {
+        let MeasurementModel::BearingRange {
+            mapping,
+            offset,
+            rotation,
+            ..
+        } = self
+        else {
             return (f64::NAN, f64::NAN); // (only called for a bearing–range model)
         };
         let at = |i: usize| if i == index { x[i] + step } else { x[i] + 0.0 };
@@ -146,7 +180,13 @@ impl MeasurementModel {
 
     /// The closed-form Jacobian; false (h untouched) at ρ = 0, where it is undefined.
     fn analytic_jacobian(&self, x: &[f64], h: &mut [f64]) -> bool {
-        let MeasurementModel::BearingRange { mapping, offset, rotation, .. } = self else {
+        let MeasurementModel::BearingRange {
+            mapping,
+            offset,
+            rotation,
+            ..
+        } = self
+        else {
             return false;
         };
         let ndim = x.len();

@@ -49,7 +49,11 @@ pub struct Mixture {
 
 impl Mixture {
     pub fn new(ndim: usize) -> Self {
-        Mixture { ndim, next_tag: 1, ..Default::default() }
+        Mixture {
+            ndim,
+            next_tag: 1,
+            ..Default::default()
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -77,23 +81,44 @@ impl Mixture {
 
     /// Appends components (births, or a mixture given by the user). Tags other than
     /// [`BIRTH`] must be below `next_tag` (the caller allocates them with [`Self::reserve_tags`]).
-    pub fn extend(&mut self, means: &[f64], covars: &[f64], weights: &[f64], tags: &[u64], times: &[i64]) -> Result<()> {
+    pub fn extend(
+        &mut self,
+        means: &[f64],
+        covars: &[f64],
+        weights: &[f64],
+        tags: &[u64],
+        times: &[i64],
+    ) -> Result<()> {
         let n = weights.len();
         let d = self.ndim;
         if means.len() != n * d || covars.len() != n * d * d || tags.len() != n || times.len() != n {
-            return Err(ModelError::shape("components", format!("expected {n} means of dimension {d}, {n} covariances ({d}×{d}), {n} tags and {n} times")));
+            return Err(ModelError::shape(
+                "components",
+                format!("expected {n} means of dimension {d}, {n} covariances ({d}×{d}), {n} tags and {n} times"),
+            ));
         }
         if let Some(row) = (0..n).find(|&i| !means[i * d..(i + 1) * d].iter().all(|v| v.is_finite())) {
             return Err(ModelError::non_finite("means", row, "component means must be finite"));
         }
         if let Some(row) = (0..n).find(|&i| !covars[i * d * d..(i + 1) * d * d].iter().all(|v| v.is_finite())) {
-            return Err(ModelError::non_finite("covars", row, "component covariances must be finite"));
+            return Err(ModelError::non_finite(
+                "covars",
+                row,
+                "component covariances must be finite",
+            ));
         }
         if let Some(row) = weights.iter().position(|w| !w.is_finite() || *w < 0.0) {
-            return Err(ModelError::non_finite("weights", row, "weights must be finite and >= 0"));
+            return Err(ModelError::non_finite(
+                "weights",
+                row,
+                "weights must be finite and >= 0",
+            ));
         }
         if let Some(row) = tags.iter().position(|&t| t >= self.next_tag) {
-            return Err(ModelError::invalid("tags", format!("tag {} of row {row} was not reserved", tags[row])));
+            return Err(ModelError::invalid(
+                "tags",
+                format!("tag {} of row {row} was not reserved", tags[row]),
+            ));
         }
         self.reserve(n)?;
         self.means.extend_from_slice(means);
@@ -109,15 +134,29 @@ impl Mixture {
     /// only those inside it. The same as [`Self::extend`]ing a fresh mixture, keeping its
     /// components inside the circle ([`Self::retain_inside_circle`]) and taking them all
     /// ([`Self::take_from`]), in one call.
-    pub fn extend_births(&mut self, means: &[f64], covar: &[f64], weight: f64, time: i64, circle: Option<([usize; 2], [f64; 2], f64)>) -> Result<()> {
+    pub fn extend_births(
+        &mut self,
+        means: &[f64],
+        covar: &[f64],
+        weight: f64,
+        time: i64,
+        circle: Option<([usize; 2], [f64; 2], f64)>,
+    ) -> Result<()> {
         let d = self.ndim;
         if covar.len() != d * d || means.len() % d != 0 {
-            return Err(ModelError::shape("births", format!("expected means of dimension {d} and one {d}×{d} covariance")));
+            return Err(ModelError::shape(
+                "births",
+                format!("expected means of dimension {d} and one {d}×{d} covariance"),
+            ));
         }
         let n = means.len() / d;
         let mut fresh = Mixture::new(d);
         let covars = memory::collected("covars", (0..n).flat_map(|_| covar.iter().copied()))?;
-        let (weights, tags, times) = (memory::filled("weights", n, weight)?, memory::filled("tags", n, BIRTH)?, memory::filled("times", n, time)?);
+        let (weights, tags, times) = (
+            memory::filled("weights", n, weight)?,
+            memory::filled("tags", n, BIRTH)?,
+            memory::filled("times", n, time)?,
+        );
         fresh.extend(means, &covars, &weights, &tags, &times)?;
         if let Some((position, centre, radius)) = circle.filter(|_| !fresh.is_empty()) {
             fresh.retain_inside_circle(position, centre, radius)?;
@@ -131,7 +170,10 @@ impl Mixture {
         let d = self.ndim;
         let bytes = (self.len() as u128 + n as u128) * (d as u128 * d as u128 + d as u128 + 3) * 8;
         let fail = |_| ModelError::memory("means", bytes);
-        let (more_means, more_covars) = (memory::product("means", &[n, d])?, memory::product("means", &[n, d, d])?);
+        let (more_means, more_covars) = (
+            memory::product("means", &[n, d])?,
+            memory::product("means", &[n, d, d])?,
+        );
         self.means.try_reserve(more_means).map_err(fail)?;
         self.covars.try_reserve(more_covars).map_err(fail)?;
         self.weights.try_reserve(n).map_err(fail)?;
@@ -149,7 +191,10 @@ impl Mixture {
     /// Keeps the components whose flag is set, in order.
     pub fn retain(&mut self, keep: &[bool]) -> Result<()> {
         if keep.len() != self.len() {
-            return Err(ModelError::shape("keep", format!("expected {} flags, got {}", self.len(), keep.len())));
+            return Err(ModelError::shape(
+                "keep",
+                format!("expected {} flags, got {}", self.len(), keep.len()),
+            ));
         }
         let d = self.ndim;
         let mut out = 0;
@@ -184,7 +229,10 @@ impl Mixture {
     pub fn retain_inside_circle(&mut self, position: [usize; 2], centre: [f64; 2], radius: f64) -> Result<()> {
         let d = self.ndim;
         if position[0] >= d || position[1] >= d {
-            return Err(ModelError::invalid("position_mapping", format!("indices {position:?} out of range for dimension {d}")));
+            return Err(ModelError::invalid(
+                "position_mapping",
+                format!("indices {position:?} out of range for dimension {d}"),
+            ));
         }
         let limit = radius * radius;
         let keep: Vec<bool> = memory::collected(
@@ -202,13 +250,22 @@ impl Mixture {
     /// order); the others stay in `other`, in order.
     pub fn take_from(&mut self, other: &mut Mixture, take: &[bool]) -> Result<()> {
         if take.len() != other.len() {
-            return Err(ModelError::shape("take", format!("expected {} flags, got {}", other.len(), take.len())));
+            return Err(ModelError::shape(
+                "take",
+                format!("expected {} flags, got {}", other.len(), take.len()),
+            ));
         }
         if other.ndim != self.ndim {
-            return Err(ModelError::shape("other", format!("dimension {} differs from {}", other.ndim, self.ndim)));
+            return Err(ModelError::shape(
+                "other",
+                format!("dimension {} differs from {}", other.ndim, self.ndim),
+            ));
         }
         if let Some(row) = (0..other.len()).find(|&i| take[i] && other.tags[i] >= self.next_tag) {
-            return Err(ModelError::invalid("other", format!("row {row}'s tag {} was not reserved here", other.tags[row])));
+            return Err(ModelError::invalid(
+                "other",
+                format!("row {row}'s tag {} was not reserved here", other.tags[row]),
+            ));
         }
         let keep: Vec<bool> = memory::collected("take", take.iter().map(|t| !t))?;
         self.reserve(take.iter().filter(|t| **t).count())?;
@@ -227,7 +284,10 @@ impl Mixture {
     pub fn retain_position_std(&mut self, position: [usize; 2], max_std: f64) -> Result<()> {
         let d = self.ndim;
         if position[0] >= d || position[1] >= d {
-            return Err(ModelError::invalid("position_mapping", format!("indices {position:?} out of range for dimension {d}")));
+            return Err(ModelError::invalid(
+                "position_mapping",
+                format!("indices {position:?} out of range for dimension {d}"),
+            ));
         }
         let limit = 2.0 * max_std * max_std;
         let keep: Vec<bool> = memory::collected(
@@ -257,7 +317,13 @@ impl Mixture {
                 rows.push(i);
             }
         }
-        let gone = memory::collected("tracked", tracked.iter().copied().filter(|tag| sorted.binary_search(tag).is_ok_and(|at| !present[at])))?;
+        let gone = memory::collected(
+            "tracked",
+            tracked
+                .iter()
+                .copied()
+                .filter(|tag| sorted.binary_search(tag).is_ok_and(|at| !present[at])),
+        )?;
         Ok((rows, gone))
     }
 
@@ -277,7 +343,12 @@ impl Mixture {
         for (row, time) in self.times.iter().enumerate() {
             match from.iter().position(|t| t == time) {
                 Some(g) => group.push(g),
-                None => return Err(ModelError::invalid("from_times", format!("component {row}'s time {time} has no transition"))),
+                None => {
+                    return Err(ModelError::invalid(
+                        "from_times",
+                        format!("component {row}'s time {time} has no transition"),
+                    ))
+                }
             }
         }
         self.predict(&group, transitions, noises)?;
@@ -291,17 +362,29 @@ impl Mixture {
         let d = self.ndim;
         let d2 = d * d;
         if group.len() != self.len() {
-            return Err(ModelError::shape("group", format!("expected {} group indices, got {}", self.len(), group.len())));
+            return Err(ModelError::shape(
+                "group",
+                format!("expected {} group indices, got {}", self.len(), group.len()),
+            ));
         }
         if transitions.len() != noises.len() || transitions.len() % d2.max(1) != 0 {
-            return Err(ModelError::shape("transitions", format!("expected (G, {d}, {d}) transition matrices and noise covariances")));
+            return Err(ModelError::shape(
+                "transitions",
+                format!("expected (G, {d}, {d}) transition matrices and noise covariances"),
+            ));
         }
         let groups = if d2 == 0 { 0 } else { transitions.len() / d2 };
         if let Some(row) = group.iter().position(|&g| g >= groups) {
-            return Err(ModelError::invalid("group", format!("row {row} names group {} of {groups}", group[row])));
+            return Err(ModelError::invalid(
+                "group",
+                format!("row {row} names group {} of {groups}", group[row]),
+            ));
         }
         if !transitions.iter().chain(noises).all(|v| v.is_finite()) {
-            return Err(ModelError::invalid("transitions", "transition matrices and noise covariances must be finite"));
+            return Err(ModelError::invalid(
+                "transitions",
+                "transition matrices and noise covariances must be finite",
+            ));
         }
         let mut mean = memory::filled("means", d, 0.0)?;
         let mut fp = memory::filled("means", d2, 0.0)?;

@@ -2,7 +2,9 @@
 //! (Vo & Ma), unique tags, truncate — in its order, with the shared-tag pass in
 //! first-appearance order (stock iterates a set of random tag strings there).
 
-use super::linalg::{cholesky_into, general_inverse_into, inverse_from_cholesky, pseudo_inverse, quadratic_form, spd_inverse_into};
+use super::linalg::{
+    cholesky_into, general_inverse_into, inverse_from_cholesky, pseudo_inverse, quadratic_form, spd_inverse_into,
+};
 use super::Mixture;
 use crate::error::{ModelError, Result};
 use crate::memory;
@@ -61,10 +63,20 @@ struct Candidates {
 }
 
 impl Candidates {
-    fn new(covars: impl Iterator<Item = (usize, impl AsRef<[f64]>)>, n: usize, d: usize, threshold: f64) -> Result<Self> {
+    fn new(
+        covars: impl Iterator<Item = (usize, impl AsRef<[f64]>)>,
+        n: usize,
+        d: usize,
+        threshold: f64,
+    ) -> Result<Self> {
         // (as large as the mixture's own covariances and means, whose sizes did not overflow)
         let zeros = |len: usize| memory::filled("means", len, 0.0);
-        let mut this = Candidates { d, matrices: zeros(n * d * d)?, inverted: memory::filled("means", n, false)?, limits: memory::filled("means", n * d, f64::INFINITY)? };
+        let mut this = Candidates {
+            d,
+            matrices: zeros(n * d * d)?,
+            inverted: memory::filled("means", n, false)?,
+            limits: memory::filled("means", n * d, f64::INFINITY)?,
+        };
         let mut scratch = zeros(2 * d * d)?;
         let mut part = zeros(d * d)?;
         let mut part_inverse = zeros(d * d)?;
@@ -127,7 +139,10 @@ impl CandidateIndex {
         let mut finite: Vec<f64> = memory::collected("means", radius.iter().copied().filter(|r| r.is_finite()))?;
         finite.sort_by(f64::total_cmp);
         let width = finite.get(finite.len() * 9 / 10).copied().unwrap_or(0.0);
-        let (mut by_first, mut wide) = (memory::with_room("means", first.len())?, memory::with_room("means", first.len())?);
+        let (mut by_first, mut wide) = (
+            memory::with_room("means", first.len())?,
+            memory::with_room("means", first.len())?,
+        );
         for (rank, (&x, &r)) in first.iter().zip(radius).enumerate() {
             if r <= width && x.is_finite() {
                 by_first.push((x, rank));
@@ -170,7 +185,11 @@ fn first_candidates(ranked_means: &[f64], limits: &[f64], radius: &[f64], d: usi
     // the means in that order, contiguous: the inner loop walks them linearly
     let firsts: Vec<f64> = memory::collected("means", order.iter().map(|&rank| ranked_means[rank * d]))?;
     let mut sorted: Vec<f64> = memory::with_room("means", ranked_means.len())?;
-    sorted.extend(order.iter().flat_map(|&rank| ranked_means[rank * d..(rank + 1) * d].iter().copied()));
+    sorted.extend(
+        order
+            .iter()
+            .flat_map(|&rank| ranked_means[rank * d..(rank + 1) * d].iter().copied()),
+    );
     let mut lists = memory::filled("means", n, Vec::new())?;
     for k in 0..n {
         let (x, reach) = (ranked_means[k * d], radius[k]);
@@ -189,7 +208,9 @@ fn first_candidates(ranked_means: &[f64], limits: &[f64], radius: &[f64], d: usi
             }
             let top = order[low + j];
             if inside && top > k {
-                lists[top].try_reserve(1).map_err(|_| ModelError::memory("means", (lists[top].len() as u128 + 1) * 8))?;
+                lists[top]
+                    .try_reserve(1)
+                    .map_err(|_| ModelError::memory("means", (lists[top].len() as u128 + 1) * 8))?;
                 lists[top].push(k);
             }
         }
@@ -199,8 +220,14 @@ fn first_candidates(ranked_means: &[f64], limits: &[f64], radius: &[f64], d: usi
 
 impl Mixture {
     pub fn reduce(&mut self, params: &ReduceParams) -> Result<()> {
-        if params.prune_threshold.is_nan() || params.merge_threshold.is_nan() || params.max_distance.is_some_and(f64::is_nan) {
-            return Err(ModelError::invalid("reducer", "prune_threshold and merge_threshold must not be NaN"));
+        if params.prune_threshold.is_nan()
+            || params.merge_threshold.is_nan()
+            || params.max_distance.is_some_and(f64::is_nan)
+        {
+            return Err(ModelError::invalid(
+                "reducer",
+                "prune_threshold and merge_threshold must not be NaN",
+            ));
         }
         if self.is_empty() {
             return Ok(());
@@ -251,7 +278,12 @@ impl Mixture {
         // a rank has left the remaining set (so the first test also drops it).
         let mut ranked_means = memory::with_room("means", self.means.len())?;
         let mut scratch = memory::filled("means", 2 * d * d, 0.0)?;
-        let mut candidates = Candidates::new(order.iter().enumerate().map(|(rank, &i)| (rank, self.covar(i))), n, d, threshold)?;
+        let mut candidates = Candidates::new(
+            order.iter().enumerate().map(|(rank, &i)| (rank, self.covar(i))),
+            n,
+            d,
+            threshold,
+        )?;
         let mut first = memory::filled("means", n, 0.0)?;
         let mut radius = memory::filled("means", n, f64::INFINITY)?;
         for (rank, &i) in order.iter().enumerate() {
@@ -260,10 +292,16 @@ impl Mixture {
             radius[rank] = candidates.limits[rank * d].sqrt() * BOUND_SLACK;
         }
         let index = CandidateIndex::new(&first, &radius)?;
-        let lists = (listed && ranked_means.iter().all(|x| x.is_finite())).then(|| first_candidates(&ranked_means, &candidates.limits, &radius, d)).transpose()?;
+        let lists = (listed && ranked_means.iter().all(|x| x.is_finite()))
+            .then(|| first_candidates(&ranked_means, &candidates.limits, &radius, d))
+            .transpose()?;
         // (hits: at most n ranks)
         let mut hits = memory::with_room("means", n)?;
-        let mut out = Mixture { ndim: d, next_tag: self.next_tag, ..Default::default() };
+        let mut out = Mixture {
+            ndim: d,
+            next_tag: self.next_tag,
+            ..Default::default()
+        };
         out.reserve(n)?;
         let mut mean = memory::filled("means", d, 0.0)?;
         let mut covar = memory::filled("means", d * d, 0.0)?;
@@ -333,7 +371,8 @@ impl Mixture {
                 }
                 for r in 0..d {
                     for s in 0..d {
-                        covar[r * d + s] = (covar[r * d + s] * w1 + other_covar[r * d + s] * w2) + delta[r] * delta[s] * w1 * w2;
+                        covar[r * d + s] =
+                            (covar[r * d + s] * w1 + other_covar[r * d + s] * w2) + delta[r] * delta[s] * w1 * w2;
                     }
                 }
                 for k in 0..d {
@@ -390,7 +429,11 @@ impl Mixture {
 
     fn reorder(&mut self, order: &[usize]) -> Result<()> {
         let d = self.ndim;
-        let mut out = Mixture { ndim: d, next_tag: self.next_tag, ..Default::default() };
+        let mut out = Mixture {
+            ndim: d,
+            next_tag: self.next_tag,
+            ..Default::default()
+        };
         out.reserve(order.len())?;
         for &i in order {
             out.means.extend_from_slice(self.mean(i));

@@ -1,6 +1,8 @@
 //! The GM-PHD measurement update of one scan (see the module docs of [`super`]).
 
-use super::linalg::{general_inverse_into, matmul, matmul_bt, matvec, quadratic_form, spd_inverse_into, symmetric_product};
+use super::linalg::{
+    general_inverse_into, matmul, matmul_bt, matvec, quadratic_form, spd_inverse_into, symmetric_product,
+};
 use super::measurement::MeasurementModel;
 use super::{Mixture, BIRTH};
 use crate::error::{ModelError, Result};
@@ -35,12 +37,12 @@ pub struct UpdateParams {
 /// use the plain inverse of `S` (NumPy's `inv`), the likelihood reads `S`'s lower triangle
 /// (SciPy's `eigh`).
 struct Linearised {
-    predicted: Vec<f64>,   // N×m
-    cross: Vec<f64>,       // N×D×m, P Hᵀ
-    innovation: Vec<f64>,  // N×m×m, S = H P Hᵀ + R
-    inverse: Vec<f64>,     // N×m×m, S⁻¹
+    predicted: Vec<f64>,         // N×m
+    cross: Vec<f64>,             // N×D×m, P Hᵀ
+    innovation: Vec<f64>,        // N×m×m, S = H P Hᵀ + R
+    inverse: Vec<f64>,           // N×m×m, S⁻¹
     symmetric_inverse: Vec<f64>, // N×m×m, the inverse of S's lower triangle, mirrored
-    log_det: Vec<f64>,     // N, of S's lower triangle; NaN: not positive definite
+    log_det: Vec<f64>,           // N, of S's lower triangle; NaN: not positive definite
 }
 
 /// The measurement prediction of every component: what the gate and the likelihoods need.
@@ -85,7 +87,13 @@ fn linearise(mixture: &Mixture, model: &MeasurementModel) -> Result<Linearised> 
 /// Kalman gains `K = P Hᵀ S⁻¹` (N×D×m) and posterior covariances `P − K S Kᵀ` (N×D×D,
 /// symmetrised on request), computed only for the components in `needed` (those some
 /// detection updates): most components of a scan are gated by none.
-fn gains(mixture: &Mixture, lin: &Linearised, m: usize, needed: &[bool], force_symmetric: bool) -> Result<(Vec<f64>, Vec<f64>)> {
+fn gains(
+    mixture: &Mixture,
+    lin: &Linearised,
+    m: usize,
+    needed: &[bool],
+    force_symmetric: bool,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     let (n, d) = (needed.len(), mixture.ndim);
     let zeros = |sizes: &[usize]| memory::filled("means", memory::product("means", sizes)?, 0.0);
     let mut gain = zeros(&[n, d, m])?;
@@ -96,7 +104,14 @@ fn gains(mixture: &Mixture, lin: &Linearised, m: usize, needed: &[bool], force_s
         // (`needed` is empty when the scan has no detections)
         let p = mixture.covar(i);
         let k = &mut gain[i * d * m..(i + 1) * d * m];
-        matmul(&lin.cross[i * d * m..(i + 1) * d * m], &lin.inverse[i * m * m..(i + 1) * m * m], d, m, m, k);
+        matmul(
+            &lin.cross[i * d * m..(i + 1) * d * m],
+            &lin.inverse[i * m * m..(i + 1) * m * m],
+            d,
+            m,
+            m,
+            k,
+        );
         matmul(k, &lin.innovation[i * m * m..(i + 1) * m * m], d, m, m, &mut gain_s); // K S
         symmetric_product(&gain_s, k, d, m, &mut correction); // (K S) Kᵀ
         let posterior = &mut posterior[i * d * d..(i + 1) * d * d];
@@ -116,7 +131,14 @@ fn gains(mixture: &Mixture, lin: &Linearised, m: usize, needed: &[bool], force_s
     Ok((gain, posterior))
 }
 
-fn check_inputs(mixture: &Mixture, model: &MeasurementModel, detections: &[f64], prob_detection: &[f64], clutter: &[f64], params: &UpdateParams) -> Result<usize> {
+fn check_inputs(
+    mixture: &Mixture,
+    model: &MeasurementModel,
+    detections: &[f64],
+    prob_detection: &[f64],
+    clutter: &[f64],
+    params: &UpdateParams,
+) -> Result<usize> {
     model.validate(mixture.ndim)?;
     let m = model.ndim_meas();
     if detections.len() % m != 0 {
@@ -124,22 +146,45 @@ fn check_inputs(mixture: &Mixture, model: &MeasurementModel, detections: &[f64],
     }
     let count = detections.len() / m;
     if let Some(row) = (0..count).find(|&j| !detections[j * m..(j + 1) * m].iter().all(|v| v.is_finite())) {
-        return Err(ModelError::non_finite("detections", row, "measurement vectors must be finite"));
+        return Err(ModelError::non_finite(
+            "detections",
+            row,
+            "measurement vectors must be finite",
+        ));
     }
     if prob_detection.len() != mixture.len() {
-        return Err(ModelError::shape("prob_detection", format!("expected one value per component ({}), got {}", mixture.len(), prob_detection.len())));
+        return Err(ModelError::shape(
+            "prob_detection",
+            format!(
+                "expected one value per component ({}), got {}",
+                mixture.len(),
+                prob_detection.len()
+            ),
+        ));
     }
     if let Some(row) = prob_detection.iter().position(|p| !(0.0..=1.0).contains(p)) {
-        return Err(ModelError::invalid("prob_detection", format!("row {row} is not a probability in [0, 1]: {}", prob_detection[row])));
+        return Err(ModelError::invalid(
+            "prob_detection",
+            format!("row {row} is not a probability in [0, 1]: {}", prob_detection[row]),
+        ));
     }
     if clutter.len() != count {
-        return Err(ModelError::shape("clutter", format!("expected one value per detection ({count}), got {}", clutter.len())));
+        return Err(ModelError::shape(
+            "clutter",
+            format!("expected one value per detection ({count}), got {}", clutter.len()),
+        ));
     }
     if let Some(row) = clutter.iter().position(|c| !c.is_finite() || *c < 0.0) {
-        return Err(ModelError::invalid("clutter", format!("row {row} must be finite and >= 0, got {}", clutter[row])));
+        return Err(ModelError::invalid(
+            "clutter",
+            format!("row {row} must be finite and >= 0, got {}", clutter[row]),
+        ));
     }
     if !(params.prob_survival.is_finite() && (0.0..=1.0).contains(&params.prob_survival)) {
-        return Err(ModelError::invalid("prob_survival", format!("must be a probability in [0, 1], got {}", params.prob_survival)));
+        return Err(ModelError::invalid(
+            "prob_survival",
+            format!("must be a probability in [0, 1], got {}", params.prob_survival),
+        ));
     }
     if params.gate.is_nan() {
         return Err(ModelError::invalid("missed_distance", "must not be NaN"));
@@ -154,11 +199,22 @@ impl Mixture {
     /// λ(z) / (λ(z) + Σᵢ p_S P_D,ᵢ wᵢ N(z; ẑᵢ, Sᵢ)) over the components that gate it — 1 for
     /// a detection that no component explains (what it adds to the map of
     /// a clutter learner, in expectation).
-    pub fn update(&mut self, model: &MeasurementModel, detections: &[f64], prob_detection: &[f64], clutter: &[f64], params: &UpdateParams) -> Result<Vec<f64>> {
+    pub fn update(
+        &mut self,
+        model: &MeasurementModel,
+        detections: &[f64],
+        prob_detection: &[f64],
+        clutter: &[f64],
+        params: &UpdateParams,
+    ) -> Result<Vec<f64>> {
         let count = check_inputs(self, model, detections, prob_detection, clutter, params)?;
         let (n, d, m) = (self.len(), self.ndim, model.ndim_meas());
         // (no detections: only the missed-detection terms, nothing to linearise)
-        let lin = if count > 0 { linearise(self, model)? } else { linearise(&Mixture::new(d), model)? };
+        let lin = if count > 0 {
+            linearise(self, model)?
+        } else {
+            linearise(&Mixture::new(d), model)?
+        };
 
         // The gate, pair by pair: d(ẑ, z) with ẑ − z wrapped, as the stock measure takes it.
         let mut gated: Vec<Vec<usize>> = memory::filled("detections", count, Vec::new())?;
@@ -176,7 +232,9 @@ impl Mixture {
                     }
                 }
                 // (room for one more, fallibly: n × detections pairs can gate)
-                members.try_reserve(1).map_err(|_| ModelError::memory("detections", (members.len() as u128 + 1) * 8))?;
+                members
+                    .try_reserve(1)
+                    .map_err(|_| ModelError::memory("detections", (members.len() as u128 + 1) * 8))?;
                 members.push(i);
             }
         }
@@ -237,7 +295,11 @@ impl Mixture {
                 out.means.extend(x.iter().zip(&correction).map(|(a, b)| a + b));
                 out.covars.extend_from_slice(&posterior[i * d * d..(i + 1) * d * d]);
                 out.weights.push(weight);
-                let tag = if self.tags[i] == BIRTH { out.fresh_tag() } else { self.tags[i] };
+                let tag = if self.tags[i] == BIRTH {
+                    out.fresh_tag()
+                } else {
+                    self.tags[i]
+                };
                 out.tags.push(tag);
                 out.times.push(params.time);
             }
@@ -257,7 +319,8 @@ impl Mixture {
             }
             out.means.extend_from_slice(self.mean(i));
             out.covars.extend_from_slice(self.covar(i));
-            out.weights.push(self.weights[i] * (1.0 - prob_detection[i]) * 1.0 * params.prob_survival);
+            out.weights
+                .push(self.weights[i] * (1.0 - prob_detection[i]) * 1.0 * params.prob_survival);
             out.tags.push(self.tags[i]);
             out.times.push(params.time);
         }

@@ -2,8 +2,8 @@
 //! force enumeration of the joint events to check them.
 
 use super::{too_large, try_filled};
-use crate::memory;
 use crate::error::{ModelError, Result};
+use crate::memory;
 use std::collections::BTreeMap;
 
 /// A set of a cluster's detections (bit `k` of word `k / 64`).
@@ -67,7 +67,9 @@ impl Level {
         }
         budget.take_nodes(1)?;
         let n = self.nodes.len();
-        self.nodes.try_reserve(1).map_err(|_| budget.out_of_memory("the tree's nodes"))?;
+        self.nodes
+            .try_reserve(1)
+            .map_err(|_| budget.out_of_memory("the tree's nodes"))?;
         self.nodes.push(key.clone());
         self.index.insert(key, n);
         Ok(n)
@@ -116,11 +118,20 @@ pub(super) struct TreeLimits {
     pub(super) edges: usize,
 }
 
-const TREE_LIMITS: TreeLimits = TreeLimits { nodes: MAX_TREE_NODES, edges: MAX_TREE_EDGES };
+const TREE_LIMITS: TreeLimits = TreeLimits {
+    nodes: MAX_TREE_NODES,
+    edges: MAX_TREE_EDGES,
+};
 
 impl TreeBudget {
     fn new(limits: TreeLimits, tracks: usize, dets: usize) -> Self {
-        TreeBudget { limits, nodes: limits.nodes, edges: limits.edges, tracks, dets }
+        TreeBudget {
+            limits,
+            nodes: limits.nodes,
+            edges: limits.edges,
+            tracks,
+            dets,
+        }
     }
 
     fn intractable(&self, what: String) -> ModelError {
@@ -136,7 +147,10 @@ impl TreeBudget {
 
     fn take_nodes(&mut self, count: usize) -> Result<()> {
         if count > self.nodes {
-            return Err(self.intractable(format!("its hypothesis tree needs more than {} nodes", self.limits.nodes)));
+            return Err(self.intractable(format!(
+                "its hypothesis tree needs more than {} nodes",
+                self.limits.nodes
+            )));
         }
         self.nodes -= count;
         Ok(())
@@ -148,7 +162,10 @@ impl TreeBudget {
                 self.edges -= count;
                 Ok(())
             }
-            _ => Err(self.intractable(format!("its hypothesis tree needs more than {} node links", self.limits.edges))),
+            _ => Err(self.intractable(format!(
+                "its hypothesis tree needs more than {} node links",
+                self.limits.edges
+            ))),
         }
     }
 
@@ -176,17 +193,26 @@ fn rescale(values: &mut [f64]) {
 
 fn check_weights(weights: &[f64], valid: &[bool], tracks: usize, dets: usize) -> Result<()> {
     if weights.len() != tracks * (dets + 1) {
-        return Err(ModelError::shape("weights", format!("must be ({tracks}, {}), got {} values", dets + 1, weights.len())));
+        return Err(ModelError::shape(
+            "weights",
+            format!("must be ({tracks}, {}), got {} values", dets + 1, weights.len()),
+        ));
     }
     if valid.len() != tracks * dets {
-        return Err(ModelError::shape("gated", format!("must be ({tracks}, {dets}), got {} values", valid.len())));
+        return Err(ModelError::shape(
+            "gated",
+            format!("must be ({tracks}, {dets}), got {} values", valid.len()),
+        ));
     }
     for t in 0..tracks {
         let row = &weights[t * (dets + 1)..(t + 1) * (dets + 1)];
         let used = std::iter::once(0).chain((0..dets).filter(|&j| valid[t * dets + j]).map(|j| j + 1));
         for k in used {
             if !(row[k].is_finite() && row[k] >= 0.0) {
-                return Err(ModelError::invalid("weights", format!("row {t}, column {k}: must be finite and >= 0, got {}", row[k])));
+                return Err(ModelError::invalid(
+                    "weights",
+                    format!("row {t}, column {k}: must be finite and >= 0, got {}", row[k]),
+                ));
             }
         }
     }
@@ -194,7 +220,10 @@ fn check_weights(weights: &[f64], valid: &[bool], tracks: usize, dets: usize) ->
 }
 
 fn no_event(tracks: &[usize]) -> ModelError {
-    ModelError::invalid("weights", format!("no joint association of tracks {tracks:?} has positive probability"))
+    ModelError::invalid(
+        "weights",
+        format!("no joint association of tracks {tracks:?} has positive probability"),
+    )
 }
 
 /// Exact marginal association probabilities of `tracks` tracks and `dets` detections:
@@ -208,7 +237,13 @@ pub fn joint_marginals(weights: &[f64], valid: &[bool], tracks: usize, dets: usi
     joint_marginals_within(TREE_LIMITS, weights, valid, tracks, dets)
 }
 
-pub(super) fn joint_marginals_within(limits: TreeLimits, weights: &[f64], valid: &[bool], tracks: usize, dets: usize) -> Result<Vec<f64>> {
+pub(super) fn joint_marginals_within(
+    limits: TreeLimits,
+    weights: &[f64],
+    valid: &[bool],
+    tracks: usize,
+    dets: usize,
+) -> Result<Vec<f64>> {
     check_weights(weights, valid, tracks, dets)?;
     let mut out = try_filled(tracks.checked_mul(dets + 1), 0.0).ok_or_else(|| too_large(tracks, dets))?;
     // Clusters: tracks connected through shared detections (union–find, smallest index as root).
@@ -247,9 +282,19 @@ pub(super) fn joint_marginals_within(limits: TreeLimits, weights: &[f64], valid:
     Ok(out)
 }
 
-fn solve_cluster(limits: TreeLimits, members: &[usize], weights: &[f64], valid: &[bool], dets: usize, out: &mut [f64]) -> Result<()> {
+fn solve_cluster(
+    limits: TreeLimits,
+    members: &[usize],
+    weights: &[f64],
+    valid: &[bool],
+    dets: usize,
+    out: &mut [f64],
+) -> Result<()> {
     // The cluster's detections, in index order.
-    let local: Vec<usize> = memory::collected("detections", (0..dets).filter(|&j| members.iter().any(|&t| valid[t * dets + j])))?;
+    let local: Vec<usize> = memory::collected(
+        "detections",
+        (0..dets).filter(|&j| members.iter().any(|&t| valid[t * dets + j])),
+    )?;
     let words = local.len().div_ceil(64).max(1);
     // (per level: its track's gated hypotheses, at most the cluster's detections)
     let mut levels: Vec<Level> = memory::collected(
@@ -264,7 +309,16 @@ fn solve_cluster(limits: TreeLimits, members: &[usize], weights: &[f64], valid: 
                     meas.set(k);
                 }
             }
-            Level { hyps, acc: meas, children: Vec::new(), nodes: Vec::new(), index: BTreeMap::new(), next: Vec::new(), backward: Vec::new(), forward: Vec::new() }
+            Level {
+                hyps,
+                acc: meas,
+                children: Vec::new(),
+                nodes: Vec::new(),
+                index: BTreeMap::new(),
+                next: Vec::new(),
+                backward: Vec::new(),
+                forward: Vec::new(),
+            }
         }),
     )?;
     let n = levels.len();
@@ -299,7 +353,10 @@ fn solve_cluster(limits: TreeLimits, members: &[usize], weights: &[f64], valid: 
         let children = std::mem::take(&mut levels[l].children);
         let hyps = std::mem::take(&mut levels[l].hyps);
         let nodes = std::mem::take(&mut levels[l].nodes);
-        let links = nodes.len().checked_mul(hyps.len()).and_then(|v| v.checked_mul(children.len()));
+        let links = nodes
+            .len()
+            .checked_mul(hyps.len())
+            .and_then(|v| v.checked_mul(children.len()));
         budget.take_edges(links)?;
         let mut next = budget.filled(links.unwrap_or_default(), NONE, "the tree's node links")?;
         for (ni, used) in nodes.iter().enumerate() {
@@ -414,7 +471,13 @@ pub fn brute_force_marginals(weights: &[f64], valid: &[bool], tracks: usize, det
     // (its buffers below are as large as `weights`, which exists; the enumeration's time,
     // not memory, limits its inputs: a reference for tests)
     // (for tests: every buffer here is as large as `weights`, which exists)
-    let options: Vec<Vec<usize>> = (0..tracks).map(|t| std::iter::once(0).chain((0..dets).filter(|&j| valid[t * dets + j]).map(|j| j + 1)).collect()).collect();
+    let options: Vec<Vec<usize>> = (0..tracks)
+        .map(|t| {
+            std::iter::once(0)
+                .chain((0..dets).filter(|&j| valid[t * dets + j]).map(|j| j + 1))
+                .collect()
+        })
+        .collect();
     let mut sums = vec![0.0; tracks * (dets + 1)];
     let mut choice = vec![0usize; tracks];
     let mut total = 0.0;

@@ -4,9 +4,9 @@
 use super::check_finite;
 // The GM-PHD's bearing helpers, held against their definitions in
 // tests::shared_bearing_helpers_are_the_jpda_formulae.
-pub(super) use crate::gmphd::measurement::spacing;
-pub use crate::gmphd::measurement::mod_bearing;
 use crate::error::{ModelError, Result};
+pub use crate::gmphd::measurement::mod_bearing;
+pub(super) use crate::gmphd::measurement::spacing;
 use nalgebra::{DMatrix, DVector};
 
 /// How the bearing–range model is linearised: the GM-PHD's choice, the same two kinds.
@@ -19,42 +19,87 @@ pub enum MeasurementModel {
     Linear { matrix: DMatrix<f64>, noise: DMatrix<f64> },
     /// Stone Soup's `CartesianToBearingRange` in 2-D: `r = R·[x_{m₀} − t₀, x_{m₁} − t₁, 0]`,
     /// `z = [atan2(r₁, r₀), √(r₀² + r₁²)]`, bearing wrapped to `[−π, π)`.
-    BearingRange { mapping: [usize; 2], offset: [f64; 2], rotation: [[f64; 3]; 3], noise: DMatrix<f64>, jacobian: Jacobian },
+    BearingRange {
+        mapping: [usize; 2],
+        offset: [f64; 2],
+        rotation: [[f64; 3]; 3],
+        noise: DMatrix<f64>,
+        jacobian: Jacobian,
+    },
 }
-
 
 impl MeasurementModel {
     /// A linear Gaussian model from its row-major `rows × cols` matrix and `rows × rows` noise.
     pub fn linear(matrix: &[f64], rows: usize, cols: usize, noise: &[f64]) -> Result<Self> {
         if rows == 0 || cols == 0 || matrix.len() != rows * cols {
-            return Err(ModelError::shape("matrix", format!("must be a non-empty ({rows}, {cols}) matrix, got {} values", matrix.len())));
+            return Err(ModelError::shape(
+                "matrix",
+                format!(
+                    "must be a non-empty ({rows}, {cols}) matrix, got {} values",
+                    matrix.len()
+                ),
+            ));
         }
         if noise.len() != rows * rows {
-            return Err(ModelError::shape("noise_covar", format!("must be ({rows}, {rows}) to match the matrix, got {} values", noise.len())));
+            return Err(ModelError::shape(
+                "noise_covar",
+                format!(
+                    "must be ({rows}, {rows}) to match the matrix, got {} values",
+                    noise.len()
+                ),
+            ));
         }
         check_finite("matrix", matrix)?;
         check_finite("noise_covar", noise)?;
-        Ok(MeasurementModel::Linear { matrix: DMatrix::from_row_slice(rows, cols, matrix), noise: DMatrix::from_row_slice(rows, rows, noise) })
+        Ok(MeasurementModel::Linear {
+            matrix: DMatrix::from_row_slice(rows, cols, matrix),
+            noise: DMatrix::from_row_slice(rows, rows, noise),
+        })
     }
 
     /// A 2-D bearing–range model: `rotation` is the row-major 3×3 rotation matrix, `noise`
     /// the 2×2 covariance of (bearing, range).
-    pub fn bearing_range(mapping: [usize; 2], offset: [f64; 2], rotation: &[f64], noise: &[f64], jacobian: Jacobian) -> Result<Self> {
+    pub fn bearing_range(
+        mapping: [usize; 2],
+        offset: [f64; 2],
+        rotation: &[f64],
+        noise: &[f64],
+        jacobian: Jacobian,
+    ) -> Result<Self> {
         if rotation.len() != 9 {
-            return Err(ModelError::shape("rotation_matrix", format!("must be 3×3, got {} values", rotation.len())));
+            return Err(ModelError::shape(
+                "rotation_matrix",
+                format!("must be 3×3, got {} values", rotation.len()),
+            ));
         }
         if noise.len() != 4 {
-            return Err(ModelError::shape("noise_covar", format!("must be 2×2, got {} values", noise.len())));
+            return Err(ModelError::shape(
+                "noise_covar",
+                format!("must be 2×2, got {} values", noise.len()),
+            ));
         }
         if mapping[0] == mapping[1] {
-            return Err(ModelError::invalid("mapping", format!("x and y must be different state indices, got {mapping:?}")));
+            return Err(ModelError::invalid(
+                "mapping",
+                format!("x and y must be different state indices, got {mapping:?}"),
+            ));
         }
         check_finite("translation_offset", &offset)?;
         check_finite("rotation_matrix", rotation)?;
         check_finite("noise_covar", noise)?;
         let r = |i: usize, j: usize| rotation[3 * i + j];
-        let rotation = [[r(0, 0), r(0, 1), r(0, 2)], [r(1, 0), r(1, 1), r(1, 2)], [r(2, 0), r(2, 1), r(2, 2)]];
-        Ok(MeasurementModel::BearingRange { mapping, offset, rotation, noise: DMatrix::from_row_slice(2, 2, noise), jacobian })
+        let rotation = [
+            [r(0, 0), r(0, 1), r(0, 2)],
+            [r(1, 0), r(1, 1), r(1, 2)],
+            [r(2, 0), r(2, 1), r(2, 2)],
+        ];
+        Ok(MeasurementModel::BearingRange {
+            mapping,
+            offset,
+            rotation,
+            noise: DMatrix::from_row_slice(2, 2, noise),
+            jacobian,
+        })
     }
 
     /// Number of measured values per detection.
@@ -81,11 +126,18 @@ impl MeasurementModel {
 
     pub(super) fn check_dim(&self, dim: usize) -> Result<()> {
         match self {
-            MeasurementModel::Linear { matrix, .. } if matrix.ncols() != dim => {
-                Err(ModelError::shape("model", format!("the measurement matrix has {} columns, the states {dim}", matrix.ncols())))
-            }
+            MeasurementModel::Linear { matrix, .. } if matrix.ncols() != dim => Err(ModelError::shape(
+                "model",
+                format!(
+                    "the measurement matrix has {} columns, the states {dim}",
+                    matrix.ncols()
+                ),
+            )),
             MeasurementModel::BearingRange { mapping, .. } if mapping.iter().any(|&m| m >= dim) => {
-                Err(ModelError::shape("model", format!("mapping {mapping:?} is out of range for states of {dim} values")))
+                Err(ModelError::shape(
+                    "model",
+                    format!("mapping {mapping:?} is out of range for states of {dim} values"),
+                ))
             }
             _ => Ok(()),
         }
@@ -95,7 +147,13 @@ impl MeasurementModel {
     pub fn linearise(&self, x: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
         match self {
             MeasurementModel::Linear { matrix, .. } => (matrix * x, matrix.clone()),
-            MeasurementModel::BearingRange { mapping, offset, rotation, jacobian, .. } => {
+            MeasurementModel::BearingRange {
+                mapping,
+                offset,
+                rotation,
+                jacobian,
+                ..
+            } => {
                 let dim = x.len();
                 // One column through a 3×3 @ 3×1 product, as NumPy's matrix-vector kernel
                 // rounds it here (a fused multiply-add onto the second term).

@@ -37,10 +37,10 @@ mod measurement;
 #[cfg(test)]
 mod tests;
 
-pub use marginals::{brute_force_marginals, joint_marginals, MAX_TREE_EDGES, MAX_TREE_NODES};
-pub use measurement::{mod_bearing, Jacobian, MeasurementModel};
 pub use assignment::assign;
 pub use initiation::{initiator_scan, InitiatorInput, InitiatorOutput};
+pub use marginals::{brute_force_marginals, joint_marginals, MAX_TREE_EDGES, MAX_TREE_NODES};
+pub use measurement::{mod_bearing, Jacobian, MeasurementModel};
 
 use crate::error::{ModelError, Result};
 use crate::memory;
@@ -50,7 +50,10 @@ const LOG_TWO_PI: f64 = 1.837_877_066_409_345_5; // ln(2π)
 
 fn check_finite(argument: &'static str, values: &[f64]) -> Result<()> {
     if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-        return Err(ModelError::invalid(argument, format!("element {i} is not finite ({})", values[i])));
+        return Err(ModelError::invalid(
+            argument,
+            format!("element {i} is not finite ({})", values[i]),
+        ));
     }
     Ok(())
 }
@@ -71,22 +74,41 @@ fn too_large(tracks: usize, dets: usize) -> ModelError {
 /// Kalman prediction `x' = F x`, `P' = F P Fᵀ + Q` of `T` states (`means` T×D, `covars`
 /// T×D×D, row-major), state `t` with the transition `index[t]` of `matrices`/`noises`
 /// (K×D×D each).
-pub fn predict(dim: usize, means: &[f64], covars: &[f64], index: &[usize], matrices: &[f64], noises: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+pub fn predict(
+    dim: usize,
+    means: &[f64],
+    covars: &[f64],
+    index: &[usize],
+    matrices: &[f64],
+    noises: &[f64],
+) -> Result<(Vec<f64>, Vec<f64>)> {
     let tracks = index.len();
     check_states(dim, tracks, means, covars)?;
     let dd = dim * dim;
     if !matrices.len().is_multiple_of(dd.max(1)) || matrices.len() != noises.len() {
-        return Err(ModelError::shape("transition_matrices", format!("must be (K, {dim}, {dim}) like transition_covars")));
+        return Err(ModelError::shape(
+            "transition_matrices",
+            format!("must be (K, {dim}, {dim}) like transition_covars"),
+        ));
     }
     let kinds = matrices.len() / dd.max(1);
     if let Some(t) = index.iter().position(|&k| k >= kinds) {
-        return Err(ModelError::invalid("transition_index", format!("row {t}: index {} is out of range for {kinds} transitions", index[t])));
+        return Err(ModelError::invalid(
+            "transition_index",
+            format!("row {t}: index {} is out of range for {kinds} transitions", index[t]),
+        ));
     }
     check_finite("transition_matrices", matrices)?;
     check_finite("transition_covars", noises)?;
     // (nalgebra's matrices allocate infallibly: as large as the given matrices, which exist)
-    let f: Vec<DMatrix<f64>> = memory::collected("transition_matrices", (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &matrices[k * dd..(k + 1) * dd])))?;
-    let q: Vec<DMatrix<f64>> = memory::collected("transition_covars", (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &noises[k * dd..(k + 1) * dd])))?;
+    let f: Vec<DMatrix<f64>> = memory::collected(
+        "transition_matrices",
+        (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &matrices[k * dd..(k + 1) * dd])),
+    )?;
+    let q: Vec<DMatrix<f64>> = memory::collected(
+        "transition_covars",
+        (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &noises[k * dd..(k + 1) * dd])),
+    )?;
     let mut out_means = memory::with_room("means", means.len())?;
     let mut out_covars = memory::with_room("covars", covars.len())?;
     for (t, &k) in index.iter().enumerate() {
@@ -113,16 +135,33 @@ fn check_states(dim: usize, tracks: usize, means: &[f64], covars: &[f64]) -> Res
         return Err(ModelError::shape("means", "states must have at least one dimension"));
     }
     if means.len() != tracks * dim {
-        return Err(ModelError::shape("means", format!("must be ({tracks}, {dim}), got {} values", means.len())));
+        return Err(ModelError::shape(
+            "means",
+            format!("must be ({tracks}, {dim}), got {} values", means.len()),
+        ));
     }
     if covars.len() != tracks * dim * dim {
-        return Err(ModelError::shape("covars", format!("must be ({tracks}, {dim}, {dim}), got {} values", covars.len())));
+        return Err(ModelError::shape(
+            "covars",
+            format!("must be ({tracks}, {dim}, {dim}), got {} values", covars.len()),
+        ));
     }
     if let Some(row) = means.chunks_exact(dim).position(|r| r.iter().any(|v| !v.is_finite())) {
-        return Err(ModelError::non_finite("means", row, "a state mean holds NaN or infinity"));
+        return Err(ModelError::non_finite(
+            "means",
+            row,
+            "a state mean holds NaN or infinity",
+        ));
     }
-    if let Some(row) = covars.chunks_exact(dim * dim).position(|r| r.iter().any(|v| !v.is_finite())) {
-        return Err(ModelError::non_finite("covars", row, "a covariance holds NaN or infinity"));
+    if let Some(row) = covars
+        .chunks_exact(dim * dim)
+        .position(|r| r.iter().any(|v| !v.is_finite()))
+    {
+        return Err(ModelError::non_finite(
+            "covars",
+            row,
+            "a covariance holds NaN or infinity",
+        ));
     }
     Ok(())
 }
@@ -182,26 +221,60 @@ pub struct ScanOutput {
 }
 
 fn check_scan(model: &MeasurementModel, input: &ScanInput) -> Result<()> {
-    let (dim, tracks, dets, m) = (input.dim, input.prob_detect.len(), input.clutter.len(), model.ndim_meas());
+    let (dim, tracks, dets, m) = (
+        input.dim,
+        input.prob_detect.len(),
+        input.clutter.len(),
+        model.ndim_meas(),
+    );
     check_states(dim, tracks, input.means, input.covars)?;
     model.check_dim(dim)?;
     if input.detections.len() != dets * m {
-        return Err(ModelError::shape("detections", format!("must be ({dets}, {m}) to match clutter_density and the model, got {} values", input.detections.len())));
+        return Err(ModelError::shape(
+            "detections",
+            format!(
+                "must be ({dets}, {m}) to match clutter_density and the model, got {} values",
+                input.detections.len()
+            ),
+        ));
     }
-    if let Some(row) = input.detections.chunks_exact(m).position(|r| r.iter().any(|v| !v.is_finite())) {
-        return Err(ModelError::non_finite("detections", row, "a measurement holds NaN or infinity"));
+    if let Some(row) = input
+        .detections
+        .chunks_exact(m)
+        .position(|r| r.iter().any(|v| !v.is_finite()))
+    {
+        return Err(ModelError::non_finite(
+            "detections",
+            row,
+            "a measurement holds NaN or infinity",
+        ));
     }
     if let Some(t) = input.prob_detect.iter().position(|p| !(0.0..=1.0).contains(p)) {
-        return Err(ModelError::invalid("prob_detect", format!("row {t}: P_D must lie in [0, 1], got {}", input.prob_detect[t])));
+        return Err(ModelError::invalid(
+            "prob_detect",
+            format!("row {t}: P_D must lie in [0, 1], got {}", input.prob_detect[t]),
+        ));
     }
     if let Some(j) = input.clutter.iter().position(|l| !(l.is_finite() && *l > 0.0)) {
-        return Err(ModelError::invalid("clutter_density", format!("row {j}: must be finite and > 0 (weights divide by it), got {}", input.clutter[j])));
+        return Err(ModelError::invalid(
+            "clutter_density",
+            format!(
+                "row {j}: must be finite and > 0 (weights divide by it), got {}",
+                input.clutter[j]
+            ),
+        ));
     }
     if !(0.0..=1.0).contains(&input.prob_gate) {
-        return Err(ModelError::invalid("prob_gate", format!("must lie in [0, 1], got {}", input.prob_gate)));
+        return Err(ModelError::invalid(
+            "prob_gate",
+            format!("must lie in [0, 1], got {}", input.prob_gate),
+        ));
     }
     if input.gate_threshold.is_nan() || input.gate_threshold < 0.0 {
-        return Err(ModelError::invalid("gate_threshold", format!("must be >= 0 (inf: no gate), got {}", input.gate_threshold)));
+        return Err(ModelError::invalid(
+            "gate_threshold",
+            format!("must be >= 0 (inf: no gate), got {}", input.gate_threshold),
+        ));
     }
     Ok(())
 }
@@ -209,11 +282,19 @@ fn check_scan(model: &MeasurementModel, input: &ScanInput) -> Result<()> {
 /// Runs one JPDA scan (see the module documentation).
 pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
     check_scan(model, input)?;
-    let (dim, tracks, dets, m) = (input.dim, input.prob_detect.len(), input.clutter.len(), model.ndim_meas());
+    let (dim, tracks, dets, m) = (
+        input.dim,
+        input.prob_detect.len(),
+        input.clutter.len(),
+        model.ndim_meas(),
+    );
     let dd = dim * dim;
     let angle = model.angle_row();
     let noise = model.noise();
-    let z: Vec<DVector<f64>> = memory::collected("detections", input.detections.chunks_exact(m).map(DVector::from_row_slice))?;
+    let z: Vec<DVector<f64>> = memory::collected(
+        "detections",
+        input.detections.chunks_exact(m).map(DVector::from_row_slice),
+    )?;
     let log_clutter: Vec<f64> = memory::collected("clutter", input.clutter.iter().map(|l| l.ln()))?;
 
     let pairs = tracks.checked_mul(dets);
@@ -248,7 +329,10 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
         push_row_major(&mut out.meas_covars, &s);
         push_row_major(&mut out.cross_covars, &cross);
         let chol = s.clone().cholesky().ok_or_else(|| {
-            ModelError::not_positive_definite("covars", format!("track {t}: the innovation covariance H P Hᵀ + R is not positive definite"))
+            ModelError::not_positive_definite(
+                "covars",
+                format!("track {t}: the innovation covariance H P Hᵀ + R is not positive definite"),
+            )
         })?;
         let lower = chol.l();
         let log_det = 2.0 * lower.diagonal().iter().map(|v| v.ln()).sum::<f64>();
@@ -263,7 +347,10 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
                 nu[a] = mod_bearing(nu[a]);
             }
             let white = lower.solve_lower_triangular(&nu).ok_or_else(|| {
-                ModelError::not_positive_definite("covars", format!("track {t}: the innovation covariance H P Hᵀ + R is not positive definite"))
+                ModelError::not_positive_definite(
+                    "covars",
+                    format!("track {t}: the innovation covariance H P Hᵀ + R is not positive definite"),
+                )
             })?;
             let d2 = white.norm_squared();
             if d2 <= input.gate_threshold || input.include_all {
@@ -274,7 +361,9 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
         }
         // Log weights → weights relative to the largest, normalised to sum 1.
         let gated = &out.gated[t * dets..(t + 1) * dets];
-        let max = std::iter::once(row[0]).chain((0..dets).filter(|&j| gated[j]).map(|j| row[1 + j])).fold(f64::NEG_INFINITY, f64::max);
+        let max = std::iter::once(row[0])
+            .chain((0..dets).filter(|&j| gated[j]).map(|j| row[1 + j]))
+            .fold(f64::NEG_INFINITY, f64::max);
         if max == f64::NEG_INFINITY || max.is_nan() {
             return Err(ModelError::invalid(
                 "prob_detect",
@@ -299,7 +388,13 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
         if input.force_symmetric {
             p_updated = (&p_updated + p_updated.transpose()) / 2.0;
         }
-        updates.push(TrackUpdate { x, p, gain, p_updated, innovations });
+        updates.push(TrackUpdate {
+            x,
+            p,
+            gain,
+            p_updated,
+            innovations,
+        });
     }
 
     out.marginals = joint_marginals(&out.weights, &out.gated, tracks, dets)?;

@@ -4,13 +4,15 @@
 use super::marginals::{joint_marginals_within, TreeLimits};
 use super::measurement::spacing;
 use super::*;
-use std::f64::consts::PI;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+use std::f64::consts::PI;
 
 fn random_problem(rng: &mut StdRng, tracks: usize, dets: usize, density: f64) -> (Vec<f64>, Vec<bool>) {
     let valid: Vec<bool> = (0..tracks * dets).map(|_| rng.random::<f64>() < density).collect();
-    let weights: Vec<f64> = (0..tracks * (dets + 1)).map(|_| rng.random::<f64>().powi(3) * 10.0 + 1e-12).collect();
+    let weights: Vec<f64> = (0..tracks * (dets + 1))
+        .map(|_| rng.random::<f64>().powi(3) * 10.0 + 1e-12)
+        .collect();
     (weights, valid)
 }
 
@@ -25,7 +27,10 @@ fn marginals_equal_brute_force_enumeration() {
         let ehm = joint_marginals(&weights, &valid, tracks, dets).unwrap();
         let brute = brute_force_marginals(&weights, &valid, tracks, dets).unwrap();
         for (a, b) in ehm.iter().zip(&brute) {
-            assert!((a - b).abs() <= 1e-12 * b.abs().max(1e-300) + 1e-15, "case {case}: {a} vs {b}");
+            assert!(
+                (a - b).abs() <= 1e-12 * b.abs().max(1e-300) + 1e-15,
+                "case {case}: {a} vs {b}"
+            );
         }
         for t in 0..tracks {
             let row: f64 = ehm[t * (dets + 1)..(t + 1) * (dets + 1)].iter().sum();
@@ -69,7 +74,10 @@ fn impossible_cluster_is_an_error_naming_the_weights() {
     let valid = vec![true, true];
     let err = joint_marginals(&weights, &valid, 2, 1).unwrap_err();
     assert_eq!(err.argument(), "weights");
-    assert_eq!(brute_force_marginals(&weights, &valid, 2, 1).unwrap_err().argument(), "weights");
+    assert_eq!(
+        brute_force_marginals(&weights, &valid, 2, 1).unwrap_err().argument(),
+        "weights"
+    );
 }
 
 /// `tracks` tracks each gating every one of `dets` detections: one cluster whose exact
@@ -105,16 +113,32 @@ fn each_tree_budget_is_enforced_and_a_cluster_within_it_is_exact() {
     let (weights, valid) = dense_cluster(tracks, dets);
     // Nodes per level: 1, 6, 16, 26, 31, 32 (used sets of ≤ l of 5 detections): 112.
     let exact = brute_force_marginals(&weights, &valid, tracks, dets).unwrap();
-    let ample = TreeLimits { nodes: 112, edges: 112 * 6 };
+    let ample = TreeLimits {
+        nodes: 112,
+        edges: 112 * 6,
+    };
     let within = joint_marginals_within(ample, &weights, &valid, tracks, dets).unwrap();
     for (a, b) in within.iter().zip(&exact) {
         assert!((a - b).abs() <= 1e-12, "{a} vs {b}");
     }
     let nodes = joint_marginals_within(TreeLimits { nodes: 111, ..ample }, &weights, &valid, tracks, dets).unwrap_err();
-    assert!(nodes.to_string().contains("cluster of 6 tracks and 5 detections"), "{nodes}");
+    assert!(
+        nodes.to_string().contains("cluster of 6 tracks and 5 detections"),
+        "{nodes}"
+    );
     assert!(nodes.to_string().contains("more than 111 nodes"), "{nodes}");
     // Links: each level's nodes × 6 hypotheses × 1 child, the last level none: 80 × 6.
-    let edges = joint_marginals_within(TreeLimits { edges: 80 * 6 - 1, ..ample }, &weights, &valid, tracks, dets).unwrap_err();
+    let edges = joint_marginals_within(
+        TreeLimits {
+            edges: 80 * 6 - 1,
+            ..ample
+        },
+        &weights,
+        &valid,
+        tracks,
+        dets,
+    )
+    .unwrap_err();
     assert!(edges.to_string().contains("more than 479 node links"), "{edges}");
     assert!(joint_marginals_within(TreeLimits { edges: 80 * 6, ..ample }, &weights, &valid, tracks, dets).is_ok());
 }
@@ -125,7 +149,9 @@ fn scan_of_an_intractable_cluster_is_an_error_not_an_abort() {
     let model = linear_model();
     let (tracks, dets) = (40, 40);
     let means = vec![0.0; tracks * 4];
-    let covars: Vec<f64> = (0..tracks * 16).map(|k| if k % 16 % 5 == 0 { 100.0 } else { 0.0 }).collect();
+    let covars: Vec<f64> = (0..tracks * 16)
+        .map(|k| if k % 16 % 5 == 0 { 100.0 } else { 0.0 })
+        .collect();
     let detections: Vec<f64> = (0..dets * 2).map(|k| (k as f64 * 0.37).sin()).collect();
     let prob_detect = vec![0.9; tracks];
     let clutter = vec![1e-3; dets];
@@ -143,7 +169,10 @@ fn scan_of_an_intractable_cluster_is_an_error_not_an_abort() {
     };
     let err = scan(&model, &input).unwrap_err();
     assert_eq!(err.argument(), "weights");
-    assert!(err.to_string().contains("cluster of 40 tracks and 40 detections"), "{err}");
+    assert!(
+        err.to_string().contains("cluster of 40 tracks and 40 detections"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -188,7 +217,9 @@ fn scan_of_one_track_is_the_pda_update() {
     // posterior the mixture of the missed prediction and the two Kalman updates.
     let model = linear_model();
     let means = [0.0, 1.0, 0.0, 1.0];
-    let covars = [1.5, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.5, 0.0, 0.0, 0.0, 0.0, 0.5];
+    let covars = [
+        1.5, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.5, 0.0, 0.0, 0.0, 0.0, 0.5,
+    ];
     let detections = [0.5, -0.3, 1.2, 0.4];
     let input = ScanInput {
         dim: 4,
@@ -210,7 +241,11 @@ fn scan_of_one_track_is_the_pda_update() {
     // By hand: S = P_xy + R = 2.25 I.
     let s = 2.25_f64;
     let lik = |dx: f64, dy: f64| (-(dx * dx + dy * dy) / (2.0 * s)).exp() / (2.0 * PI * s);
-    let w = [1.0 - 0.9 * 0.95, 0.9 * lik(0.5, -0.3) / 0.125, 0.9 * lik(1.2, 0.4) / 0.125];
+    let w = [
+        1.0 - 0.9 * 0.95,
+        0.9 * lik(0.5, -0.3) / 0.125,
+        0.9 * lik(1.2, 0.4) / 0.125,
+    ];
     let total: f64 = w.iter().sum();
     for (k, wk) in w.iter().enumerate() {
         assert!((out.weights[k] - wk / total).abs() < 1e-14);
@@ -228,7 +263,18 @@ fn scan_without_detections_keeps_the_prediction() {
     let model = linear_model();
     let means = [1.0, 2.0, 3.0, 4.0];
     let covars: Vec<f64> = (0..16).map(|k| if k % 5 == 0 { 2.0 } else { 0.0 }).collect();
-    let input = ScanInput { dim: 4, means: &means, covars: &covars, detections: &[], prob_detect: &[0.4], clutter: &[], prob_gate: 0.95, gate_threshold: 6.0, include_all: false, force_symmetric: false };
+    let input = ScanInput {
+        dim: 4,
+        means: &means,
+        covars: &covars,
+        detections: &[],
+        prob_detect: &[0.4],
+        clutter: &[],
+        prob_gate: 0.95,
+        gate_threshold: 6.0,
+        include_all: false,
+        force_symmetric: false,
+    };
     let out = scan(&model, &input).unwrap();
     assert_eq!(out.means, means.to_vec());
     assert_eq!(out.covars, covars);
@@ -240,27 +286,120 @@ fn bad_inputs_name_their_argument() {
     let model = linear_model();
     let means = [0.0; 4];
     let covars: Vec<f64> = (0..16).map(|k| if k % 5 == 0 { 1.0 } else { 0.0 }).collect();
-    let base = ScanInput { dim: 4, means: &means, covars: &covars, detections: &[0.0, 0.0], prob_detect: &[0.5], clutter: &[1.0], prob_gate: 0.95, gate_threshold: 6.0, include_all: false, force_symmetric: false };
+    let base = ScanInput {
+        dim: 4,
+        means: &means,
+        covars: &covars,
+        detections: &[0.0, 0.0],
+        prob_detect: &[0.5],
+        clutter: &[1.0],
+        prob_gate: 0.95,
+        gate_threshold: 6.0,
+        include_all: false,
+        force_symmetric: false,
+    };
     let cases: Vec<(ScanInput, &str)> = vec![
-        (ScanInput { prob_detect: &[1.5], ..base }, "prob_detect"),
-        (ScanInput { clutter: &[0.0], ..base }, "clutter_density"),
-        (ScanInput { detections: &[f64::NAN, 0.0], ..base }, "detections"),
-        (ScanInput { detections: &[0.0], ..base }, "detections"),
-        (ScanInput { means: &[0.0, 0.0, f64::INFINITY, 0.0], ..base }, "means"),
-        (ScanInput { covars: &covars[..15], ..base }, "covars"),
-        (ScanInput { prob_gate: -0.1, ..base }, "prob_gate"),
-        (ScanInput { gate_threshold: f64::NAN, ..base }, "gate_threshold"),
-        (ScanInput { dim: 3, means: &[0.0; 3], covars: &[0.0; 9], ..base }, "model"),
+        (
+            ScanInput {
+                prob_detect: &[1.5],
+                ..base
+            },
+            "prob_detect",
+        ),
+        (
+            ScanInput {
+                clutter: &[0.0],
+                ..base
+            },
+            "clutter_density",
+        ),
+        (
+            ScanInput {
+                detections: &[f64::NAN, 0.0],
+                ..base
+            },
+            "detections",
+        ),
+        (
+            ScanInput {
+                detections: &[0.0],
+                ..base
+            },
+            "detections",
+        ),
+        (
+            ScanInput {
+                means: &[0.0, 0.0, f64::INFINITY, 0.0],
+                ..base
+            },
+            "means",
+        ),
+        (
+            ScanInput {
+                covars: &covars[..15],
+                ..base
+            },
+            "covars",
+        ),
+        (
+            ScanInput {
+                prob_gate: -0.1,
+                ..base
+            },
+            "prob_gate",
+        ),
+        (
+            ScanInput {
+                gate_threshold: f64::NAN,
+                ..base
+            },
+            "gate_threshold",
+        ),
+        (
+            ScanInput {
+                dim: 3,
+                means: &[0.0; 3],
+                covars: &[0.0; 9],
+                ..base
+            },
+            "model",
+        ),
     ];
     for (input, argument) in cases {
         assert_eq!(scan(&model, &input).unwrap_err().argument(), argument);
     }
     let singular = vec![0.0; 16];
     let zero_noise = MeasurementModel::linear(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], 2, 4, &[0.0; 4]).unwrap();
-    assert_eq!(scan(&zero_noise, &ScanInput { covars: &singular, ..base }).unwrap_err().argument(), "covars");
-    assert_eq!(MeasurementModel::linear(&[1.0], 2, 4, &[0.0; 4]).unwrap_err().argument(), "matrix");
-    assert_eq!(MeasurementModel::bearing_range([0, 0], [0.0; 2], &[0.0; 9], &[0.0; 4], Jacobian::Analytic).unwrap_err().argument(), "mapping");
-    assert_eq!(predict(4, &means, &covars, &[1], &covars, &covars).unwrap_err().argument(), "transition_index");
+    assert_eq!(
+        scan(
+            &zero_noise,
+            &ScanInput {
+                covars: &singular,
+                ..base
+            }
+        )
+        .unwrap_err()
+        .argument(),
+        "covars"
+    );
+    assert_eq!(
+        MeasurementModel::linear(&[1.0], 2, 4, &[0.0; 4])
+            .unwrap_err()
+            .argument(),
+        "matrix"
+    );
+    assert_eq!(
+        MeasurementModel::bearing_range([0, 0], [0.0; 2], &[0.0; 9], &[0.0; 4], Jacobian::Analytic)
+            .unwrap_err()
+            .argument(),
+        "mapping"
+    );
+    assert_eq!(
+        predict(4, &means, &covars, &[1], &covars, &covars)
+            .unwrap_err()
+            .argument(),
+        "transition_index"
+    );
 }
 
 #[test]
@@ -285,7 +424,13 @@ fn jpda_and_gmphd_models_agree_to_rounding() {
     let mut rng = StdRng::seed_from_u64(11);
     let mut worst = [0.0f64; 4]; // z (analytic, FD), h (analytic, FD): relative differences
     let mut differ_in_bits = 0;
-    for (slot, (jpda_kind, gm_kind)) in [(Jacobian::Analytic, gmphd::Jacobian::Analytic), (Jacobian::FiniteDifference, gmphd::Jacobian::FiniteDifference)].into_iter().enumerate() {
+    for (slot, (jpda_kind, gm_kind)) in [
+        (Jacobian::Analytic, gmphd::Jacobian::Analytic),
+        (Jacobian::FiniteDifference, gmphd::Jacobian::FiniteDifference),
+    ]
+    .into_iter()
+    .enumerate()
+    {
         for _ in 0..5000 {
             let yaw = rng.random_range(-PI..PI);
             let (s, c) = yaw.sin_cos();
@@ -294,13 +439,23 @@ fn jpda_and_gmphd_models_agree_to_rounding() {
             let noise = [1e-4, 0.0, 0.0, 25.0];
             let x: Vec<f64> = (0..4).map(|_| rng.random_range(-6e4..6e4)).collect();
             let ours = MeasurementModel::bearing_range([0, 2], offset, &rotation, &noise, jpda_kind).unwrap();
-            let theirs = gmphd::MeasurementModel::BearingRange { mapping: [0, 2], offset, rotation, noise, jacobian: gm_kind };
+            let theirs = gmphd::MeasurementModel::BearingRange {
+                mapping: [0, 2],
+                offset,
+                rotation,
+                noise,
+                jacobian: gm_kind,
+            };
             let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
             let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
             theirs.linearise(&x, &mut z_b, &mut h_b);
             for i in 0..2 {
                 // the bearing compared as an angle (a difference across ±π is one of 2π)
-                let dz = if i == 0 { mod_bearing(z_a[i] - z_b[i]) } else { z_a[i] - z_b[i] };
+                let dz = if i == 0 {
+                    mod_bearing(z_a[i] - z_b[i])
+                } else {
+                    z_a[i] - z_b[i]
+                };
                 worst[slot] = worst[slot].max(dz.abs() / z_b[i].abs().max(1.0));
                 differ_in_bits += usize::from(z_a[i].to_bits() != z_b[i].to_bits());
                 let scale = (0..4).map(|k| h_b[i * 4 + k].abs()).fold(0.0, f64::max);
@@ -310,19 +465,35 @@ fn jpda_and_gmphd_models_agree_to_rounding() {
             }
         }
     }
-    assert!(worst[0] < 1e-12 && worst[1] < 1e-12, "predicted measurements differ by {worst:?}");
+    assert!(
+        worst[0] < 1e-12 && worst[1] < 1e-12,
+        "predicted measurements differ by {worst:?}"
+    );
     assert!(worst[2] < 1e-12, "analytic Jacobians differ by {worst:?}");
     // Stone Soup's finite difference divides a last-bit difference of the function by its
     // tiny step: at 60 km such a Jacobian carries ~1 % round-off of its own (measured 1.3 %).
     assert!(worst[3] < 0.05, "finite-difference Jacobians differ by {worst:?}");
-    assert!(differ_in_bits > 0, "bit-identical after all: the two models could be one");
+    assert!(
+        differ_in_bits > 0,
+        "bit-identical after all: the two models could be one"
+    );
     // Linear models: equal values (only a zero's sign may differ).
     for _ in 0..5000 {
-        let pick = |rng: &mut StdRng| if rng.random::<f64>() < 0.3 { [0.0, -0.0][rng.random_range(0..2)] } else { rng.random_range(-1e3..1e3) };
+        let pick = |rng: &mut StdRng| {
+            if rng.random::<f64>() < 0.3 {
+                [0.0, -0.0][rng.random_range(0..2)]
+            } else {
+                rng.random_range(-1e3..1e3)
+            }
+        };
         let matrix: Vec<f64> = (0..8).map(|_| pick(&mut rng)).collect();
         let x: Vec<f64> = (0..4).map(|_| pick(&mut rng)).collect();
         let ours = MeasurementModel::linear(&matrix, 2, 4, &[1.0, 0.0, 0.0, 1.0]).unwrap();
-        let theirs = gmphd::MeasurementModel::Linear { matrix: matrix.clone(), noise: vec![1.0, 0.0, 0.0, 1.0], ndim_meas: 2 };
+        let theirs = gmphd::MeasurementModel::Linear {
+            matrix: matrix.clone(),
+            noise: vec![1.0, 0.0, 0.0, 1.0],
+            ndim_meas: 2,
+        };
         let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
         let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
         theirs.linearise(&x, &mut z_b, &mut h_b);
@@ -353,7 +524,20 @@ fn shared_bearing_helpers_are_the_jpda_formulae() {
     let mut rng = StdRng::seed_from_u64(12);
     let mut values: Vec<f64> = (0..100_000).map(|_| rng.random_range(-40.0..40.0)).collect();
     values.extend((0..10_000).map(|_| rng.random_range(-1e6..1e6)));
-    values.extend([0.0, -0.0, PI, -PI, 3.0 * PI, -3.0 * PI, f64::MIN_POSITIVE, -f64::MIN_POSITIVE, 1e300, -1e300, 5e-324, -5e-324]);
+    values.extend([
+        0.0,
+        -0.0,
+        PI,
+        -PI,
+        3.0 * PI,
+        -3.0 * PI,
+        f64::MIN_POSITIVE,
+        -f64::MIN_POSITIVE,
+        1e300,
+        -1e300,
+        5e-324,
+        -5e-324,
+    ]);
     for v in values {
         assert_eq!(mod_bearing(v).to_bits(), floored(v).to_bits(), "mod_bearing({v:e})");
         assert_eq!(spacing(v).to_bits(), numpy_spacing(v).to_bits(), "spacing({v:e})");

@@ -21,23 +21,44 @@ impl PyClutterMap {
     #[pyo3(signature = (space, edges0, edges1, prior_intensity, prior_scans, forgetting, counts = None, deficit = None, exposure = 0.0, scale = 1.0, pooling = "none", pooling_scans = Some(10.0)))]
     #[allow(clippy::too_many_arguments)]
     fn new(
-        space: &str, edges0: Vec<f64>, edges1: Vec<f64>, prior_intensity: f64, prior_scans: f64, forgetting: f64,
-        counts: Option<Vec<f64>>, deficit: Option<Vec<f64>>, exposure: f64, scale: f64, pooling: &str, pooling_scans: Option<f64>,
+        space: &str,
+        edges0: Vec<f64>,
+        edges1: Vec<f64>,
+        prior_intensity: f64,
+        prior_scans: f64,
+        forgetting: f64,
+        counts: Option<Vec<f64>>,
+        deficit: Option<Vec<f64>>,
+        exposure: f64,
+        scale: f64,
+        pooling: &str,
+        pooling_scans: Option<f64>,
     ) -> PyResult<Self> {
         let space = match space {
             "bearing-range" => MapSpace::BearingRange,
             "body-xy" => MapSpace::BodyXY,
             "world-xy" => MapSpace::WorldXY,
-            other => return Err(value_error("space", format!("must be 'bearing-range', 'body-xy' or 'world-xy', got {other:?}"))),
+            other => {
+                return Err(value_error(
+                    "space",
+                    format!("must be 'bearing-range', 'body-xy' or 'world-xy', got {other:?}"),
+                ))
+            }
         };
         let pooling = match pooling {
             "none" => Pooling::None,
             "range" => Pooling::Range,
             "grid" => Pooling::Grid,
-            other => return Err(value_error("pooling", format!("must be 'none', 'range' or 'grid', got {other:?}"))),
+            other => {
+                return Err(value_error(
+                    "pooling",
+                    format!("must be 'none', 'range' or 'grid', got {other:?}"),
+                ))
+            }
         };
         let map = guarded(|| {
-            let map = ClutterMap::new(space, [edges0, edges1], prior_intensity, prior_scans, forgetting)?.with_pooling(pooling, pooling_scans)?;
+            let map = ClutterMap::new(space, [edges0, edges1], prior_intensity, prior_scans, forgetting)?
+                .with_pooling(pooling, pooling_scans)?;
             map.with_saved(counts, deficit, exposure, scale)
         })?;
         Ok(PyClutterMap(Arc::new(RwLock::new(map))))
@@ -54,8 +75,12 @@ impl PyClutterMap {
     /// optionally each detection's clutter probability `weights` (M,) in [0, 1].
     #[pyo3(signature = (pose, positions, ranges = None, gates = None, weights = None))]
     fn update(
-        &self, pose: (f64, f64, f64), positions: Bound<'_, PyArray2<f64>>, ranges: Option<Bound<'_, PyArray1<f64>>>,
-        gates: Option<Bound<'_, PyArray2<f64>>>, weights: Option<Bound<'_, PyArray1<f64>>>,
+        &self,
+        pose: (f64, f64, f64),
+        positions: Bound<'_, PyArray2<f64>>,
+        ranges: Option<Bound<'_, PyArray1<f64>>>,
+        gates: Option<Bound<'_, PyArray2<f64>>>,
+        weights: Option<Bound<'_, PyArray1<f64>>>,
     ) -> PyResult<()> {
         let pose = pose_of(pose)?;
         let positions = borrow(&positions, "positions")?;
@@ -67,13 +92,21 @@ impl PyClutterMap {
         let weights = weights.map(|w| borrow(&w, "weights")).transpose()?;
         let w = weights.as_ref().map(|w| slice(w, "weights")).transpose()?;
         let map = &self.0;
-        guarded(|| map.write().unwrap_or_else(|poisoned| poisoned.into_inner()).update_weighted(&pose, p, r, w, g))
+        guarded(|| {
+            map.write()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
+                .update_weighted(&pose, p, r, w, g)
+        })
     }
 
     /// λ of the map alone at world `positions` (M, 2) (the prior outside the grid).
     #[pyo3(signature = (pose, positions, ranges = None))]
     fn intensity<'py>(
-        &self, py: Python<'py>, pose: (f64, f64, f64), positions: Bound<'py, PyArray2<f64>>, ranges: Option<Bound<'py, PyArray1<f64>>>,
+        &self,
+        py: Python<'py>,
+        pose: (f64, f64, f64),
+        positions: Bound<'py, PyArray2<f64>>,
+        ranges: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
         let positions = borrow(&positions, "positions")?;
@@ -92,9 +125,17 @@ impl PyClutterMap {
     /// (counts, deficit, exposure, scale): the state an update changes, as stored (see the
     /// core).
     #[allow(clippy::type_complexity)]
-    fn state<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64, f64)> {
+    fn state<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64, f64)> {
         let map = read_map(&self.0);
         let (counts, deficit, exposure, scale) = map.state();
-        Ok((array_of(py, "counts", counts)?, array_of(py, "deficit", deficit)?, exposure, scale))
+        Ok((
+            array_of(py, "counts", counts)?,
+            array_of(py, "deficit", deficit)?,
+            exposure,
+            scale,
+        ))
     }
 }

@@ -17,7 +17,12 @@ impl PyDetectionEstimate {
     #[new]
     #[pyo3(signature = (edges, prior_probability, prior_trials, forgetting, outside, hits = None, trials = None))]
     fn new(
-        edges: Vec<f64>, prior_probability: f64, prior_trials: f64, forgetting: f64, outside: f64, hits: Option<Vec<f64>>,
+        edges: Vec<f64>,
+        prior_probability: f64,
+        prior_trials: f64,
+        forgetting: f64,
+        outside: f64,
+        hits: Option<Vec<f64>>,
         trials: Option<Vec<f64>>,
     ) -> PyResult<Self> {
         let estimate = guarded(|| {
@@ -25,7 +30,9 @@ impl PyDetectionEstimate {
             match (hits, trials) {
                 (None, None) => Ok(estimate),
                 (hits, trials) => {
-                    let fresh = |saved: Option<Vec<f64>>, argument| saved.map_or_else(|| crate::memory::copied(argument, estimate.state().0), Ok);
+                    let fresh = |saved: Option<Vec<f64>>, argument| {
+                        saved.map_or_else(|| crate::memory::copied(argument, estimate.state().0), Ok)
+                    };
                     let (hits, trials) = (fresh(hits, "hits")?, fresh(trials, "trials")?);
                     estimate.with_state(hits, trials)
                 }
@@ -36,7 +43,10 @@ impl PyDetectionEstimate {
 
     /// One scan's trials: track `positions` (M, 2), `detected` (M,) 0/1, `weights` (M,).
     fn update(
-        &self, pose: (f64, f64, f64), positions: Bound<'_, PyArray2<f64>>, detected: Bound<'_, PyArray1<f64>>,
+        &self,
+        pose: (f64, f64, f64),
+        positions: Bound<'_, PyArray2<f64>>,
+        detected: Bound<'_, PyArray1<f64>>,
         weights: Bound<'_, PyArray1<f64>>,
     ) -> PyResult<()> {
         let pose = pose_of(pose)?;
@@ -46,12 +56,20 @@ impl PyDetectionEstimate {
         let weights = borrow(&weights, "weights")?;
         let (d, w) = (slice(&detected, "detected")?, slice(&weights, "weights")?);
         let estimate = &self.0;
-        guarded(|| estimate.write().unwrap_or_else(|poisoned| poisoned.into_inner()).update(&pose, p, d, w))
+        guarded(|| {
+            estimate
+                .write()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
+                .update(&pose, p, d, w)
+        })
     }
 
     /// The posterior mean P_D of every band.
     fn probabilities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        Ok(PyArray1::from_vec(py, guarded(|| read_estimate(&self.0).probabilities())?))
+        Ok(PyArray1::from_vec(
+            py,
+            guarded(|| read_estimate(&self.0).probabilities())?,
+        ))
     }
 
     /// (hits, trials): the state an update changes.

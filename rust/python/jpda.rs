@@ -3,9 +3,9 @@
 //! module (C-contiguous float64, fallible borrows, errors naming the argument); the work runs
 //! with the GIL released and a panic becomes a RuntimeError.
 
+use super::scan::PyDetectionAtPose;
 use super::{borrow, detached, slice, to_py, value_error};
 use crate::jpda::{self, Jacobian, MeasurementModel, ScanInput};
-use super::scan::PyDetectionAtPose;
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -28,9 +28,14 @@ impl PyJPDAMeasurementModel {
         let (h, rows, cols) = matrix_of(&matrix, "matrix")?;
         let (r, r_rows, r_cols) = matrix_of(&noise_covar, "noise_covar")?;
         if (r_rows, r_cols) != (rows, rows) {
-            return Err(value_error("noise_covar", format_args!("must have shape ({rows}, {rows}) to match matrix, got ({r_rows}, {r_cols})")));
+            return Err(value_error(
+                "noise_covar",
+                format_args!("must have shape ({rows}, {rows}) to match matrix, got ({r_rows}, {r_cols})"),
+            ));
         }
-        Ok(PyJPDAMeasurementModel(MeasurementModel::linear(&h, rows, cols, &r).map_err(to_py)?))
+        Ok(PyJPDAMeasurementModel(
+            MeasurementModel::linear(&h, rows, cols, &r).map_err(to_py)?,
+        ))
     }
 
     /// A 2-D bearing–range model (Stone Soup's `CartesianToBearingRange`): state indices
@@ -45,23 +50,39 @@ impl PyJPDAMeasurementModel {
         noise_covar: Bound<'_, PyArray2<f64>>,
         jacobian: &str,
     ) -> PyResult<Self> {
-        let index = |i: i64| usize::try_from(i).map_err(|_| value_error("mapping", format_args!("indices must be >= 0, got {mapping:?}")));
+        let index = |i: i64| {
+            usize::try_from(i)
+                .map_err(|_| value_error("mapping", format_args!("indices must be >= 0, got {mapping:?}")))
+        };
         let mapping = [index(mapping.0)?, index(mapping.1)?];
         let jacobian = match jacobian {
             "finite-difference" => Jacobian::FiniteDifference,
             "analytic" => Jacobian::Analytic,
-            other => return Err(value_error("jacobian", format_args!("must be 'finite-difference' or 'analytic', got {other:?}"))),
+            other => {
+                return Err(value_error(
+                    "jacobian",
+                    format_args!("must be 'finite-difference' or 'analytic', got {other:?}"),
+                ))
+            }
         };
         let (rotation, r_rows, r_cols) = matrix_of(&rotation_matrix, "rotation_matrix")?;
         if (r_rows, r_cols) != (3, 3) {
-            return Err(value_error("rotation_matrix", format_args!("must have shape (3, 3), got ({r_rows}, {r_cols})")));
+            return Err(value_error(
+                "rotation_matrix",
+                format_args!("must have shape (3, 3), got ({r_rows}, {r_cols})"),
+            ));
         }
         let (noise, n_rows, n_cols) = matrix_of(&noise_covar, "noise_covar")?;
         if (n_rows, n_cols) != (2, 2) {
-            return Err(value_error("noise_covar", format_args!("must have shape (2, 2), got ({n_rows}, {n_cols})")));
+            return Err(value_error(
+                "noise_covar",
+                format_args!("must have shape (2, 2), got ({n_rows}, {n_cols})"),
+            ));
         }
         let offset = [translation_offset.0, translation_offset.1];
-        Ok(PyJPDAMeasurementModel(MeasurementModel::bearing_range(mapping, offset, &rotation, &noise, jacobian).map_err(to_py)?))
+        Ok(PyJPDAMeasurementModel(
+            MeasurementModel::bearing_range(mapping, offset, &rotation, &noise, jacobian).map_err(to_py)?,
+        ))
     }
 
     /// Number of measured values per detection.
@@ -71,19 +92,36 @@ impl PyJPDAMeasurementModel {
     }
 }
 
-pub(super) fn array2<'py>(py: Python<'py>, data: Vec<f64>, rows: usize, cols: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+pub(super) fn array2<'py>(
+    py: Python<'py>,
+    data: Vec<f64>,
+    rows: usize,
+    cols: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     PyArray1::from_vec(py, data).reshape([rows, cols])
 }
 
-pub(super) fn array3<'py>(py: Python<'py>, data: Vec<f64>, n: usize, rows: usize, cols: usize) -> PyResult<Bound<'py, PyArray3<f64>>> {
+pub(super) fn array3<'py>(
+    py: Python<'py>,
+    data: Vec<f64>,
+    n: usize,
+    rows: usize,
+    cols: usize,
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
     PyArray1::from_vec(py, data).reshape([n, rows, cols])
 }
 
-pub(super) fn check_covars(means: &Bound<'_, PyArray2<f64>>, covars: &Bound<'_, PyArray3<f64>>) -> PyResult<(usize, usize)> {
+pub(super) fn check_covars(
+    means: &Bound<'_, PyArray2<f64>>,
+    covars: &Bound<'_, PyArray3<f64>>,
+) -> PyResult<(usize, usize)> {
     let (n, dim) = (means.shape()[0], means.shape()[1]);
     let shape = covars.shape();
     if shape != [n, dim, dim] {
-        return Err(value_error("covars", format_args!("must have shape ({n}, {dim}, {dim}) to match means, got {shape:?}")));
+        return Err(value_error(
+            "covars",
+            format_args!("must have shape ({n}, {dim}, {dim}) to match means, got {shape:?}"),
+        ));
     }
     Ok((n, dim))
 }
@@ -98,19 +136,32 @@ fn transitions<'a>(
     noises: &'a PyReadonlyArray3<'_, f64>,
 ) -> PyResult<(Vec<usize>, &'a [f64], &'a [f64])> {
     if transition_index.len() != n {
-        return Err(value_error("transition_index", format_args!("must have {n} entries (one per track), got {}", transition_index.len())));
+        return Err(value_error(
+            "transition_index",
+            format_args!("must have {n} entries (one per track), got {}", transition_index.len()),
+        ));
     }
     for (name, array) in [("transition_matrices", matrices), ("transition_covars", noises)] {
         let shape = array.shape();
         if shape[1] != dim || shape[2] != dim {
-            return Err(value_error(name, format_args!("must have shape (K, {dim}, {dim}), got {shape:?}")));
+            return Err(value_error(
+                name,
+                format_args!("must have shape (K, {dim}, {dim}), got {shape:?}"),
+            ));
         }
     }
     let mut index = crate::memory::with_room("transition_index", n).map_err(to_py)?;
     for (t, &k) in transition_index.iter().enumerate() {
-        index.push(usize::try_from(k).map_err(|_| value_error("transition_index", format_args!("row {t}: must be >= 0, got {k}")))?);
+        index.push(
+            usize::try_from(k)
+                .map_err(|_| value_error("transition_index", format_args!("row {t}: must be >= 0, got {k}")))?,
+        );
     }
-    Ok((index, slice(matrices, "transition_matrices")?, slice(noises, "transition_covars")?))
+    Ok((
+        index,
+        slice(matrices, "transition_matrices")?,
+        slice(noises, "transition_covars")?,
+    ))
 }
 
 /// Predicted means (T, D) and covariances (T, D, D).
@@ -170,28 +221,54 @@ fn jpda_scan<'py>(
     let meas_dim = model.0.ndim_meas();
     let (n_dets, det_cols) = (detections.shape()[0], detections.shape()[1]);
     if det_cols != meas_dim && n_dets > 0 {
-        return Err(value_error("detections", format_args!("must have {meas_dim} columns (the model's measurement size), got {det_cols}")));
+        return Err(value_error(
+            "detections",
+            format_args!("must have {meas_dim} columns (the model's measurement size), got {det_cols}"),
+        ));
     }
-    let at_pose = prob_detect.cast::<PyDetectionAtPose>().ok().map(|at_pose| at_pose.get());
+    let at_pose = prob_detect
+        .cast::<PyDetectionAtPose>()
+        .ok()
+        .map(|at_pose| at_pose.get());
     let given = match at_pose {
         Some(_) => None,
         None => {
-            let array = prob_detect
-                .cast::<PyArray1<f64>>()
-                .map_err(|_| value_error("prob_detect", "must be a float64 array (one P_D per track) or a DetectionAtPose"))?;
+            let array = prob_detect.cast::<PyArray1<f64>>().map_err(|_| {
+                value_error(
+                    "prob_detect",
+                    "must be a float64 array (one P_D per track) or a DetectionAtPose",
+                )
+            })?;
             if array.len() != n {
-                return Err(value_error("prob_detect", format_args!("must have {n} entries (one per track), got {}", array.len())));
+                return Err(value_error(
+                    "prob_detect",
+                    format_args!("must have {n} entries (one per track), got {}", array.len()),
+                ));
             }
             Some(borrow(array, "prob_detect")?)
         }
     };
     if clutter_density.len() != n_dets {
-        return Err(value_error("clutter_density", format_args!("must have {n_dets} entries (one per detection), got {}", clutter_density.len())));
+        return Err(value_error(
+            "clutter_density",
+            format_args!(
+                "must have {n_dets} entries (one per detection), got {}",
+                clutter_density.len()
+            ),
+        ));
     }
     let (matrices, noises) = match (transition_matrices, transition_covars) {
-        (Some(f), Some(q)) if transition_index.is_some() => (Some(borrow(&f, "transition_matrices")?), Some(borrow(&q, "transition_covars")?)),
+        (Some(f), Some(q)) if transition_index.is_some() => (
+            Some(borrow(&f, "transition_matrices")?),
+            Some(borrow(&q, "transition_covars")?),
+        ),
         (None, None) if transition_index.is_none() => (None, None),
-        _ => return Err(value_error("transition_index", "transition_index, transition_matrices and transition_covars come together")),
+        _ => {
+            return Err(value_error(
+                "transition_index",
+                "transition_index, transition_matrices and transition_covars come together",
+            ))
+        }
     };
     let prediction = match (&transition_index, &matrices, &noises) {
         (Some(index), Some(f), Some(q)) => Some(transitions(n, dim, index, f, q)?),
@@ -225,7 +302,18 @@ fn jpda_scan<'py>(
             }
             (None, None) => unreachable!("prob_detect is an array or a DetectionAtPose"),
         };
-        let input = ScanInput { dim, means: x, covars: p, detections: z, prob_detect: &pd, clutter: lam, prob_gate, gate_threshold, include_all, force_symmetric };
+        let input = ScanInput {
+            dim,
+            means: x,
+            covars: p,
+            detections: z,
+            prob_detect: &pd,
+            clutter: lam,
+            prob_gate,
+            gate_threshold,
+            include_all,
+            force_symmetric,
+        };
         let out = jpda::scan(core, &input)?;
         Ok((predicted, pd, out))
     })?;
@@ -252,20 +340,38 @@ fn jpda_scan<'py>(
 /// Exact joint association marginals: `weights` (T, M+1) single-hypothesis weights (column
 /// 0 the missed detection), `gated` (T, M) which detection hypotheses exist.
 #[pyfunction]
-fn jpda_marginals<'py>(py: Python<'py>, weights: Bound<'py, PyArray2<f64>>, gated: Bound<'py, PyArray2<bool>>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+fn jpda_marginals<'py>(
+    py: Python<'py>,
+    weights: Bound<'py, PyArray2<f64>>,
+    gated: Bound<'py, PyArray2<bool>>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (t, columns) = (weights.shape()[0], weights.shape()[1]);
     if columns == 0 {
-        return Err(value_error("weights", "must have at least one column (the missed detection)"));
+        return Err(value_error(
+            "weights",
+            "must have at least one column (the missed detection)",
+        ));
     }
     let k = columns - 1;
     if gated.shape() != [t, k] {
-        return Err(value_error("gated", format_args!("must have shape ({t}, {k}) to match weights, got {:?}", gated.shape())));
+        return Err(value_error(
+            "gated",
+            format_args!("must have shape ({t}, {k}) to match weights, got {:?}", gated.shape()),
+        ));
     }
     if !gated.is_c_contiguous() {
         return Err(value_error("gated", "must be C-contiguous"));
     }
-    let valid = gated.try_readonly().map_err(|_| value_error("gated", "is being written by another call"))?;
-    let valid = crate::memory::copied("gated", valid.as_slice().map_err(|_| value_error("gated", "must be C-contiguous and aligned"))?).map_err(to_py)?;
+    let valid = gated
+        .try_readonly()
+        .map_err(|_| value_error("gated", "is being written by another call"))?;
+    let valid = crate::memory::copied(
+        "gated",
+        valid
+            .as_slice()
+            .map_err(|_| value_error("gated", "must be C-contiguous and aligned"))?,
+    )
+    .map_err(to_py)?;
     let weights = borrow(&weights, "weights")?;
     let w = slice(&weights, "weights")?;
     let out = detached(py, || jpda::joint_marginals(w, &valid, t, k))?;

@@ -19,24 +19,43 @@ impl PyScanMeasurementModel {
     fn linear(matrix: Bound<'_, PyArray2<f64>>, noise: Bound<'_, PyArray2<f64>>) -> PyResult<Self> {
         let m = matrix.shape()[0];
         if noise.shape() != [m, m] {
-            return Err(value_error("noise", format_args!("must be ({m}, {m}) for a ({m}, D) matrix, got {:?}", noise.shape())));
+            return Err(value_error(
+                "noise",
+                format_args!("must be ({m}, {m}) for a ({m}, D) matrix, got {:?}", noise.shape()),
+            ));
         }
         let h = borrow(&matrix, "matrix")?;
         let r = borrow(&noise, "noise")?;
         // (copies of a model's matrices, as large as the arrays given)
-        Ok(Self(MeasurementModel::Linear { matrix: slice(&h, "matrix")?.to_vec(), noise: slice(&r, "noise")?.to_vec(), ndim_meas: m }))
+        Ok(Self(MeasurementModel::Linear {
+            matrix: slice(&h, "matrix")?.to_vec(),
+            noise: slice(&r, "noise")?.to_vec(),
+            ndim_meas: m,
+        }))
     }
 
     /// Bearing–range of the state's `mapping` (x, y) seen from `offset` (x, y) through the
     /// 3×3 `rotation`; `noise` (2, 2); `analytic`: closed-form Jacobian, else Stone Soup's
     /// finite difference.
     #[staticmethod]
-    fn bearing_range(mapping: (usize, usize), offset: (f64, f64), rotation: Bound<'_, PyArray2<f64>>, noise: Bound<'_, PyArray2<f64>>, analytic: bool) -> PyResult<Self> {
+    fn bearing_range(
+        mapping: (usize, usize),
+        offset: (f64, f64),
+        rotation: Bound<'_, PyArray2<f64>>,
+        noise: Bound<'_, PyArray2<f64>>,
+        analytic: bool,
+    ) -> PyResult<Self> {
         if rotation.shape() != [3, 3] {
-            return Err(value_error("rotation", format_args!("must be (3, 3), got {:?}", rotation.shape())));
+            return Err(value_error(
+                "rotation",
+                format_args!("must be (3, 3), got {:?}", rotation.shape()),
+            ));
         }
         if noise.shape() != [2, 2] {
-            return Err(value_error("noise", format_args!("must be (2, 2), got {:?}", noise.shape())));
+            return Err(value_error(
+                "noise",
+                format_args!("must be (2, 2), got {:?}", noise.shape()),
+            ));
         }
         let rotation = borrow(&rotation, "rotation")?;
         let noise = borrow(&noise, "noise")?;
@@ -44,8 +63,18 @@ impl PyScanMeasurementModel {
         rot.copy_from_slice(slice(&rotation, "rotation")?);
         let mut r = [0.0; 4];
         r.copy_from_slice(slice(&noise, "noise")?);
-        let jacobian = if analytic { Jacobian::Analytic } else { Jacobian::FiniteDifference };
-        Ok(Self(MeasurementModel::BearingRange { mapping: [mapping.0, mapping.1], offset: [offset.0, offset.1], rotation: rot, noise: r, jacobian }))
+        let jacobian = if analytic {
+            Jacobian::Analytic
+        } else {
+            Jacobian::FiniteDifference
+        };
+        Ok(Self(MeasurementModel::BearingRange {
+            mapping: [mapping.0, mapping.1],
+            offset: [offset.0, offset.1],
+            rotation: rot,
+            noise: r,
+            jacobian,
+        }))
     }
 
     #[getter]
@@ -93,7 +122,14 @@ impl PyGaussianMixtureArrays {
 
     /// Appends components: `means` (N, D), `covars` (N, D, D), `weights` (N,), `tags`
     /// (0 = birth, others reserved), `times` (integer clock).
-    fn extend(&mut self, means: Bound<'_, PyArray2<f64>>, covars: Bound<'_, PyArray3<f64>>, weights: Bound<'_, PyArray1<f64>>, tags: Vec<u64>, times: Vec<i64>) -> PyResult<()> {
+    fn extend(
+        &mut self,
+        means: Bound<'_, PyArray2<f64>>,
+        covars: Bound<'_, PyArray3<f64>>,
+        weights: Bound<'_, PyArray1<f64>>,
+        tags: Vec<u64>,
+        times: Vec<i64>,
+    ) -> PyResult<()> {
         let (n, d) = (weights.len(), self.0.ndim);
         if means.shape() != [n, d] {
             return Err(shape_error("means", format!("({n}, {d})"), means.shape()));
@@ -101,8 +137,20 @@ impl PyGaussianMixtureArrays {
         if covars.shape() != [n, d, d] {
             return Err(shape_error("covars", format!("({n}, {d}, {d})"), covars.shape()));
         }
-        let (m, c, w) = (borrow(&means, "means")?, borrow(&covars, "covars")?, borrow(&weights, "weights")?);
-        self.0.extend(slice(&m, "means")?, slice(&c, "covars")?, slice(&w, "weights")?, &tags, &times).map_err(super::to_py)
+        let (m, c, w) = (
+            borrow(&means, "means")?,
+            borrow(&covars, "covars")?,
+            borrow(&weights, "weights")?,
+        );
+        self.0
+            .extend(
+                slice(&m, "means")?,
+                slice(&c, "covars")?,
+                slice(&w, "weights")?,
+                &tags,
+                &times,
+            )
+            .map_err(super::to_py)
     }
 
     /// Births at the `means` rows (N, D), each with `covar` (D, D), `weight`, tag 0 and
@@ -111,7 +159,14 @@ impl PyGaussianMixtureArrays {
     /// circle and taking them all does, in one call.
     #[pyo3(signature = (means, covar, weight, time, circle = None))]
     #[allow(clippy::type_complexity)]
-    fn extend_births(&mut self, means: Bound<'_, PyArray2<f64>>, covar: Bound<'_, PyArray2<f64>>, weight: f64, time: i64, circle: Option<((usize, usize), (f64, f64), f64)>) -> PyResult<()> {
+    fn extend_births(
+        &mut self,
+        means: Bound<'_, PyArray2<f64>>,
+        covar: Bound<'_, PyArray2<f64>>,
+        weight: f64,
+        time: i64,
+        circle: Option<((usize, usize), (f64, f64), f64)>,
+    ) -> PyResult<()> {
         let d = self.0.ndim;
         if means.shape()[1] != d {
             return Err(shape_error("means", format!("(N, {d})"), means.shape()));
@@ -121,7 +176,9 @@ impl PyGaussianMixtureArrays {
         }
         let (m, c) = (borrow(&means, "means")?, borrow(&covar, "covar")?);
         let circle = circle.map(|(p, c, r)| ([p.0, p.1], [c.0, c.1], r));
-        self.0.extend_births(slice(&m, "means")?, slice(&c, "covar")?, weight, time, circle).map_err(super::to_py)
+        self.0
+            .extend_births(slice(&m, "means")?, slice(&c, "covar")?, weight, time, circle)
+            .map_err(super::to_py)
     }
 
     /// The distinct component times, ascending.
@@ -131,11 +188,22 @@ impl PyGaussianMixtureArrays {
 
     /// Kalman prediction to `now`: components stamped `from_times[g]` use
     /// `transitions[g]`, `noises[g]`; all then take the time `now`.
-    fn predict(&mut self, py: Python<'_>, from_times: Vec<i64>, now: i64, transitions: Bound<'_, PyArray3<f64>>, noises: Bound<'_, PyArray3<f64>>) -> PyResult<()> {
+    fn predict(
+        &mut self,
+        py: Python<'_>,
+        from_times: Vec<i64>,
+        now: i64,
+        transitions: Bound<'_, PyArray3<f64>>,
+        noises: Bound<'_, PyArray3<f64>>,
+    ) -> PyResult<()> {
         let d = self.0.ndim;
         let g = from_times.len();
         if transitions.shape() != [g, d, d] || noises.shape() != [g, d, d] {
-            return Err(shape_error("transitions", format!("({g}, {d}, {d}) for both transitions and noises"), transitions.shape()));
+            return Err(shape_error(
+                "transitions",
+                format!("({g}, {d}, {d}) for both transitions and noises"),
+                transitions.shape(),
+            ));
         }
         let (f, q) = (borrow(&transitions, "transitions")?, borrow(&noises, "noises")?);
         let (f, q) = (slice(&f, "transitions")?, slice(&q, "noises")?);
@@ -168,9 +236,26 @@ impl PyGaussianMixtureArrays {
         if detections.shape()[1] != m && detections.len() > 0 {
             return Err(shape_error("detections", format!("(M, {m})"), detections.shape()));
         }
-        let (z, pd, lam) = (borrow(&detections, "detections")?, borrow(&prob_detection, "prob_detection")?, borrow(&clutter, "clutter")?);
-        let (z, pd, lam) = (slice(&z, "detections")?, slice(&pd, "prob_detection")?, slice(&lam, "clutter")?);
-        let params = UpdateParams { prob_survival, gate: missed_distance, squared, include_all, normalise, skip_undetectable, time, force_symmetric };
+        let (z, pd, lam) = (
+            borrow(&detections, "detections")?,
+            borrow(&prob_detection, "prob_detection")?,
+            borrow(&clutter, "clutter")?,
+        );
+        let (z, pd, lam) = (
+            slice(&z, "detections")?,
+            slice(&pd, "prob_detection")?,
+            slice(&lam, "clutter")?,
+        );
+        let params = UpdateParams {
+            prob_survival,
+            gate: missed_distance,
+            squared,
+            include_all,
+            normalise,
+            skip_undetectable,
+            time,
+            force_symmetric,
+        };
         let mixture = &mut self.0;
         let model = &model.0;
         let clutter_probability = detached(py, || mixture.update(model, z, pd, lam, &params))?;
@@ -181,13 +266,21 @@ impl PyGaussianMixtureArrays {
     /// same bits as `at_pose.evaluate(self.means())`, without the copy. None when the core
     /// cannot evaluate them (a position not finite, a mapping beyond the dimension): the
     /// caller's general route then says why.
-    fn prob_detection<'py>(&self, py: Python<'py>, at_pose: &Bound<'py, PyDetectionAtPose>) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
+    fn prob_detection<'py>(
+        &self,
+        py: Python<'py>,
+        at_pose: &Bound<'py, PyDetectionAtPose>,
+    ) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
         let (n, d, at_pose) = (self.0.len(), self.0.ndim, at_pose.get());
         let mut pd = crate::memory::filled("means", n, 0.0).map_err(super::to_py)?;
         let means = &self.0.means;
         // (a panic is a RuntimeError, as in every call; the core's refusal is None)
         let mut run = || Ok(at_pose.at_rows(means, d, &mut pd));
-        let evaluated = if n < DETACH_ROWS { guarded(run)? } else { detached(py, run)? };
+        let evaluated = if n < DETACH_ROWS {
+            guarded(run)?
+        } else {
+            detached(py, run)?
+        };
         Ok(evaluated.ok().map(|()| PyArray1::from_vec(py, pd)))
     }
 
@@ -198,30 +291,62 @@ impl PyGaussianMixtureArrays {
 
     /// Keeps the components whose `position_mapping` x/y lies in the disc of `radius`
     /// around `centre` (boundary included).
-    fn retain_inside_circle(&mut self, position_mapping: (usize, usize), centre: (f64, f64), radius: f64) -> PyResult<()> {
-        self.0.retain_inside_circle([position_mapping.0, position_mapping.1], [centre.0, centre.1], radius).map_err(super::to_py)
+    fn retain_inside_circle(
+        &mut self,
+        position_mapping: (usize, usize),
+        centre: (f64, f64),
+        radius: f64,
+    ) -> PyResult<()> {
+        self.0
+            .retain_inside_circle([position_mapping.0, position_mapping.1], [centre.0, centre.1], radius)
+            .map_err(super::to_py)
     }
 
     /// Moves the components of `other` whose flag in `take` is true to the end of this
     /// mixture, in order; the others stay in `other`.
     fn take_from(&mut self, other: &Bound<'_, Self>, take: Vec<bool>) -> PyResult<()> {
-        let mut other = other.try_borrow_mut().map_err(|_| value_error("other", "must be another mixture than this one"))?;
+        let mut other = other
+            .try_borrow_mut()
+            .map_err(|_| value_error("other", "must be another mixture than this one"))?;
         self.0.take_from(&mut other.0, &take).map_err(super::to_py)
     }
 
     /// Keeps the components with `√(tr P_xy / 2) ≤ max_std`.
     fn retain_position_std(&mut self, position_mapping: (usize, usize), max_std: f64) -> PyResult<()> {
         if !(max_std.is_finite() && max_std > 0.0) {
-            return Err(value_error("max_position_std", format_args!("must be finite and > 0, got {max_std}")));
+            return Err(value_error(
+                "max_position_std",
+                format_args!("must be finite and > 0, got {max_std}"),
+            ));
         }
-        self.0.retain_position_std([position_mapping.0, position_mapping.1], max_std).map_err(super::to_py)
+        self.0
+            .retain_position_std([position_mapping.0, position_mapping.1], max_std)
+            .map_err(super::to_py)
     }
 
     /// Prune, merge (and make tags unique), truncate, as `GaussianMixtureReducer`.
     #[pyo3(signature = (*, pruning, prune_threshold, merging, merge_threshold, truncating, max_components, kdtree_max_distance = None))]
     #[allow(clippy::too_many_arguments)]
-    fn reduce(&mut self, py: Python<'_>, pruning: bool, prune_threshold: f64, merging: bool, merge_threshold: f64, truncating: bool, max_components: u64, kdtree_max_distance: Option<f64>) -> PyResult<()> {
-        let params = ReduceParams { pruning, prune_threshold, merging, merge_threshold, truncating, max_components: usize::try_from(max_components).unwrap_or(usize::MAX), max_distance: kdtree_max_distance };
+    fn reduce(
+        &mut self,
+        py: Python<'_>,
+        pruning: bool,
+        prune_threshold: f64,
+        merging: bool,
+        merge_threshold: f64,
+        truncating: bool,
+        max_components: u64,
+        kdtree_max_distance: Option<f64>,
+    ) -> PyResult<()> {
+        let params = ReduceParams {
+            pruning,
+            prune_threshold,
+            merging,
+            merge_threshold,
+            truncating,
+            max_components: usize::try_from(max_components).unwrap_or(usize::MAX),
+            max_distance: kdtree_max_distance,
+        };
         let mixture = &mut self.0;
         detached(py, || mixture.reduce(&params))
     }
@@ -229,7 +354,18 @@ impl PyGaussianMixtureArrays {
     /// The components that extend or start tracks (see `Mixture::track_rows`) as `(tags,
     /// weights, means (k, D, 1), covars (k, D, D))`, and the `tracked` tags that left.
     #[allow(clippy::type_complexity)]
-    fn track_states<'py>(&self, py: Python<'py>, tracked: Vec<u64>, threshold: f64) -> PyResult<(Vec<u64>, Vec<f64>, Bound<'py, PyArray3<f64>>, Bound<'py, PyArray3<f64>>, Vec<u64>)> {
+    fn track_states<'py>(
+        &self,
+        py: Python<'py>,
+        tracked: Vec<u64>,
+        threshold: f64,
+    ) -> PyResult<(
+        Vec<u64>,
+        Vec<f64>,
+        Bound<'py, PyArray3<f64>>,
+        Bound<'py, PyArray3<f64>>,
+        Vec<u64>,
+    )> {
         let mixture = &self.0;
         let d = mixture.ndim;
         let (rows, gone) = mixture.track_rows(&tracked, threshold).map_err(super::to_py)?;
@@ -242,8 +378,15 @@ impl PyGaussianMixtureArrays {
         }
         let k = rows.len();
         let tags = crate::memory::collected("means", rows.iter().map(|&i| mixture.tags[i])).map_err(super::to_py)?;
-        let weights = crate::memory::collected("means", rows.iter().map(|&i| mixture.weights[i])).map_err(super::to_py)?;
-        Ok((tags, weights, PyArray1::from_vec(py, means).reshape([k, d, 1])?, PyArray1::from_vec(py, covars).reshape([k, d, d])?, gone))
+        let weights =
+            crate::memory::collected("means", rows.iter().map(|&i| mixture.weights[i])).map_err(super::to_py)?;
+        Ok((
+            tags,
+            weights,
+            PyArray1::from_vec(py, means).reshape([k, d, 1])?,
+            PyArray1::from_vec(py, covars).reshape([k, d, d])?,
+            gone,
+        ))
     }
 
     fn means<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -272,11 +415,28 @@ impl PyGaussianMixtureArrays {
         let py = slf.py();
         let this = slf.borrow();
         // (tags and times as lists for pickling: Python's own objects, MemoryError on failure)
-        let state = (this.means(py)?, this.covars(py)?, this.weights(py)?, this.tags(py)?.to_vec()?, this.times(py)?.to_vec()?, this.0.next_tag);
+        let state = (
+            this.means(py)?,
+            this.covars(py)?,
+            this.weights(py)?,
+            this.tags(py)?.to_vec()?,
+            this.times(py)?.to_vec()?,
+            this.0.next_tag,
+        );
         (slf.get_type(), (this.0.ndim,), state).into_pyobject(py)
     }
 
-    fn __setstate__(&mut self, state: (Bound<'_, PyArray2<f64>>, Bound<'_, PyArray3<f64>>, Bound<'_, PyArray1<f64>>, Vec<u64>, Vec<i64>, u64)) -> PyResult<()> {
+    fn __setstate__(
+        &mut self,
+        state: (
+            Bound<'_, PyArray2<f64>>,
+            Bound<'_, PyArray3<f64>>,
+            Bound<'_, PyArray1<f64>>,
+            Vec<u64>,
+            Vec<i64>,
+            u64,
+        ),
+    ) -> PyResult<()> {
         let (means, covars, weights, tags, times, next_tag) = state;
         let mut mixture = Mixture::new(self.0.ndim);
         mixture.next_tag = next_tag;

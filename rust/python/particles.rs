@@ -30,19 +30,30 @@ pub(super) fn evaluate<'py>(
     let (ndim, n) = (particles.shape()[0], particles.shape()[1]);
     let particles = borrow_contiguous(&particles, "particles")?;
     // A (D, 1) or (1, N) array is both; C is then right, as for any C-ordered one.
-    let order = if particles.is_c_contiguous() { MemoryOrder::C } else { MemoryOrder::F };
+    let order = if particles.is_c_contiguous() {
+        MemoryOrder::C
+    } else {
+        MemoryOrder::F
+    };
     let data = slice(&particles, "particles")?;
     let want_table = log && n > 0;
     let (pd, table) = detached(py, || {
         let mut pd = crate::memory::filled("particles", n, 0.0)?;
         model.at_pose(&pose).at_particles(data, ndim, order, mapping, &mut pd)?;
-        let table = if want_table { Distinct::of(&pd, MAX_DISTINCT) } else { None };
+        let table = if want_table {
+            Distinct::of(&pd, MAX_DISTINCT)
+        } else {
+            None
+        };
         Ok((pd, table))
     })?;
 
     let (detected, not_detected) = match (log, table) {
         (false, _) => {
-            let complement = missed.then(|| crate::memory::collected("particles", pd.iter().map(|p| 1.0 - p))).transpose().map_err(super::to_py)?;
+            let complement = missed
+                .then(|| crate::memory::collected("particles", pd.iter().map(|p| 1.0 - p)))
+                .transpose()
+                .map_err(super::to_py)?;
             (pd, complement)
         }
         (true, Some(table)) => {
@@ -50,7 +61,10 @@ pub(super) fn evaluate<'py>(
             let log_pd = numpy_log(py, table.values())?;
             let log_missed = if missed {
                 // (a table holds at most MAX_DISTINCT values)
-                Some(numpy_log(py, &table.values().iter().map(|p| 1.0 - p).collect::<Vec<_>>())?)
+                Some(numpy_log(
+                    py,
+                    &table.values().iter().map(|p| 1.0 - p).collect::<Vec<_>>(),
+                )?)
             } else {
                 None
             };
@@ -71,8 +85,13 @@ pub(super) fn evaluate<'py>(
         }
         // More distinct values than a table is worth (or none at all): NumPy on every value.
         (true, None) => {
-            let complement = |pd: &[f64]| crate::memory::collected("particles", pd.iter().map(|p| 1.0 - p)).map_err(super::to_py);
-            let log_missed = if missed { Some(numpy_log(py, &complement(&pd)?)?) } else { None };
+            let complement =
+                |pd: &[f64]| crate::memory::collected("particles", pd.iter().map(|p| 1.0 - p)).map_err(super::to_py);
+            let log_missed = if missed {
+                Some(numpy_log(py, &complement(&pd)?)?)
+            } else {
+                None
+            };
             (numpy_log(py, &pd)?, log_missed)
         }
     };
@@ -87,10 +106,24 @@ pub(super) fn evaluate<'py>(
 /// warning: NumPy sees the non-zero values only, as one contiguous array (its log is the
 /// same function of each value whatever the array's length or alignment).
 fn numpy_log(py: Python<'_>, values: &[f64]) -> PyResult<Vec<f64>> {
-    let nonzero: Vec<f64> = crate::memory::collected("particles", values.iter().copied().filter(|v| *v != 0.0)).map_err(super::to_py)?;
-    let logs = py.import("numpy")?.getattr("log")?.call1((PyArray1::from_vec(py, nonzero),))?;
+    let nonzero: Vec<f64> =
+        crate::memory::collected("particles", values.iter().copied().filter(|v| *v != 0.0)).map_err(super::to_py)?;
+    let logs = py
+        .import("numpy")?
+        .getattr("log")?
+        .call1((PyArray1::from_vec(py, nonzero),))?;
     let logs = logs.cast_into::<PyArray1<f64>>()?;
     let logs = super::borrow(&logs, "log")?;
     let mut logs = slice(&logs, "log")?.iter();
-    crate::memory::collected("particles", values.iter().map(|v| if *v == 0.0 { f64::NEG_INFINITY } else { *logs.next().unwrap_or(&f64::NAN) })).map_err(super::to_py)
+    crate::memory::collected(
+        "particles",
+        values.iter().map(|v| {
+            if *v == 0.0 {
+                f64::NEG_INFINITY
+            } else {
+                *logs.next().unwrap_or(&f64::NAN)
+            }
+        }),
+    )
+    .map_err(super::to_py)
 }

@@ -5,11 +5,14 @@
 //! vector) and return None for anything else, which the Python layer then converts and
 //! checks, raising its errors that name the argument.
 
-use super::{borrow, detached, guarded, mapping_of, output, pose_of, rule_of, slice, value_error, PyClutterModel, PyDetectionModel};
-use crate::pose::Pose;
+use super::{
+    borrow, detached, guarded, mapping_of, output, pose_of, rule_of, slice, value_error, PyClutterModel,
+    PyDetectionModel,
+};
 use crate::batch::PositionMapping;
 use crate::cubature::Rule;
 use crate::detection::ScanDetection;
+use crate::pose::Pose;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
@@ -29,11 +32,21 @@ pub struct PyDetectionAtPose {
 impl PyDetectionAtPose {
     #[new]
     #[pyo3(signature = (model, pose, position_mapping = (0, 2), rule = "mean", order = 3))]
-    fn new(model: &Bound<'_, PyDetectionModel>, pose: (f64, f64, f64), position_mapping: (i64, i64), rule: &str, order: i64) -> PyResult<Self> {
+    fn new(
+        model: &Bound<'_, PyDetectionModel>,
+        pose: (f64, f64, f64),
+        position_mapping: (i64, i64),
+        rule: &str,
+        order: i64,
+    ) -> PyResult<Self> {
         let pose = pose_of(pose)?;
         let mapping = mapping_of(position_mapping)?;
         let rule = rule_of(rule, order)?;
-        Ok(PyDetectionAtPose { scan: model.get().0.at_pose(&pose), mapping, rule })
+        Ok(PyDetectionAtPose {
+            scan: model.get().0.at_pose(&pose),
+            mapping,
+            rule,
+        })
     }
 
     /// P_D at each row of `states` (N, D), into `out` if given; None (nothing evaluated)
@@ -41,8 +54,15 @@ impl PyDetectionAtPose {
     /// An `out` that is not a float64 (N,) C-contiguous, aligned array also returns None
     /// (the Python layer's check names what is wrong with it).
     #[pyo3(signature = (states, out = None))]
-    fn evaluate<'py>(&self, py: Python<'py>, states: &Bound<'py, PyAny>, out: Option<&Bound<'py, PyAny>>) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
-        let Ok(states) = states.cast::<PyArray2<f64>>() else { return Ok(None) };
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        states: &Bound<'py, PyAny>,
+        out: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
+        let Ok(states) = states.cast::<PyArray2<f64>>() else {
+            return Ok(None);
+        };
         if !(states.is_c_contiguous() && states.is_aligned()) {
             return Ok(None);
         }
@@ -52,7 +72,9 @@ impl PyDetectionAtPose {
         let data = slice(&states, "states")?;
         let mut out = output(py, out, n, &[("states", data)])?;
         let result = Bound::clone(&out);
-        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
+        let buffer = out
+            .as_slice_mut()
+            .map_err(|_| value_error("out", "must be C-contiguous"))?;
         let (scan, mapping) = (&self.scan, self.mapping);
         if n < DETACH_ROWS {
             guarded(|| scan.at_states(data, ncols, mapping, buffer))?;
@@ -67,7 +89,9 @@ impl PyDetectionAtPose {
     fn at(&self, vector: &Bound<'_, PyAny>) -> Option<f64> {
         let (px, py) = self.position_of(vector)?;
         let mut pd = [0.0];
-        self.scan.at_states(&[px, py], 2, PositionMapping { x: 0, y: 1 }, &mut pd).ok()?;
+        self.scan
+            .at_states(&[px, py], 2, PositionMapping { x: 0, y: 1 }, &mut pd)
+            .ok()?;
         Some(pd[0])
     }
 
@@ -85,9 +109,23 @@ impl PyDetectionAtPose {
         if covar.shape()[1] != d || vector.len().ok()? != d {
             return None;
         }
-        let block = [covar.get_owned([x, x])?, covar.get_owned([x, y])?, covar.get_owned([y, x])?, covar.get_owned([y, y])?];
+        let block = [
+            covar.get_owned([x, x])?,
+            covar.get_owned([x, y])?,
+            covar.get_owned([y, x])?,
+            covar.get_owned([y, y])?,
+        ];
         let mut pd = [0.0];
-        self.scan.expected_at_gaussians(&[px, py], &block, 2, PositionMapping { x: 0, y: 1 }, &self.rule, &mut pd).ok()?;
+        self.scan
+            .expected_at_gaussians(
+                &[px, py],
+                &block,
+                2,
+                PositionMapping { x: 0, y: 1 },
+                &self.rule,
+                &mut pd,
+            )
+            .ok()?;
         Some(pd[0])
     }
 }
@@ -125,7 +163,10 @@ pub struct PyClutterAtPose {
 impl PyClutterAtPose {
     #[new]
     fn new(model: Py<PyClutterModel>, pose: (f64, f64, f64)) -> PyResult<Self> {
-        Ok(PyClutterAtPose { model, pose: pose_of(pose)? })
+        Ok(PyClutterAtPose {
+            model,
+            pose: pose_of(pose)?,
+        })
     }
 
     /// λ at world `positions` (M, 2) with `metadata` (M, K) in the model's column order
@@ -133,11 +174,17 @@ impl PyClutterAtPose {
     /// evaluated) unless every array is a C-contiguous, aligned float64 array of its shape.
     #[pyo3(signature = (positions, metadata = None, out = None))]
     fn evaluate<'py>(
-        &self, py: Python<'py>, positions: &Bound<'py, PyAny>, metadata: Option<&Bound<'py, PyAny>>, out: Option<&Bound<'py, PyAny>>,
+        &self,
+        py: Python<'py>,
+        positions: &Bound<'py, PyAny>,
+        metadata: Option<&Bound<'py, PyAny>>,
+        out: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
         let model = &self.model.get().0;
         let k = model.metadata_columns();
-        let Some(positions) = common_rows(positions, 2) else { return Ok(None) };
+        let Some(positions) = common_rows(positions, 2) else {
+            return Ok(None);
+        };
         let n = positions.shape()[0];
         let metadata = match metadata {
             None if k == 0 => None,
@@ -151,10 +198,16 @@ impl PyClutterAtPose {
         let positions = borrow(&positions, "positions")?;
         let p = slice(&positions, "positions")?;
         let metadata = metadata.map(|m| borrow(&m, "metadata")).transpose()?;
-        let m = metadata.as_ref().map(|m| slice(m, "metadata")).transpose()?.unwrap_or(&[]);
+        let m = metadata
+            .as_ref()
+            .map(|m| slice(m, "metadata"))
+            .transpose()?
+            .unwrap_or(&[]);
         let mut out = output(py, out, n, &[("positions", p), ("metadata", m)])?;
         let result = Bound::clone(&out);
-        let buffer = out.as_slice_mut().map_err(|_| value_error("out", "must be C-contiguous"))?;
+        let buffer = out
+            .as_slice_mut()
+            .map_err(|_| value_error("out", "must be C-contiguous"))?;
         let pose = &self.pose;
         if n < DETACH_ROWS {
             guarded(|| model.evaluate(pose, p, m, buffer))?;

@@ -92,7 +92,10 @@ impl Lanes for Avx2 {
             let (c, d) = (_mm256_loadu_pd(r[8..].as_ptr()), _mm256_loadu_pd(r[12..].as_ptr()));
             // [x0, x1, y0, y1] and [x2, x3, y2, y3], then the 128-bit halves regrouped.
             let (ab, cd) = (_mm256_unpacklo_pd(a, b), _mm256_unpacklo_pd(c, d));
-            (Avx2(_mm256_permute2f128_pd::<0x20>(ab, cd)), Avx2(_mm256_permute2f128_pd::<0x31>(ab, cd)))
+            (
+                Avx2(_mm256_permute2f128_pd::<0x20>(ab, cd)),
+                Avx2(_mm256_permute2f128_pd::<0x31>(ab, cd)),
+            )
         }
     }
     #[inline(always)]
@@ -101,7 +104,10 @@ impl Lanes for Avx2 {
         unsafe {
             let (a, b) = (_mm256_loadu_pd(p.as_ptr()), _mm256_loadu_pd(p[4..].as_ptr()));
             // [x0, y0, x2, y2] and [x1, y1, x3, y3], then interleaved.
-            let (even, odd) = (_mm256_permute2f128_pd::<0x20>(a, b), _mm256_permute2f128_pd::<0x31>(a, b));
+            let (even, odd) = (
+                _mm256_permute2f128_pd::<0x20>(a, b),
+                _mm256_permute2f128_pd::<0x31>(a, b),
+            );
             (Avx2(_mm256_unpacklo_pd(even, odd)), Avx2(_mm256_unpackhi_pd(even, odd)))
         }
     }
