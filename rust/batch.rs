@@ -232,7 +232,7 @@ pub fn check_rows(states: &[f64], ncols: usize, n_out: usize, argument: &'static
     if ncols == 0 {
         return Err(ModelError::shape(argument, "rows must have at least one column"));
     }
-    if states.len() % ncols != 0 {
+    if !states.len().is_multiple_of(ncols) {
         return Err(ModelError::shape(
             argument,
             format!("length {} is not a multiple of the row width {ncols}", states.len()),

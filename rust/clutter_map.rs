@@ -247,6 +247,7 @@ fn posterior_mean(direct: f64, mean: f64, weight: f64, evidence: f64, exposure: 
 impl ClutterMap {
     /// A fresh map (the prior everywhere). `edges[0]` is bearing (rad, within [−π, π]) or x,
     /// `edges[1]` range (m, ≥ 0) or y.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(a > b)` on purpose: NaN fails the test
     pub fn new(
         space: MapSpace,
         edges: [Vec<f64>; 2],
@@ -489,11 +490,11 @@ impl ClutterMap {
         changed.fill(false);
         cells.rows_to_test(tests, to_test);
         for row in (0..rows).filter(|row| to_test[*row]) {
-            for j in 0..columns {
+            for (j, column_changed) in changed.iter_mut().enumerate().take(columns) {
                 let c = row * columns + j;
                 if tests.may_leave(cells.at(c), j) && tests.leaves(cells.at(c), j) {
                     apart[c] = true;
-                    changed[j] = true;
+                    *column_changed = true;
                 }
             }
         }
@@ -516,6 +517,7 @@ impl ClutterMap {
             // (NaN where e² overflows, in a grid of huge cells: no spread resolved, max gives
             // 0; an infinite one, from a level near f64::MAX, is the largest double instead)
             self.pool_spread[g] = if ee > 0.0 {
+                #[allow(clippy::manual_clamp)] // clamp keeps NaN; max(0) turns it into 0
                 (excess / ee).max(0.0).min(f64::MAX)
             } else {
                 0.0
@@ -1082,9 +1084,9 @@ mod tests {
         for _ in 0..300 {
             let mut points = Vec::new();
             for (cell, ring) in (0..36).flat_map(|c| [(c, 0), (c, 1)]) {
-                let rate = if (cell, ring) == (9, 1) { 5.0 } else { 0.5 };
+                let rate: f64 = if (cell, ring) == (9, 1) { 5.0 } else { 0.5 };
                 // a Poisson draw by inversion
-                let (mut k, mut p, u) = (0, (-rate as f64).exp(), uniform());
+                let (mut k, mut p, u) = (0, (-rate).exp(), uniform());
                 let mut total = p;
                 while u > total {
                     k += 1;

@@ -9,11 +9,13 @@
 //! trial by the forgetting factor γ ∈ (0, 1] per update (a power prior), the estimate after
 //! update k is
 //!
-//!   p_b = (p₀ s₀ + H_b) / (s₀ + T_b),   H_b = Σ_{j: w_j > 0} γ^(k−j) d_j,   T_b = Σ_j γ^(k−j) w_j,
+//! ```text
+//! p_b = (p₀ s₀ + H_b) / (s₀ + T_b),   H_b = Σ_{j: w_j > 0} γ^(k−j) d_j,   T_b = Σ_j γ^(k−j) w_j,
+//! ```
 //!
 //! clamped to [0, 1]. A trial of weight 0 is no evidence, hit or miss: it changes neither
-//! H nor T. With weights 0 or 1 (the usual case: sectors, land and line of sight are 0 or
-//! 1) this is the Beta posterior mean exactly; with fractional weights it is the ratio
+//! H nor T. With weights 0 or 1 (the usual case: sectors, land and line of sight are
+//! 0 or 1) this is the Beta posterior mean exactly; with fractional weights it is the ratio
 //! estimator Σd / Σw of p_b shrunk to the prior, which can exceed 1 before clamping.
 //! Where p₀ s₀ + H_b would overflow or leave the normal doubles (s₀ or a restored state
 //! near f64's limits), p_b is formed as p₀ · s₀/(s₀ + T_b) + H_b/(s₀ + T_b): finite for
@@ -213,7 +215,7 @@ impl DetectionEstimate {
     /// Every input is checked before anything changes. Forgets one scan, even with no trials.
     pub fn update(&mut self, pose: &Pose, positions: &[f64], detected: &[f64], weights: &[f64]) -> Result<()> {
         let n = positions.len() / 2;
-        if positions.len() % 2 != 0 {
+        if !positions.len().is_multiple_of(2) {
             return Err(ModelError::shape("positions", "must be (M, 2)"));
         }
         for (argument, values) in [("detected", detected), ("weights", weights)] {

@@ -269,7 +269,7 @@ proptest! {
     #[test]
     fn cholesky_never_panics(a in wild(), b in wild(), bt in wild(), c in wild()) {
         if let Some(l) = cholesky2(a, b, bt, c) {
-            prop_assert!(l.iter().all(|v| v.is_finite() || v.is_nan() == false));
+            prop_assert!(l.iter().all(|v| v.is_finite() || !v.is_nan()));
         }
     }
 
@@ -315,7 +315,7 @@ proptest! {
                     0 => 100.0,
                     1 => 1e300,
                     2 => 0.0,
-                    3 => if d == 0 { -1.0 } else { 1.0 },
+                    3 if d == 0 => -1.0,
                     _ => 1.0,
                 };
             }

@@ -253,11 +253,11 @@ fn ring_of(ring: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 2]>> {
         ));
     }
     let array = borrow(array, "polygons")?;
-    Ok(crate::memory::collected(
+    crate::memory::collected(
         "polygons",
         slice(&array, "polygons")?.chunks_exact(2).map(|r| [r[0], r[1]]),
     )
-    .map_err(to_py)?)
+    .map_err(to_py)
 }
 
 #[pymethods]
@@ -649,10 +649,13 @@ fn simd_backend() -> &'static str {
     crate::simd::backend().name()
 }
 
+/// A rule's points (x, y) and weights.
+type RulePoints = (Vec<(f64, f64)>, Vec<f64>);
+
 /// Points and weights of an integration rule in standard-normal space.
 #[pyfunction]
 #[pyo3(signature = (rule, order = 3))]
-fn rule_points(rule: &str, order: i64) -> PyResult<(Vec<(f64, f64)>, Vec<f64>)> {
+fn rule_points(rule: &str, order: i64) -> PyResult<RulePoints> {
     let r = rule_of(rule, order)?;
     // (a rule has at most MAX_ORDER² = 1024 points)
     Ok((r.points().iter().map(|p| (p[0], p[1])).collect(), r.weights().to_vec()))

@@ -92,6 +92,7 @@ pub fn spd_inverse_into(a: &[f64], n: usize, inverse: &mut [f64], scratch: &mut 
 
 /// The Cholesky factor `L` (lower, `A = L Lᵀ`) of the lower triangle of `a` into `l`;
 /// false if `a` is not positive definite (or not finite).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(a > b)` on purpose: NaN fails the test
 pub fn cholesky_into(a: &[f64], n: usize, l: &mut [f64]) -> bool {
     for i in 0..n {
         for j in 0..=i {
@@ -141,6 +142,7 @@ pub fn inverse_from_cholesky(l: &[f64], n: usize, inverse: &mut [f64], scratch: 
 
 /// Inverse of a general (n×n) matrix by Gauss–Jordan elimination with partial pivoting
 /// into `inverse`, `scratch` of at least n² values; false (inverse NaN) when singular.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(a > b)` on purpose: NaN fails the test
 pub fn general_inverse_into(a: &[f64], n: usize, inverse: &mut [f64], scratch: &mut [f64]) -> bool {
     let work = &mut scratch[..n * n];
     work.copy_from_slice(&a[..n * n]);

@@ -143,7 +143,7 @@ impl Mixture {
         circle: Option<([usize; 2], [f64; 2], f64)>,
     ) -> Result<()> {
         let d = self.ndim;
-        if covar.len() != d * d || means.len() % d != 0 {
+        if covar.len() != d * d || !means.len().is_multiple_of(d) {
             return Err(ModelError::shape(
                 "births",
                 format!("expected means of dimension {d} and one {d}×{d} covariance"),
@@ -198,8 +198,8 @@ impl Mixture {
         }
         let d = self.ndim;
         let mut out = 0;
-        for i in 0..self.len() {
-            if !keep[i] {
+        for (i, &kept) in keep.iter().enumerate() {
+            if !kept {
                 continue;
             }
             if out != i {
@@ -367,13 +367,13 @@ impl Mixture {
                 format!("expected {} group indices, got {}", self.len(), group.len()),
             ));
         }
-        if transitions.len() != noises.len() || transitions.len() % d2.max(1) != 0 {
+        if transitions.len() != noises.len() || !transitions.len().is_multiple_of(d2.max(1)) {
             return Err(ModelError::shape(
                 "transitions",
                 format!("expected (G, {d}, {d}) transition matrices and noise covariances"),
             ));
         }
-        let groups = if d2 == 0 { 0 } else { transitions.len() / d2 };
+        let groups = transitions.len().checked_div(d2).unwrap_or(0);
         if let Some(row) = group.iter().position(|&g| g >= groups) {
             return Err(ModelError::invalid(
                 "group",

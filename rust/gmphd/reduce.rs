@@ -178,6 +178,7 @@ impl CandidateIndex {
 /// first merge test, found in one sweep over the ranks sorted by their first coordinate
 /// (each `k` looks at the means within its radius) instead of one query per `T`. For
 /// finite means only; a rank whose radius is NaN is nobody's candidate, as in the index.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(a > b)` on purpose: NaN fails the test
 fn first_candidates(ranked_means: &[f64], limits: &[f64], radius: &[f64], d: usize) -> Result<Vec<Vec<usize>>> {
     let n = radius.len();
     let mut order: Vec<usize> = memory::collected("means", 0..n)?;
@@ -270,6 +271,7 @@ impl Mixture {
 
     /// `listed`: take each heaviest's first candidates from [`first_candidates`] (false:
     /// from the index alone; the same merges, which the tests check).
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(a > b)` on purpose: NaN fails the test
     pub(super) fn merge(&mut self, threshold: f64, max_distance: Option<f64>, listed: bool) -> Result<()> {
         let (n, d) = (self.len(), self.ndim);
         let order = self.ascending()?;

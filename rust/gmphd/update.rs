@@ -141,7 +141,7 @@ fn check_inputs(
 ) -> Result<usize> {
     model.validate(mixture.ndim)?;
     let m = model.ndim_meas();
-    if detections.len() % m != 0 {
+    if !detections.len().is_multiple_of(m) {
         return Err(ModelError::shape("detections", format!("expected rows of {m} values")));
     }
     let count = detections.len() / m;
@@ -199,6 +199,7 @@ impl Mixture {
     /// λ(z) / (λ(z) + Σᵢ p_S P_D,ᵢ wᵢ N(z; ẑᵢ, Sᵢ)) over the components that gate it — 1 for
     /// a detection that no component explains (what it adds to the map of
     /// a clutter learner, in expectation).
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(a > b)` on purpose: NaN fails the test
     pub fn update(
         &mut self,
         model: &MeasurementModel,
@@ -255,7 +256,6 @@ impl Mixture {
             weights: memory::with_room("detections", most)?,
             tags: memory::with_room("detections", most)?,
             times: memory::with_room("detections", most)?,
-            ..Default::default()
         };
         let log_norm = m as f64 * (2.0 * std::f64::consts::PI).ln();
         let mut raw = memory::filled("detections", m, 0.0)?;
@@ -313,14 +313,14 @@ impl Mixture {
                 }
             }
         }
-        for i in 0..n {
+        for (i, &pd) in prob_detection.iter().enumerate().take(n) {
             if self.tags[i] == BIRTH {
                 continue;
             }
             out.means.extend_from_slice(self.mean(i));
             out.covars.extend_from_slice(self.covar(i));
             out.weights
-                .push(self.weights[i] * (1.0 - prob_detection[i]) * 1.0 * params.prob_survival);
+                .push(self.weights[i] * (1.0 - pd) * 1.0 * params.prob_survival);
             out.tags.push(self.tags[i]);
             out.times.push(params.time);
         }

@@ -7,6 +7,9 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use std::sync::{Arc, RwLock};
 
+/// An estimate's (hits, trials) per band.
+type HitsAndTrials<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
 #[pyclass(name = "DetectionEstimate", module = "ctxmodels._core", frozen)]
 pub struct PyDetectionEstimate(pub(super) SharedEstimate);
 
@@ -73,7 +76,7 @@ impl PyDetectionEstimate {
     }
 
     /// (hits, trials): the state an update changes.
-    fn state<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<HitsAndTrials<'py>> {
         let estimate = read_estimate(&self.0);
         let (hits, trials) = estimate.state();
         Ok((array_of(py, "hits", hits)?, array_of(py, "trials", trials)?))

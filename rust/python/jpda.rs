@@ -6,7 +6,7 @@
 use super::scan::PyDetectionAtPose;
 use super::{borrow, detached, slice, to_py, value_error};
 use crate::jpda::{self, Jacobian, MeasurementModel, ScanInput};
-use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 

@@ -275,7 +275,7 @@ impl PyGaussianMixtureArrays {
         let mut pd = crate::memory::filled("means", n, 0.0).map_err(super::to_py)?;
         let means = &self.0.means;
         // (a panic is a RuntimeError, as in every call; the core's refusal is None)
-        let mut run = || Ok(at_pose.at_rows(means, d, &mut pd));
+        let run = || Ok(at_pose.at_rows(means, d, &mut pd));
         let evaluated = if n < DETACH_ROWS {
             guarded(run)?
         } else {
@@ -391,12 +391,12 @@ impl PyGaussianMixtureArrays {
 
     fn means<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let (n, d) = (self.0.len(), self.0.ndim);
-        Ok(super::array_of(py, "means", &self.0.means)?.reshape([n, d])?)
+        super::array_of(py, "means", &self.0.means)?.reshape([n, d])
     }
 
     fn covars<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let (n, d) = (self.0.len(), self.0.ndim);
-        Ok(super::array_of(py, "covars", &self.0.covars)?.reshape([n, d, d])?)
+        super::array_of(py, "covars", &self.0.covars)?.reshape([n, d, d])
     }
 
     fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
@@ -426,17 +426,7 @@ impl PyGaussianMixtureArrays {
         (slf.get_type(), (this.0.ndim,), state).into_pyobject(py)
     }
 
-    fn __setstate__(
-        &mut self,
-        state: (
-            Bound<'_, PyArray2<f64>>,
-            Bound<'_, PyArray3<f64>>,
-            Bound<'_, PyArray1<f64>>,
-            Vec<u64>,
-            Vec<i64>,
-            u64,
-        ),
-    ) -> PyResult<()> {
+    fn __setstate__(&mut self, state: PickledMixture<'_>) -> PyResult<()> {
         let (means, covars, weights, tags, times, next_tag) = state;
         let mut mixture = Mixture::new(self.0.ndim);
         mixture.next_tag = next_tag;
@@ -448,6 +438,16 @@ impl PyGaussianMixtureArrays {
         result
     }
 }
+
+/// What a mixture pickles as: means, covariances, weights, tags, times and the next tag.
+type PickledMixture<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray3<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Vec<u64>,
+    Vec<i64>,
+    u64,
+);
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScanMeasurementModel>()?;
