@@ -134,7 +134,7 @@ def time_array(chain, scan: Scan) -> dict:
     """The same scan in the core, as :class:`ArrayPointProcessTracker` runs it: the mixture
     as arrays, F/Q per time step, the detections' vectors and model converted, then
     predict, update and reduce (hypothesise = predict + conversions)."""
-    from ctxmodels.stonesoup.array_plan import _Plan
+    from ctxmodels.stonesoup.gmphd._plan import _Plan
     from ctxmodels.stonesoup.ordering import in_stable_order
     hypothesiser, updater, reducer = chain
     holder = type("Tracker", (), {})()

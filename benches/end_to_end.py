@@ -48,7 +48,7 @@ from stonesoup.updater.pointprocess import PHDUpdater as StockPHD
 
 import ctxmodels
 from ctxmodels.stonesoup.particle import BernoulliParticleUpdater
-from ctxmodels.stonesoup.pointprocess import PHDUpdater
+from ctxmodels.stonesoup.gmphd import PHDUpdater
 
 T0 = datetime.datetime(2024, 1, 1)
 SCAN = datetime.timedelta(seconds=1.25)

@@ -35,7 +35,7 @@ from ctxmodels import (
     RangeBands,
     SensorModel,
 )
-from ctxmodels.stonesoup import AnalyticCartesianToBearingRange, pointprocess
+from ctxmodels.stonesoup import AnalyticCartesianToBearingRange, PHDUpdater
 
 START = datetime.datetime(2024, 1, 1)
 RTOL = 1e-9
@@ -210,7 +210,7 @@ def stock_components(scenario, context_updater=False, **reducer_options):
         DistanceHypothesiser(predictor, kalman, Mahalanobis(),
                              missed_distance=scenario["missed_distance"]),
         order_by_detection=True)
-    updater = (pointprocess.PHDUpdater if context_updater else StockPHDUpdater)(
+    updater = (PHDUpdater if context_updater else StockPHDUpdater)(
         kalman, clutter_spatial_density=scenario["clutter"], prob_detection=scenario["pd"],
         prob_survival=0.99)
     reducer = GaussianMixtureReducer(

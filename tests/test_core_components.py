@@ -238,6 +238,28 @@ def test_yaml_of_several_components_in_one_document():
     assert restored["radar"] == radar and restored["lidar"] == lidar and restored["nav"] == navigation()
 
 
+def test_yaml_tag_of_a_moved_module_loads_the_public_class():
+    """A tag names the defining module; one whose module no longer holds the class (the
+    layout moved it) loads the package's public class of that name. A name that is not
+    public under the tag's package is still an error naming the tag."""
+    from ruamel.yaml.constructor import ConstructorError
+    from ctxmodels.stonesoup import CircularRegion, PHDUpdater
+    text = YAML().dumps({"region": CircularRegion(centre=(1.0, 2.0), radius=3.0),
+                         "bands": RangeBands(edges=[50.0], values=[0.9, 0.2])})
+    moved = (text.replace(f"!{CircularRegion.__module__}.", "!ctxmodels.stonesoup.pointprocess.")
+                 .replace(f"!{RangeBands.__module__}.", "!ctxmodels.bands."))
+    assert "!ctxmodels.stonesoup.pointprocess.CircularRegion" in moved
+    assert "!ctxmodels.bands.RangeBands" in moved
+    restored = YAML().load(moved)
+    assert restored["region"].radius == 3.0 and type(restored["region"]) is CircularRegion
+    assert restored["bands"] == RangeBands(edges=[50.0], values=[0.9, 0.2])
+    assert PHDUpdater.__module__ != "ctxmodels.stonesoup.pointprocess"
+    with pytest.raises(ConstructorError, match="ctxmodels.stonesoup.pointprocess.NoSuchThing"):
+        YAML().load(moved.replace("pointprocess.CircularRegion", "pointprocess.NoSuchThing"))
+    with pytest.raises(ConstructorError, match="ctxmodels.bands.CircularRegion"):
+        YAML().load(moved.replace("!ctxmodels.bands.RangeBands", "!ctxmodels.bands.CircularRegion"))
+
+
 def _assert_immutable(obj):
     for name in type(obj).properties:
         with pytest.raises(AttributeError, match=name):

@@ -12,7 +12,7 @@ from stonesoup.mixturereducer.gaussianmixture import GaussianMixtureReducer
 from stonesoup.types.state import TaggedWeightedGaussianState, WeightedGaussianState
 
 from ctxmodels import _core
-from ctxmodels.stonesoup.reduction import reduce_mixture
+from ctxmodels.stonesoup.gmphd.reduction import reduce_mixture
 
 
 def _mixture(seed, n=60, tags=8):

@@ -373,7 +373,7 @@ def test_jpda_context_position_bound_is_the_gmphds():
     assert type(expected) is ExpectedMissesDeleter and type(covariance) is CovarianceBasedDeleter
     paper = trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker.deleter
     assert type(paper) is UpdateTimeStepsDeleter and paper.time_steps_since_update == 30
-    from ctxmodels.stonesoup.pointprocess import PointProcessMultiTargetTracker
+    from ctxmodels.stonesoup.gmphd import PointProcessMultiTargetTracker
     from stonesoup.types.state import TaggedWeightedGaussianState
     from ctxmodels.trackers.specs import MAX_POSITION_STD as sigma
     for variance in (sigma ** 2, np.nextafter(sigma ** 2, np.inf), 0.9 * sigma ** 2,

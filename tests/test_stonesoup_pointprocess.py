@@ -30,10 +30,9 @@ from stonesoup.updater.pointprocess import PHDUpdater as StockPHD
 
 import ctxmodels
 from ctxmodels import ClutterDensityModel, DetectionProbabilityModel, DetectionSet, SensorModel
-from ctxmodels.stonesoup.birth import TABLE_I_BIRTH_COVAR, MeasurementDrivenBirth
+from ctxmodels.stonesoup.gmphd.birth import TABLE_I_BIRTH_COVAR, MeasurementDrivenBirth
 from ctxmodels.stonesoup import CircularRegion
-from ctxmodels.stonesoup.pointprocess import (LCCUpdater, PHDUpdater,
-                                              PointProcessMultiTargetTracker)
+from ctxmodels.stonesoup.gmphd import LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
 
 # Stock runs compared bit for bit with ctxmodels visit shared tags in first-appearance order.
 from ctxmodels.stonesoup.ordering import in_stable_order  # noqa: E402

@@ -13,7 +13,7 @@ import pytest
 
 from ctxmodels import LandMask, LineOfSight, NavigationTrack, RangeBands
 from ctxmodels.geo import MAX_DISTANCE, lonlat_to_local, pyproj_available
-from ctxmodels.stonesoup.region import CircularRegion, PoseCentredRegion
+from ctxmodels.stonesoup.gmphd.region import CircularRegion, PoseCentredRegion
 
 T0 = datetime.datetime(2026, 1, 1)
 NAN, INF = float("nan"), float("inf")

@@ -295,7 +295,7 @@ def _warn_from(module: str, category):
 @pytest.mark.parametrize("category", [DeprecationWarning, RuntimeWarning, UserWarning,
                                       FutureWarning, SyntaxWarning])
 def test_a_warning_from_a_ctxmodels_module_is_an_error(category):
-    for module in ("ctxmodels", "ctxmodels.stonesoup.pointprocess", "ctxmodels.experiment.runner"):
+    for module in ("ctxmodels", "ctxmodels.stonesoup.gmphd.tracker", "ctxmodels.experiment.runner"):
         with pytest.raises(category):
             _warn_from(module, category)
 

@@ -13,11 +13,11 @@
   :class:`DuplicateTrackDeleter` deletes one of two tracks on one target (the
   track-to-track χ² test), in a :class:`CompositeDeleter` (Stone Soup's, which also takes
   members that compare tracks with each other) beside per-track deleters.
-* GM-PHD / LCC: :class:`PHDUpdater`, :class:`LCCUpdater` (P_D per component, λ per
-  detection, one array call each per scan) and :class:`PointProcessMultiTargetTracker`, which
-  passes each scan's context to the updater and adds measurement-driven birth
-  (:class:`MeasurementDrivenBirth`) and a surveillance region (:class:`CircularRegion`, or :class:`PoseCentredRegion`
-  following the platform).
+* GM-PHD / LCC (:mod:`~ctxmodels.stonesoup.gmphd`): :class:`PHDUpdater`, :class:`LCCUpdater`
+  (P_D per component, λ per detection, one array call each per scan) and
+  :class:`PointProcessMultiTargetTracker`, which passes each scan's context to the updater
+  and adds measurement-driven birth (:class:`MeasurementDrivenBirth`) and a surveillance
+  region (:class:`CircularRegion`, or :class:`PoseCentredRegion` following the platform).
 * Particle filters: :class:`BernoulliParticleUpdater`, :class:`SMCPHDUpdater` (P_D over all
   particles in one array call).
 * Whole scans in the Rust core: :class:`ArrayPointProcessTracker` (GM-PHD) and
@@ -40,17 +40,17 @@
   scan interval.
 * :class:`AnalyticCartesianToBearingRange`: the stock bearing–range measurement model with
   its exact Jacobian instead of a finite difference, so an extended Kalman filter's output
-  no longer depends on the last bit of its inputs.
+  does not depend on the last bit of its inputs.
 """
-from .array_tracker import ArrayPointProcessTracker
 from .array_initiator import ArrayMultiMeasurementInitiator
 from .array_jpda import ArrayJPDATracker
-from .birth import MeasurementDrivenBirth
 from .composite_deleter import CompositeDeleter
 from .deleter import (DuplicateTrackDeleter, ExpectedMissesDeleter, MissesNotWeighedWarning,
                       UpdateTimeStepsDeleter)
 from .fast_association import FastGNNWith2DAssignment
 from .feeder import ContextFeeder, MultiSensorFeeder
+from .gmphd import (ArrayPointProcessTracker, CircularRegion, LCCUpdater, MeasurementDrivenBirth,
+                    PHDUpdater, PointProcessMultiTargetTracker, PoseCentredRegion)
 from .hypothesiser import PDAHypothesiser
 from .learning import ClutterMapLearner, DetectionLearner, LearningTracker
 from .measurement import AnalyticCartesianToBearingRange
@@ -58,8 +58,6 @@ from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracke
 from .paths import ComponentPathWarning
 from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
-from .pointprocess import LCCUpdater, PHDUpdater, PointProcessMultiTargetTracker
-from .region import CircularRegion, PoseCentredRegion
 from .sensor_adapter import (PlatformContextFeeder, SensorContext, SensorPose, sensor_context,
                              sensor_model_from_stonesoup, sensor_pose)
 from .transition import CachedCombinedLinearGaussianTransitionModel

@@ -84,9 +84,9 @@ def jpda_tracker(spec, predictor, updater, detector, fast):
 
 
 def gmphd_tracker(spec, region, predictor, updater, detector, fast):
-    from ..stonesoup.birth import MeasurementDrivenBirth
-    from ..stonesoup.array_tracker import ArrayPointProcessTracker
-    from ..stonesoup.pointprocess import PHDUpdater, PointProcessMultiTargetTracker
+    from ..stonesoup.gmphd.birth import MeasurementDrivenBirth
+    from ..stonesoup.gmphd.array_tracker import ArrayPointProcessTracker
+    from ..stonesoup.gmphd import PHDUpdater, PointProcessMultiTargetTracker
     hypothesiser = GaussianMixtureHypothesiser(DistanceHypothesiser(
         predictor, updater, Mahalanobis(), missed_distance=GATE_MAHALANOBIS),
         order_by_detection=True)

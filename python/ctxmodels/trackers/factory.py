@@ -15,7 +15,7 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from .. import SensorModel
 from ..pose import NavigationTrack, PoseSource
-from ..stonesoup.region import PoseCentredRegion
+from ..stonesoup.gmphd.region import PoseCentredRegion
 from .components import gmphd_tracker, jpda_tracker, motion_model
 from .models import (sees_land, sensor_reach, with_coast, with_learned_clutter,
                      with_learned_detection, with_uniform_clutter)

@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from stonesoup.base import Base, Property
 
-from ..pose import PoseSource
+from ...pose import PoseSource
 
 
 class CircularRegion(Base):

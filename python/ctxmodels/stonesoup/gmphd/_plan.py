@@ -17,10 +17,10 @@ from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
 from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
 
-from .. import _core
-from .fast import supports_predictor
-from .measurement import AnalyticCartesianToBearingRange
-from .pointprocess import PHDUpdater
+from ... import _core
+from ..fast import supports_predictor
+from ..measurement import AnalyticCartesianToBearingRange
+from .updater import PHDUpdater
 
 _KALMAN = (KalmanUpdater, ExtendedKalmanUpdater)
 #: Core measurement models by (model value, state dimension, updater types).

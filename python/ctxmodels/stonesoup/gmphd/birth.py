@@ -38,8 +38,8 @@ from stonesoup.base import Base, Property
 from stonesoup.types.array import CovarianceMatrix
 from stonesoup.types.state import TaggedWeightedGaussianState
 
-from ..context import detection_positions
-from ..foreign import as_array_context
+from ...context import detection_positions
+from ...foreign import as_array_context
 
 #: Table I of the paper: track initialisation covariance for [x, vx, y, vy].
 TABLE_I_BIRTH_COVAR = np.diag([10.0, 15.0, 10.0, 15.0]) ** 2

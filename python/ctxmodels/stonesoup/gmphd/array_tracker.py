@@ -54,15 +54,15 @@ from stonesoup.types.mixture import GaussianMixture
 from stonesoup.types.state import TaggedWeightedGaussianState
 from stonesoup.types.track import Track
 
-from .. import _core
-from ..context import DetectorContext, detection_positions
-from ..model_key import scan_model_groups
-from ..foreign import as_array_context
-from .array_plan import _Plan
-from .fast import ObjectFactory, plain_track_lists
-from .ordering import declares_context, in_stable_order
-from .paths import PathCounts
-from .pointprocess import PointProcessMultiTargetTracker
+from ... import _core
+from ...context import DetectorContext, detection_positions
+from ...model_key import scan_model_groups
+from ...foreign import as_array_context
+from ._plan import _Plan
+from ..fast import ObjectFactory, plain_track_lists
+from ..ordering import declares_context, in_stable_order
+from ..paths import PathCounts
+from .tracker import PointProcessMultiTargetTracker
 from .region import CircularRegion, scan_region
 
 _BIRTH_NAME = TaggedWeightedGaussianState.BIRTH
