@@ -5,8 +5,8 @@ hypothesisers and updaters) or once per batch of a few states. Reading the conte
 Properties, converting the pose, checking the position mapping and wrapping the result in
 a new :class:`~stonesoup.types.numeric.Probability` on every call would cost several
 microseconds of Python around a fraction of a microsecond in the core. :class:`ScanCalls`
-does that work once per context: the snapshot of the detection model that the whole scan evaluates (its learned
-factors fixed as they stand, :meth:`~ctxmodels.DetectionProbabilityModel.frozen`), that
+does that work once per context: the snapshot of the detection model that the whole scan
+evaluates (its learned factors fixed as they stand, :meth:`~ctxmodels.DetectionProbabilityModel.frozen`), that
 snapshot in the core at the scan's pose and mapping (and the sensor model's rule for the
 expected P_D of a Gaussian), the clutter model at the pose, and one ``Probability`` per
 distinct P_D value (a scan has a handful: products of band, sector and land values).
