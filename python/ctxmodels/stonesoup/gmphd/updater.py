@@ -1,8 +1,9 @@
 r"""Context-aware GM-PHD and GM-LCC updaters.
 
 Drop-ins for :mod:`stonesoup.updater.pointprocess` (Stone Soup 1.9.1). Given a scan's
-:class:`~ctxmodels.DetectorContext`, the GM-PHD update (Vo & Ma 2006) uses the state-dependent detection probability of each predicted component
-:math:`j` and the clutter intensity of each detection :math:`z`:
+:class:`~ctxmodels.DetectorContext`, the GM-PHD update (Vo & Ma 2006) uses the
+state-dependent detection probability of each predicted component :math:`j` and the
+clutter intensity of each detection :math:`z`:
 
 .. math::
     w^{(j)}_{k|k}(z) = \frac{P_D(m^{(j)}_{k|k-1}; S_k)\, w^{(j)}_{k|k-1}\, q^{(j)}(z)}
