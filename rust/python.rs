@@ -26,13 +26,13 @@ use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
 
+mod at_pose;
 mod clutter_map;
 mod detection_estimate;
+mod gmphd;
 mod initiation;
 mod jpda;
-mod mixture;
 mod particles;
-mod scan;
 
 pyo3::create_exception!(
     ctxmodels._core,
@@ -668,8 +668,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyLandMask>()?;
     m.add_class::<PyLineOfSight>()?;
     m.add_class::<PyDetectionModel>()?;
-    m.add_class::<scan::PyDetectionAtPose>()?;
-    m.add_class::<scan::PyClutterAtPose>()?;
+    m.add_class::<at_pose::PyDetectionAtPose>()?;
+    m.add_class::<at_pose::PyClutterAtPose>()?;
     m.add_class::<PyMetadataThreshold>()?;
     m.add_class::<PyClutterModel>()?;
     m.add_class::<clutter_map::PyClutterMap>()?;
@@ -682,7 +682,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "NotPositiveDefiniteError",
         m.py().get_type::<NotPositiveDefiniteError>(),
     )?;
-    mixture::register(m)?;
+    gmphd::register(m)?;
     jpda::register(m)?;
     initiation::register(m)?;
     Ok(())

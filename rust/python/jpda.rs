@@ -3,7 +3,7 @@
 //! module (C-contiguous float64, fallible borrows, errors naming the argument); the work runs
 //! with the GIL released and a panic becomes a RuntimeError.
 
-use super::scan::PyDetectionAtPose;
+use super::at_pose::PyDetectionAtPose;
 use super::{borrow, detached, slice, to_py, value_error};
 use crate::jpda::{self, Jacobian, MeasurementModel, ScanInput};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};

@@ -1,7 +1,7 @@
 //! Binding of the GM-PHD scan core ([`crate::gmphd`]): a mutable Gaussian mixture kept as
 //! arrays between scans, and the measurement models it updates with.
 
-use super::scan::{PyDetectionAtPose, DETACH_ROWS};
+use super::at_pose::{PyDetectionAtPose, DETACH_ROWS};
 use super::{borrow, detached, guarded, slice, value_error};
 use crate::gmphd::{Jacobian, MeasurementModel, Mixture, ReduceParams, UpdateParams};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
