@@ -2,6 +2,7 @@
 and repeated runs; the stable-order drop-ins (JPDA tracker, M-of-N initiator) equal the stock
 components run in the same order."""
 
+import datetime
 import json
 import os
 import random
@@ -109,6 +110,25 @@ def test_stable_order_depends_on_values_only():
     context = object()
     assert in_stable_order(DetectionSet(detections, context)).detector_context is context
     assert in_stable_order(set(detections)).detector_context is None
+
+
+def test_stable_order_of_converted_rows_is_the_same():
+    """The vectors the scan check converted (in the collection's order) give the same order,
+    detections and float rows as converting them again; rows of another shape are not used."""
+    from ctxmodels.stonesoup.scan_checks import checked_scan_rows
+
+    class Tracker:
+        pass
+    detections = _detections(30, 2)
+    for given in (set(detections), list(detections), detections[:1]):
+        _, items, rows = checked_scan_rows(Tracker(), (datetime.datetime(2024, 1, 1), given))
+        assert rows is not None
+        got, expected = in_stable_order(items, rows), in_stable_order(items)
+        assert list(got) == list(expected)
+        assert np.array_equal(got.vectors, expected.vectors)
+    wrong = np.zeros((len(detections) + 1, 2, 1))
+    assert np.array_equal(in_stable_order(detections, wrong).vectors,
+                          in_stable_order(detections).vectors)
 
 
 def test_track_order_depends_on_content_only():

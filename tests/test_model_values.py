@@ -242,3 +242,41 @@ def test_other_model_types_are_keyed_by_identity():
     assert measurement_model_key(a) == measurement_model_key(a)
     assert measurement_model_key(a) != measurement_model_key(b)
     assert measurement_model_key(None) is None
+
+
+def test_groups_carried_to_a_subset_are_the_subsets_own():
+    """``carry_model_groups`` cuts a scan's remembered groups down to some of its
+    detections: the same groups, order, members and representatives as grouping the
+    subset afresh; a subset whose models differ from the remembered ones is grouped
+    afresh."""
+    import random
+
+    from stonesoup.types.detection import Detection
+
+    from ctxmodels.model_key import carry_model_groups, scan_model_groups
+    from ctxmodels.stonesoup.ordering import OrderedDetections
+
+    rng = random.Random(5)
+    shared = [_bearing_range(), _linear(), None]
+    for _ in range(200):
+        models = [rng.choice(shared + [_bearing_range(), _linear()])
+                  for _ in range(rng.randint(0, 8))]
+        scan = OrderedDetections([Detection(StateVector([0.0, 0.0]), measurement_model=m)
+                                  for m in models])
+        scan_model_groups(scan)  # (remembered on the scan)
+        kept = sorted(rng.sample(range(len(scan)), rng.randint(0, len(scan))))
+        carried = OrderedDetections([scan[k] for k in kept])
+        carry_model_groups(scan, carried, kept)
+        fresh = OrderedDetections(list(carried))
+        got, expected = scan_model_groups(carried), scan_model_groups(fresh)
+        assert list(got) == list(expected)
+        for key in expected:
+            assert got[key][0] is expected[key][0] and got[key][1] == expected[key][1]
+    scan = OrderedDetections([Detection(StateVector([0.0, 0.0]), measurement_model=_linear())
+                              for _ in range(2)])
+    scan_model_groups(scan)
+    moved = OrderedDetections([Detection(StateVector([0.0, 0.0]),
+                                         measurement_model=_bearing_range())])
+    carry_model_groups(scan, moved, [0])  # (not the scan's detection: its model differs)
+    (model, members), = scan_model_groups(moved).values()
+    assert model is moved[0].measurement_model and members == [0]

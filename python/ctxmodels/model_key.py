@@ -10,6 +10,9 @@ model object of each group as the group's representative.
 """
 from __future__ import annotations
 
+from itertools import repeat
+from operator import is_
+
 import numpy as np
 from stonesoup.models.measurement.linear import LinearGaussian
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
@@ -52,18 +55,21 @@ class _NotAValue(Exception):
 def _value(value):
     """An exact, hashable form of one Property value: arrays by type, dtype, shape and
     bytes (so equal forms mean bit-identical numbers, NaN and signed zeros included)."""
-    if value is None or type(value) in (bool, int, str):
-        return value if value is None else (type(value), value)
-    if type(value) is float:
+    kind = type(value)
+    if kind is int or kind is bool or kind is str:
+        return kind, value
+    if value is None:
+        return value
+    if kind is tuple or kind is list:  # (a mapping: ints)
+        return kind, tuple([(int, v) if type(v) is int else _value(v) for v in value])
+    if kind is float:
         return float, np.float64(value).tobytes()
     if isinstance(value, np.ndarray):
         if value.dtype.hasobject:
             raise _NotAValue
-        return type(value), value.dtype, value.shape, value.tobytes()  # (C order)
+        return kind, value.dtype, value.shape, value.tobytes()  # (C order)
     if isinstance(value, np.generic) and not isinstance(value, np.object_):
-        return type(value), value.tobytes()
-    if type(value) in (tuple, list):
-        return type(value), tuple([_value(v) for v in value])
+        return kind, value.tobytes()
     raise _NotAValue
 
 
@@ -94,7 +100,7 @@ def models_by_value(models) -> dict:
     if not models:
         return {}
     first = models[0]
-    if all(model is first for model in models):
+    if all(map(is_, models, repeat(first))):  # (identity, at C speed)
         return {measurement_model_key(first): (first, list(range(len(models))))}
     groups: dict = {}
     keys: dict = {}  # id -> key: each object keyed once (the list holds them alive)
@@ -118,7 +124,7 @@ def scan_model_groups(detections) -> dict:
     models = [getattr(det, "measurement_model", None) for det in detections]
     cached = getattr(detections, "_model_groups", None)
     if cached is not None and len(cached[0]) == len(models) \
-            and all(a is b for a, b in zip(cached[0], models)):
+            and all(map(is_, cached[0], models)):
         return cached[1]
     groups = models_by_value(models)
     try:
@@ -128,5 +134,45 @@ def scan_model_groups(detections) -> dict:
     return groups
 
 
-__all__ = ["compared_by_value", "measurement_model_key", "models_by_value",
-           "scan_model_groups"]
+def carry_model_groups(source, target, kept) -> None:
+    """Remembers on ``target`` — the detections of ``source`` at the positions ``kept``
+    (ascending), in that order — their :func:`scan_model_groups`, cut from the groups
+    remembered on ``source`` instead of keying the models again: a group keeps its members
+    among ``kept`` (renumbered), its representative becomes its first such member's model,
+    and the groups stay in first-appearance order. Nothing when ``source`` has no groups
+    remembered or ``target`` takes no attributes; :func:`scan_model_groups` still checks
+    the remembered models against ``target``'s own."""
+    cached = getattr(source, "_model_groups", None)
+    if cached is None or len(cached[0]) != len(source):
+        return
+    models, groups = cached
+    kept = list(kept)
+    if len(kept) == len(models):  # all of them: the same models and groups
+        try:
+            target._model_groups = cached
+        except AttributeError:
+            pass
+        return
+    kept_models = [models[i] for i in kept]
+    if len(groups) == 1:  # one model value: one group of them all (or none)
+        key, = groups
+        cut = {key: (kept_models[0], list(range(len(kept))))} if kept else {}
+    else:
+        position = [-1] * len(models)
+        for new, old in enumerate(kept):
+            position[old] = new
+        firsts = []
+        for key, (_, members) in groups.items():
+            renumbered = [position[i] for i in members if position[i] >= 0]
+            if renumbered:
+                firsts.append((renumbered[0], key, renumbered))
+        firsts.sort(key=lambda entry: entry[0])  # (first members are distinct)
+        cut = {key: (kept_models[members[0]], members) for _, key, members in firsts}
+    try:
+        target._model_groups = (kept_models, cut)
+    except AttributeError:
+        pass
+
+
+__all__ = ["carry_model_groups", "compared_by_value", "measurement_model_key",
+           "models_by_value", "scan_model_groups"]

@@ -140,32 +140,33 @@ class ArrayDeletion:
                 counting.append(("expected", float(member.default_prob_detect)))
         return counting
 
-    def _count(self, track, length, backed, state, prob_detect, counting):
-        """Counts ``state``, just appended to ``track`` (of ``length`` states before; is it
-        ``backed`` by a detection), into the track's miss counter."""
-        if not counting:
-            return
-        counter = self._counters.get(track)
-        if counter is None or counter.length != length:
-            self._counters.pop(track, None)
-            return  # re-read from the track when next needed
-        counter.length += 1
-        values = counter.values
-        for k, (kind, default) in enumerate(counting):
-            if kind == "steps":
-                if backed:
-                    values[k] = {state.timestamp}
+    def _count(self, tracks, lengths, backed, timestamp, prob_detect, counting):
+        """Counts each track's state at ``timestamp``, just appended to it, into the track's
+        miss counter; per track (aligned lists) its ``length`` before the append, whether
+        the state is ``backed`` by a detection and the P_D of the scan."""
+        counters = self._counters
+        for track, length, is_backed, pd_scan in zip(tracks, lengths, backed, prob_detect):
+            counter = counters.get(track)
+            if counter is None or counter.length != length:
+                counters.pop(track, None)
+                continue  # re-read from the track when next needed
+            counter.length = length + 1
+            values = counter.values
+            for k, (kind, default) in enumerate(counting):
+                if kind == "steps":
+                    if is_backed:
+                        values[k] = {timestamp}
+                    else:
+                        values[k].add(timestamp)
+                elif kind == "time":
+                    if is_backed and (values[k] is None or timestamp > values[k]):
+                        values[k] = timestamp
+                elif is_backed:
+                    values[k] = []
                 else:
-                    values[k].add(state.timestamp)
-            elif kind == "time":
-                if backed and (values[k] is None or state.timestamp > values[k]):
-                    values[k] = state.timestamp
-            elif backed:
-                values[k] = []
-            else:
-                pd = prob_detect if default is None else default
-                if pd != 0.0:
-                    values[k].append(pd)
+                    pd = pd_scan if default is None else default
+                    if pd != 0.0:
+                        values[k].append(pd)
 
     def _read_counter(self, track, plan):
         """The counter of ``track`` read from its states (once per track, or after a change
@@ -196,10 +197,12 @@ class ArrayDeletion:
         self._counters[track] = counter
         return counter
 
-    def _delete(self, tracks, detections, latest=None):
+    def _delete(self, tracks, detections, latest=None, counted_now=frozenset()):
         """The tracks of ``tracks`` to delete. ``latest``: (the scan's tracks in order,
         their posterior means (N, D), covariances (N, D, D), the scan time), which a
-        pairwise member reads when they are all of ``tracks``."""
+        pairwise member reads when they are all of ``tracks``. ``counted_now``: plain tracks
+        whose one state of this scan was just appended to their lists and counted
+        (:meth:`_count`): a counter they still have describes them."""
         plan = self._deletion_plan()
         if plan is None:
             deleter = self.deleter
@@ -221,7 +224,7 @@ class ArrayDeletion:
             elif kind == "pairwise":
                 checks.append((kind, k, _pairwise_verdicts(member, tracks, latest)))
             else:
-                checks.append((kind, k, _covariance_check(member)))
+                checks.append((kind, k, _covariance_check(member, latest)))
         deleted = set()
         counters = self._counters
         intersect = plan.intersect
@@ -229,7 +232,8 @@ class ArrayDeletion:
         for track in tracks:
             if counted:
                 counter = counters.get(track)
-                if counter is None or counter.length != _track_length(track):
+                if counter is None or (track not in counted_now
+                                       and counter.length != _track_length(track)):
                     counter = self._read_counter(track, plan)
             # the composite's rule, member by member in its order: all (intersect) or any
             verdict = intersect
@@ -316,22 +320,35 @@ class _DeletionPlan:
         return self._signature(deleter) == self._seen
 
 
-def _covariance_check(deleter):
+def _covariance_check(deleter, latest=None):
     """``CovarianceBasedDeleter.check_for_deletion`` as a function of the track: Stone Soup
     1.9.1 deletes when the sum of the last state's covariance diagonal over ``mapping`` (all
     of it when ``mapping`` is None or empty) is strictly greater than ``covar_trace_thresh``.
     With a list of one or two plain int indices and a float threshold the sum is read
     directly (NumPy's sum of two float64 is their one IEEE addition, so the verdict is the
     same); any other mapping or threshold, or a covariance that is not a 2-D float64 array,
-    asks the deleter."""
+    asks the deleter. ``latest`` (see :meth:`ArrayDeletion._delete`): the scan's posterior
+    covariances, whose sums are taken for all its plain tracks at once (each such track's
+    last state holds its row: the same numbers, the same additions)."""
     mapping = deleter.mapping
     threshold = deleter.covar_trace_thresh
     if not (type(mapping) is list and 0 < len(mapping) <= 2
             and all(type(i) is int for i in mapping) and type(threshold) is float):
         return lambda track: bool(deleter.check_for_deletion(track))
     i, j = mapping if len(mapping) == 2 else (mapping[0], None)
+    scan: dict = {}
+    if latest is not None:
+        covars = latest[2]
+        size = covars.shape[1]
+        if covars.dtype == np.float64 and -size <= min(i, j or 0) and max(i, j or 0) < size:
+            traces = covars[:, i, i] if j is None else covars[:, i, i] + covars[:, j, j]
+            scan = {track: says for track, says in zip(latest[0], (traces > threshold).tolist())
+                    if plain_track_lists(track) is not None}  # (appended to its list)
 
     def check(track) -> bool:
+        says = scan.get(track)
+        if says is not None:
+            return says
         lists = plain_track_lists(track)
         covar = (track.states if lists is None else lists[0])[-1].covar
         if not (type(covar) in _COVARIANCE_TYPES and covar.dtype == np.float64

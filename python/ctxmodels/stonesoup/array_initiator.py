@@ -50,6 +50,9 @@ stamped with the scan time.
 """
 from __future__ import annotations
 
+from itertools import compress
+from operator import attrgetter
+
 import numpy as np
 from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
 from stonesoup.hypothesiser.distance import DistanceHypothesiser
@@ -66,7 +69,7 @@ from .initiator_births import Births
 from .initiator_history import Block, Holding, Update, materialise
 from .initiator_scan import Rows, ScanCore
 from .mixture_tracker import MultiMeasurementInitiator
-from .ordering import OrderedDetections, in_stable_order, in_track_order
+from .ordering import OrderedDetections, in_stable_order, in_track_order, ordered_subset
 
 
 class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
@@ -192,8 +195,9 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         if a holding track cannot be held as arrays."""
         live = self._holding
         records = self._records
-        built = [r.track for r in records if r.track is not None]
-        if len(built) == len(live) and all(t in live for t in built):
+        tracks = list(map(attrgetter("track"), records))  # (most rows are unbuilt: None)
+        if len(tracks) - tracks.count(None) == len(live) \
+                and (not live or all(t in live for t in tracks if t is not None)):
             return True
         keep = [k for k, r in enumerate(records) if r.track is None or r.track in live]
         present = {id(records[k].track) for k in keep if records[k].track is not None}
@@ -265,8 +269,9 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         associated = set()
         if scan:
             self._advance(scan, detections, timestamp, associated, sure_tracks)
-        new, births = self._births.arrays(
-            self.initiator, [d for d in detections if id(d) not in associated], timestamp)
+        free = detections if not associated else ordered_subset(  # (grouped, converted once)
+            detections, [id(d) not in associated for d in detections])
+        new, births = self._births.arrays(self.initiator, free, timestamp)
         if new or not self._add_births(births, ndim, timestamp):
             new.update(self._births.track(*birth) for birth in births)
             self._holding |= new
@@ -294,7 +299,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._records = self._records + [Holding(None, self._next_block, first + k, birth)
                                          for k, birth in enumerate(births)]
         self._serials = self._serials + list(range(first, first + n))
-        means = np.array([b[1][:, 0] for b in births])
+        means = np.ascontiguousarray(np.array([b[1] for b in births])[:, :, 0])
         covars = np.array([b[2] for b in births])
         self._means = means if self._means is None else np.concatenate([self._means, means])
         self._covars = covars if self._covars is None else np.concatenate([self._covars, covars])
@@ -344,7 +349,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._blocks[self._next_block] = block
         self._next_block += 1
         assigned = out["assigned"]
-        rows = np.flatnonzero(assigned >= 0)
+        rows = (assigned >= 0).nonzero()[0]
         columns = assigned[rows].tolist()
         bearing, model_index = out["bearing"], out["model_index"]
         post_means = out["means"][:, :, np.newaxis]
@@ -363,7 +368,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         self._deletion.advance(out["since"], rows, timestamp, missed, prob_detect)
         self._last_times = [timestamp] * len(records)
         released, expired = out["released"], out["expired"]
-        for k in np.flatnonzero(released).tolist():
+        for k in released.nonzero()[0].tolist():
             record = records[k]
             self._materialise(record)
             sure_tracks.add(record.track)
@@ -371,18 +376,18 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
         keep = ~(released | expired)
         if getattr(self.deleter, "time_steps_since_update", None) is None:
             # (an UpdateTimeDeleter: its verdicts from the rows' detection times)
-            for k in self._deletion.expired(self.deleter, np.flatnonzero(keep).tolist(),
+            for k in self._deletion.expired(self.deleter, keep.nonzero()[0].tolist(),
                                             self._last_times):
                 keep[k] = False
-        for k in np.flatnonzero(~keep & ~released).tolist():
-            if records[k].track is not None:
-                self._holding.discard(records[k].track)
         self._means, self._covars = out["means"], out["covars"]
         if not keep.all():
+            for k in (~keep & ~released).nonzero()[0].tolist():
+                if records[k].track is not None:
+                    self._holding.discard(records[k].track)
             kept = keep.tolist()
-            self._records = [r for r, k in zip(records, kept) if k]
-            self._serials = [r for r, k in zip(self._serials, kept) if k]
-            self._last_times = [t for t, k in zip(self._last_times, kept) if k]
+            self._records = list(compress(records, kept))
+            self._serials = list(compress(self._serials, kept))
+            self._last_times = [timestamp] * len(self._records)
             self._means, self._covars = self._means[keep], self._covars[keep]
             self._counted = self._counted[keep]
             self._deletion.take(keep)

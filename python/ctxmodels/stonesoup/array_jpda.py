@@ -85,6 +85,7 @@ from __future__ import annotations
 import numpy as np
 from stonesoup.dataassociator.probability import JPDA, JPDAwithEHM, JPDAwithEHM2
 from stonesoup.hypothesiser.probability import PDAHypothesiser as _StockPDAHypothesiser
+from stonesoup.base import Property
 from stonesoup.types.array import CovarianceMatrix, Matrix, StateVector
 from stonesoup.types.detection import Detection, MissedDetection
 from stonesoup.types.hypothesis import SingleHypothesis, SingleProbabilityHypothesis
@@ -107,7 +108,7 @@ from .hypothesiser import PDAHypothesiser, gate_threshold, is_detection_backed, 
 from .measurement import jpda_core_model
 from .mixture_tracker import MultiTargetMixtureTracker
 from .paths import PathCounts
-from .ordering import OrderedDetections, context_kwargs, in_track_order
+from .ordering import context_kwargs, in_track_order, ordered_subset
 
 _ASSOCIATORS = (JPDAwithEHM2, JPDAwithEHM, JPDA)
 #: Prior state vector and covariance types the array path takes: float64 and the integer
@@ -152,6 +153,9 @@ class _ScanHypotheses(MultipleHypothesis):
     def single_hypotheses(self, value):
         self.__dict__["_property_single_hypotheses"] = value
         self.__dict__.pop("_pending", None)
+
+    def __bool__(self):  # (pending: the missed detection and the gated ones, never empty)
+        return "_pending" in self.__dict__ or len(self) > 0
 
     def __len__(self):  # bool() of an update (deleters ask it) without building anything
         pending = self.__dict__.get("_pending")
@@ -218,16 +222,50 @@ def _updater_supported(updater) -> bool:
 
 # --- tracks -------------------------------------------------------------------------------
 _GAUSSIAN_PRIOR_TYPES: dict = {}
+_PRIOR_FIELDS = ("state_vector", "covar", "timestamp")
 
 
-def _gaussian_prior_type(kind: type) -> bool:
+def _gaussian_prior_type(kind: type):
     """Whether the array path can take a last state of type ``kind`` as a prior (a
-    :class:`GaussianState` whose Properties a prediction copies are known), per type."""
+    :class:`GaussianState` whose Properties a prediction copies are known), per type: False,
+    or how its fields are read — "plain" when ``state_vector``, ``covar`` and ``timestamp``
+    are plain Stone Soup Properties (no getter, no attribute hook: the value is the
+    instance's ``_property_<name>`` entry), else "attributes"."""
     known = _GAUSSIAN_PRIOR_TYPES.get(kind)
     if known is None:
-        known = _GAUSSIAN_PRIOR_TYPES[kind] = (issubclass(kind, GaussianState)
-                                                and _copied_properties(kind) is not None)
+        if not (issubclass(kind, GaussianState) and _copied_properties(kind) is not None):
+            known = False
+        else:
+            plain = kind.__getattribute__ is object.__getattribute__ \
+                and not hasattr(kind, "__getattr__")
+            for name in _PRIOR_FIELDS:
+                found = next((c.__dict__[name] for c in kind.__mro__ if name in c.__dict__),
+                             None)
+                plain = plain and type(found) is Property and found._getter is None \
+                    and found._property_name == f"_property_{name}"
+            known = "plain" if plain else "attributes"
+        _GAUSSIAN_PRIOR_TYPES[kind] = known
     return known
+
+
+def _prior_fields(prior):
+    """``(state_vector, covar, timestamp)`` of a track's last state (each None when
+    missing), or None when its type is not one :func:`_gaussian_prior_type` takes. Read from
+    the instance dictionary for plain Properties (the value their getter returns)."""
+    kind = _GAUSSIAN_PRIOR_TYPES.get(type(prior))
+    if kind is None:
+        kind = _gaussian_prior_type(type(prior))
+    if not kind:
+        return None
+    if kind == "plain":
+        fields = prior.__dict__
+        try:
+            return (fields["_property_state_vector"], fields["_property_covar"],
+                    fields["_property_timestamp"])
+        except KeyError:
+            pass
+    return (getattr(prior, "state_vector", None), getattr(prior, "covar", None),
+            getattr(prior, "timestamp", None))
 
 
 def _is_backed(state) -> bool:
@@ -346,49 +384,57 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
 
         predictor = hypothesiser.predictor
         ndim = predictor.transition_model.ndim_state
-        priors, vectors, covars, stamps = [], [], [], []
+        track_lists, priors, vectors, covars, stamps = [], [], [], [], []
+        vector_shape, covar_shape = (ndim, 1), (ndim, ndim)
         for track in tracks:
             lists = plain_track_lists(track)
             prior = track.state if lists is None else lists[0][-1]
-            vector, covar = getattr(prior, "state_vector", None), getattr(prior, "covar", None)
-            stamp = getattr(prior, "timestamp", None)
-            if not (_gaussian_prior_type(type(prior))
+            fields = _prior_fields(prior)
+            if fields is not None:
+                vector, covar, stamp = fields
+            if not (fields is not None
                     and isinstance(vector, np.ndarray) and vector.dtype in _PRIOR_DTYPES
-                    and vector.shape == (ndim, 1) and isinstance(covar, np.ndarray)
-                    and covar.dtype in _PRIOR_DTYPES and covar.shape == (ndim, ndim)
+                    and vector.shape == vector_shape and isinstance(covar, np.ndarray)
+                    and covar.dtype in _PRIOR_DTYPES and covar.shape == covar_shape
                     and stamp is not None):
                 return (f"a track whose last state (a {type(prior).__name__}) is not a "
                         "float64 or integer Gaussian state of the transition model's size "
                         "with a timestamp")
+            track_lists.append(lists)
             priors.append(prior)
             vectors.append(vector)
             covars.append(covar)
             stamps.append(stamp)
 
         taken_mask = latest = None
+        counted_now = frozenset()
         if tracks:
             scan = self._run_core(time, detections, tracks, priors, (vectors, covars, stamps),
                                   hypothesiser, context, core_model, bearing_row)
             if isinstance(scan, str):
                 return scan
             scan_result, out, prob_detect = scan
-            self._append_states(time, tracks, priors, scan_result, out, prob_detect,
-                                hypothesiser)
+            self._append_states(time, tracks, track_lists, priors, scan_result, out,
+                                prob_detect, hypothesiser)
             taken_mask = out["taken"]
             latest = (tracks, out["means"], out["covars"], time)
+            counted_now = set(tracks) if None not in track_lists else {
+                track for track, lists in zip(tracks, track_lists) if lists is not None}
         # deletion, then the initiator on the detections no track took (as the stock loop),
         # each handed the scan's context as the component path hands it
-        self._tracks -= self._delete(self._tracks, detections, latest)
-        free = list(detections) if taken_mask is None else \
-            [d for d, taken in zip(detections, taken_mask.tolist()) if not taken]
+        self._tracks -= self._delete(self._tracks, detections, latest, counted_now)
+        free = None if taken_mask is None or not taken_mask.any() else ~taken_mask
         if isinstance(self.initiator, ArrayMultiMeasurementInitiator):
-            unassociated = OrderedDetections(free)  # still in stable order: not sorted again
-        else:
-            unassociated = set(free)  # what the stock loop hands over
+            # still in stable order: not sorted again; models grouped, vectors converted once
+            unassociated = ordered_subset(detections, free)
+        else:  # what the stock loop hands over
+            unassociated = set(detections if free is None else
+                               [d for d, kept in zip(detections, free.tolist()) if kept])
         new = self.initiator.initiate(unassociated, time,
                                       **context_kwargs(detections, self.initiator.initiate))
-        self._tracks |= new
-        self._order.update(dict.fromkeys(in_track_order(new)))
+        if new:
+            self._tracks |= new
+            self._order.update(dict.fromkeys(in_track_order(new)))
         return time, self.tracks
 
     def _empty_model(self, hypothesiser):
@@ -410,25 +456,28 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
         means = np.array(vectors, dtype=np.float64)[:, :, 0]
         covars = np.array(covars, dtype=np.float64)
         intervals: dict = {}
-        index = []
-        for stamp in stamps:
-            interval = time - stamp
-            k = intervals.get(interval)
-            if k is None:
-                k = intervals[interval] = len(intervals)
-            index.append(k)
+        if stamps.count(stamps[0]) == len(stamps):  # (the usual scan: one previous time)
+            intervals[time - stamps[0]] = 0
+            index = [0] * len(stamps)
+        else:
+            index = []
+            for stamp in stamps:
+                interval = time - stamp
+                k = intervals.get(interval)
+                if k is None:
+                    k = intervals[interval] = len(intervals)
+                index.append(k)
         matrices, noises = [], []
         for interval in intervals:
             prior = priors[index.index(intervals[interval])]
             matrices.append(np.asarray(transition.matrix(time_interval=interval), dtype=np.float64))
-            offset, ctrl_noise = self._control_terms(control, prior, interval)
-            offset = np.asarray(offset, dtype=np.float64)
-            ctrl_noise = np.asarray(ctrl_noise, dtype=np.float64)
-            if np.any(offset) or np.any(ctrl_noise):
+            if self._control_terms.adds_input(control, prior, interval):
                 return "a control input (the core predicts without one)"
             noises.append(np.asarray(transition.covar(time_interval=interval), dtype=np.float64))
-        matrices = np.ascontiguousarray(np.stack(matrices))
-        noises = np.ascontiguousarray(np.stack(noises))
+        matrices = np.ascontiguousarray(
+            matrices[0][np.newaxis] if len(matrices) == 1 else np.stack(matrices))
+        noises = np.ascontiguousarray(
+            noises[0][np.newaxis] if len(noises) == 1 else np.stack(noises))
         means, covars = np.ascontiguousarray(means), np.ascontiguousarray(covars)
         # λ per detection and P_D per track, as the (ctxmodels) hypothesiser takes them
         if not detections:
@@ -436,16 +485,18 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
             z = np.empty((0, core_model.ndim_meas))
         else:
             if context is None:
-                clutter = np.full(len(detections), float(hypothesiser.clutter_spatial_density))
+                clutter = _filled(len(detections), float(hypothesiser.clutter_spatial_density))
             else:
                 clutter = np.asarray(hypothesiser.scan_clutter(context, context, detections),
                                      dtype=np.float64)
-            z = np.ascontiguousarray(
-                np.array([d.state_vector for d in detections], dtype=np.float64)[:, :, 0])
+            rows = getattr(detections, "vectors", None)  # (an OrderedDetections' float rows)
+            if not (isinstance(rows, np.ndarray) and rows.shape[0] == len(detections)):
+                rows = np.array([d.state_vector for d in detections], dtype=np.float64)[:, :, 0]
+            z = np.ascontiguousarray(rows)
         predict = dict(transition_index=index, transition_matrices=matrices,
                        transition_covars=noises)
         if context is None:
-            prob_detect = np.full(len(tracks), float(hypothesiser.prob_detect))
+            prob_detect = _filled(len(tracks), float(hypothesiser.prob_detect))
         else:
             # a ctxmodels context reading P_D at the mean: its model at the pose, read in
             # the core at each predicted mean; any other: its array route on the prediction
@@ -482,7 +533,10 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
             scan.bearing_type = Bearing
         return scan, out, out["prob_detect"]
 
-    def _append_states(self, time, tracks, priors, scan, out, prob_detect, hypothesiser):
+    def _append_states(self, time, tracks, track_lists, priors, scan, out, prob_detect,
+                       hypothesiser):
+        """Appends each track's state of the scan; ``track_lists``: each track's
+        :func:`plain_track_lists`, read before the scan."""
         means = out["means"][:, :, np.newaxis]
         covars = out["covars"]
         updates = out["is_update"].tolist()
@@ -494,8 +548,9 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
         marginals = out["marginals"]
         detections = scan.detections
         new_update, new_prediction = _NEW_UPDATE, _NEW_PREDICTION
+        lengths = []  # each track's length before its state of this scan
         for t, track in enumerate(tracks):
-            lists = plain_track_lists(track)
+            lists = track_lists[t]
             if records:
                 if lists is None:
                     hypothesiser._record(track, time, pd_list[t])
@@ -509,43 +564,53 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
             if updates[t]:
                 hypothesis = _lazy_hypothesis(scan, t, priors[t])
                 state = new_update(mean, covar, hypothesis, time)
-                columns = np.flatnonzero(gated[t]).tolist()
-                metadata = self._update_metadata(track, detections, columns, marginals[t])
+                columns = gated[t].nonzero()[0].tolist()
+                metadata = self._update_metadata(track, lists, detections, columns,
+                                                 marginals[t])
             else:
                 state = new_prediction(mean, covar, time)
                 metadata = None
-            length = self._append(track, lists, state, metadata)
-            # an update here always has detection hypotheses: it is detection-backed
-            self._count(track, length, updates[t], state, pd_list[t], counting)
+            if lists is None:
+                length = len(track)
+                track.append(state)  # another track type: its own bookkeeping
+            else:  # what Track.append does
+                states, metadatas = lists
+                if metadata is None:
+                    metadata = (metadatas[-1] if metadatas else track.init_metadata).copy()
+                metadatas.append(metadata)
+                states.append(state)
+                length = len(states) - 1
+            lengths.append(length)
+        if counting:  # an update here always has detection hypotheses: detection-backed
+            self._count(tracks, lengths, updates, time, pd_list, counting)
 
     @staticmethod
-    def _update_metadata(track, detections, columns, marginals):
+    def _update_metadata(track, lists, detections, columns, marginals):
         """The metadata Stone Soup's ``Track.append`` derives from a JPDA update: the
-        previous metadata, updated with the metadata of each detection hypothesis in
-        ascending probability (a stable sort: ties keep detection order), the most likely
-        last."""
-        metadata = track.metadata.copy()
-        order = sorted(range(len(columns)), key=lambda k: marginals[1 + columns[k]])
-        for k in order:
-            extra = detections[columns[k]].metadata
+        previous metadata (``lists``: the track's :func:`plain_track_lists`), updated with
+        the metadata of each detection hypothesis in ascending probability (a stable sort:
+        ties keep detection order), the most likely last."""
+        if lists is None:
+            metadata = track.metadata.copy()
+        else:
+            metadatas = lists[1]
+            metadata = (metadatas[-1] if metadatas else track.init_metadata).copy()
+        if len(columns) > 1:
+            weights = marginals.tolist()
+            columns = sorted(columns, key=lambda j: weights[1 + j])
+        for j in columns:
+            extra = detections[j].metadata
             if extra is not None:
                 metadata.update(extra)
         return metadata
 
-    @staticmethod
-    def _append(track, lists, state, metadata) -> int:
-        """Appends ``state`` (and its metadata, as ``Track.append`` would) to ``track``;
-        returns the track's length before."""
-        if lists is None:
-            length = len(track)
-            track.append(state)  # another track type: its own bookkeeping
-            return length
-        states, metadatas = lists
-        if metadata is None:
-            metadata = (metadatas[-1] if metadatas else track.init_metadata).copy()
-        metadatas.append(metadata)
-        states.append(state)
-        return len(states) - 1
+
+
+def _filled(n: int, value: float) -> np.ndarray:
+    """``np.full(n, value)`` of a float, without its Python-level steps."""
+    array = np.empty(n)
+    array.fill(value)
+    return array
 
 
 def _core_detection(context):

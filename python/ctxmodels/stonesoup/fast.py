@@ -171,6 +171,17 @@ class ObjectFactory:
         if not self.fast or any(key not in keys for key, _, _ in self._factories):
             return lambda *values: self(**dict(zip(names, values)))
         new, cls = object.__new__, self.cls
+        if len(keys) == 3:  # (a prediction per track and scan: the slots set one by one)
+            template = dict.fromkeys(keys)  # (as make orders them: these, then the defaults)
+            template.update(constants)
+            first, second, third = keys
+
+            def make3(a, b, c):
+                obj = new(cls)
+                obj.__dict__ = slots = template.copy()
+                slots[first], slots[second], slots[third] = a, b, c
+                return obj
+            return make3
 
         def make(*values):
             obj = new(cls)
@@ -370,10 +381,11 @@ def _bearing_range_prediction(rotated):
                      0.0 + np.sqrt(rotated[:, 0] ** 2 + rotated[:, 1] ** 2)], axis=1)
 
 
-def _analytic_bearing_range_batch(model, means, covars, timestamp):
+def _analytic_bearing_range_batch(model, means, covars, timestamp, jacobians_only=False):
     """:class:`AnalyticCartesianToBearingRange`: the model's closed-form Jacobian for all
     states at once (the same elementwise code its ``jacobian`` runs for one state); a state
-    at the sensor (ρ = 0) takes the model's own finite-difference fallback."""
+    at the sensor (ρ = 0) takes the model's own finite-difference fallback. With
+    ``jacobians_only`` the other three results are None (not computed)."""
     ndim = means.shape[1]
     x = means[..., 0]
     rotation = model.rotation_matrix
@@ -386,6 +398,8 @@ def _analytic_bearing_range_batch(model, means, covars, timestamp):
         state = GaussianStatePrediction(means[i].view(StateVector),
                                         covars[i].view(CovarianceMatrix), timestamp=timestamp)
         jac[i] = model.jacobian(state)
+    if jacobians_only:
+        return None, None, None, jac
     pred = _bearing_range_prediction(rotated)
     cross = covars @ jac.transpose(0, 2, 1)
     innov = (jac @ cross) + np.asarray(model.covar(), dtype=np.float64)

@@ -20,7 +20,7 @@ from stonesoup.types.state import GaussianState
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
-from ..model_key import measurement_model_key
+from ..model_key import models_by_value, scan_model_groups
 from .fast import ObjectFactory, _analytic_bearing_range_batch, _bearing_range_batch
 from .measurement import AnalyticCartesianToBearingRange
 
@@ -63,13 +63,14 @@ class _TrackFactory:
         return self._build(state) if self.fast else Track([state])
 
 
-def inverse_bearing_range(model, detections) -> list:
+def inverse_bearing_range(model, detections, rows=None) -> list:
     """``model.inverse_function(det)`` of a 2-D bearing–range model for each detection, with
     the same operations. A detection typed (Bearing, float), as the model's own measurements
     are, runs the stock code on object arrays: ``ρ cos φ`` and ``ρ sin φ`` (the Bearing's own
     NumPy cosine and sine), then the inverse rotation as an object product (Python floats,
     ``(a₀x + a₁y) + a₂·0``, in order) plus the offset; float arrays compute the same bits
-    for all such detections at once. Others take the stock function's steps one by one."""
+    for all such detections at once. Others take the stock function's steps one by one.
+    ``rows``: the detections' vectors converted to float rows ``(M, 2)``, if known."""
     if not (model.rotation_offset[0] == 0 and model.rotation_offset[1] == 0):
         return [model.inverse_function(det) for det in detections]  # the stock error
     inverse_rotation = _nonlinear.inv(model.rotation_matrix)
@@ -79,7 +80,10 @@ def inverse_bearing_range(model, detections) -> list:
     typed = [k for k, det in enumerate(detections) if _bearing_typed(det.state_vector)]
     if typed and type(inverse_rotation) is np.ndarray and inverse_rotation.shape == (3, 3) \
             and inverse_rotation.dtype == np.float64 and offset.dtype == np.float64:
-        z = np.array([detections[k].state_vector for k in typed], dtype=np.float64)[:, :, 0]
+        if rows is not None:
+            z = rows[typed]
+        else:
+            z = np.array([detections[k].state_vector for k in typed], dtype=np.float64)[:, :, 0]
         x, y = z[:, 1] * np.cos(z[:, 0]), z[:, 1] * np.sin(z[:, 0])
         vectors = np.zeros((len(typed), model.ndim_state, 1))
         for r in range(2):
@@ -101,7 +105,7 @@ def inverse_bearing_range(model, detections) -> list:
 def _bearing_typed(vector) -> bool:
     if vector.dtype != object or vector.shape != (2, 1):
         return False
-    phi, rho = vector[0, 0], vector[1, 0]
+    (phi,), (rho,) = vector.tolist()  # (an object array's own elements)
     return type(phi) is Bearing and type(rho) in _FLOATS
 
 
@@ -132,24 +136,36 @@ class Births:
         birth being the arguments of :meth:`track` (the detection, the state's mean
         ``(D, 1)`` and covariance, the prior state)."""
         births: list = []
+        if not isinstance(detections, list):
+            detections = list(detections)
         if type(inner) is not SimpleMeasurementInitiator:
             return inner.initiate(set(detections), timestamp), births
         if not detections:
             return set(), births
-        groups: dict = {}
+        # by value: equal models in different objects are one group (its first), each
+        # model object keyed once (the scan's groups, when remembered on the collection)
+        by_value = scan_model_groups(detections)
+        if None in by_value:  # detections without a model: the inner initiator's
+            fallback = inner.measurement_model
+            by_value = models_by_value([
+                fallback if det.measurement_model is None else det.measurement_model
+                for det in detections])
+        rows = getattr(detections, "vectors", None)  # (an OrderedDetections' float rows)
+        if not (isinstance(rows, np.ndarray) and rows.dtype == np.float64
+                and rows.shape == (len(detections), 2)):
+            rows = None
+        groups = []
         other = []
-        for det in detections:
-            model = det.measurement_model if det.measurement_model is not None \
-                else inner.measurement_model
+        for model, members in by_value.values():
             if type(model) is LinearGaussian or _bearing_range(model):
-                # by value: equal models in different objects are one group (its first)
-                groups.setdefault(measurement_model_key(model), (model, []))[1].append(det)
+                groups.append((model, [detections[i] for i in members],
+                               None if rows is None else rows[members]))
             else:
-                other.append(det)
+                other.extend(detections[i] for i in members)
         tracks = inner.initiate(set(other), timestamp) if other else set()
         prior = inner.prior_state
         load = np.diag(np.array([inner.diag_load] * len(prior.state_vector)))
-        for model, dets in groups.values():
+        for model, dets, dets_rows in groups:
             prior_vector = prior.state_vector.copy()
             prior_covar = prior.covar.copy()
             mapped = model.mapping
@@ -159,22 +175,27 @@ class Births:
             noise = model.covar()
             if type(model) is LinearGaussian:
                 inverse, covar = self._linear(model, noise, prior_covar, load)
-                vectors = [inverse @ det.state_vector for det in dets]
+                vectors = [prior_vector + (inverse @ det.state_vector) for det in dets]
                 covars = [covar.copy() for _ in dets]  # one array per state, as stock
             else:
-                vectors = inverse_bearing_range(model, dets)
+                vectors = inverse_bearing_range(model, dets, dets_rows)
                 means = np.array(vectors, dtype=np.float64)
                 zeros = np.zeros((len(dets),) + (means.shape[1],) * 2)
                 # the model's own Jacobian, state by state, bit for bit
                 if type(model) is AnalyticCartesianToBearingRange:
-                    _, _, _, jacobians = _analytic_bearing_range_batch(model, means, zeros, None)
+                    jacobians = _analytic_bearing_range_batch(model, means, zeros, None,
+                                                              jacobians_only=True)[3]
                 else:
                     _, _, _, jacobians = _bearing_range_batch(model, means, zeros)
                 inverses = np.linalg.pinv(jacobians)
                 stacked = (inverses @ np.asarray(noise)[np.newaxis]) @ inverses.transpose(0, 2, 1)
                 # (C + P₀) + L matrix by matrix, as the stock sum of the three
                 covars = list((stacked + np.asarray(prior_covar)) + np.asarray(load))
-            births.extend((det, prior_vector + vector, covar, prior)
+                if prior_vector.dtype == np.float64:  # (as every vector: one addition for all)
+                    vectors = [mean.view(StateVector) for mean in np.asarray(prior_vector) + means]
+                else:
+                    vectors = [prior_vector + vector for vector in vectors]
+            births.extend((det, vector, covar, prior)
                           for det, vector, covar in zip(dets, vectors, covars))
         return tracks, births
 

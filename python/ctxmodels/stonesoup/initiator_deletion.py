@@ -16,6 +16,7 @@ tracks (whose coasting predictions are not even appended yet).
 from __future__ import annotations
 
 import datetime
+from itertools import compress
 
 import numpy as np
 from stonesoup.deleter.time import UpdateTimeDeleter
@@ -76,7 +77,10 @@ class HoldingCounts:
         """Keeps the rows ``keep`` (indices, or a boolean mask), in that order."""
         self.since = self.since[keep]
         if isinstance(keep, np.ndarray) and keep.dtype == bool:
-            keep = np.flatnonzero(keep).tolist()
+            mask = keep.tolist()
+            self.backed = list(compress(self.backed, mask))
+            self.misses = list(compress(self.misses, mask))
+            return
         self.backed = [self.backed[k] for k in keep]
         self.misses = [self.misses[k] for k in keep]
 

@@ -16,13 +16,15 @@ from stonesoup.types.hypothesis import SingleDistanceHypothesis
 from stonesoup.types.prediction import GaussianMeasurementPrediction, GaussianStatePrediction
 from stonesoup.types.update import GaussianStateUpdate
 
-from .fast import ObjectFactory
+from .fast import ObjectFactory, plain_track_lists
 from .fast_association import _copied_properties, _weaken_prior_chain
 
 #: A prediction as ``Prediction.from_state`` builds it (transition model and prior).
 PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
     state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
     transition_model=None, prior=None))
+_NEW_PRIOR_PREDICTION = PRIOR_PREDICTION.maker(
+    "state_vector", "covar", "timestamp", "transition_model", "prior")
 #: What the Kalman updater's ``predict_measurement`` returns.
 _MEASUREMENT_PREDICTION = ObjectFactory(GaussianMeasurementPrediction, dict(
     state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]), timestamp=None,
@@ -100,18 +102,28 @@ def materialise(record: Holding, blocks: dict, end: int, transition) -> None:
     track = record.track
     serial = record.serial
     prior = track.state
+    lists = plain_track_lists(track)  # (a prediction appended as Track.append does)
     for b in range(record.pending_from, end):
         block = blocks[b]
         _weaken_prior_chain(prior)
         row = bisect_left(block.serials, serial)
-        prediction = PRIOR_PREDICTION(
-            state_vector=block.means[row].view(StateVector),
-            covar=block.covars[row].view(CovarianceMatrix), timestamp=block.timestamp,
-            transition_model=transition, prior=prior,
-            **{name: getattr(prior, name) for name in _copied_properties(type(prior))})
+        copied = _copied_properties(type(prior))
+        vector, covar = block.means[row].view(StateVector), block.covars[row].view(CovarianceMatrix)
+        if copied != ():  # (a prior of a subclass: its extra Properties carried over)
+            prediction = PRIOR_PREDICTION(
+                state_vector=vector, covar=covar, timestamp=block.timestamp,
+                transition_model=transition, prior=prior,
+                **{name: getattr(prior, name) for name in copied})
+        else:
+            prediction = _NEW_PRIOR_PREDICTION(vector, covar, block.timestamp, transition, prior)
         update = block.updates.get(serial)
         if update is None:
-            track.append(prediction)
+            if lists is None:
+                track.append(prediction)
+            else:  # no Update: the metadata carried on unchanged
+                states, metadatas = lists
+                metadatas.append((metadatas[-1] if metadatas else track.init_metadata).copy())
+                states.append(prediction)
             prior = prediction
             continue
         measurement_prediction = _MEASUREMENT_PREDICTION(

@@ -54,7 +54,9 @@ class ScanCore:
             return None
         models, model_index, z, bearing = found
         last_times = rows.last_times
-        distinct = dict.fromkeys(last_times)
+        # (the usual scan: every row last seen at one time, often the same object)
+        uniform = bool(last_times) and last_times.count(last_times[0]) == len(last_times)
+        distinct = dict.fromkeys(last_times[:1] if uniform else last_times)
         matrices, noises = [], []
         for k, last in enumerate(distinct):
             interval = timestamp - last
@@ -67,7 +69,8 @@ class ScanCore:
         n = len(last_times)
         if len(distinct) == 1:
             index = np.zeros(n, dtype=np.int64)
-            new_time = np.full(n, last_times[0] != timestamp)
+            new_time = np.empty(n, dtype=bool)
+            new_time.fill(last_times[0] != timestamp)
         else:
             index = np.array([distinct[t] for t in last_times], dtype=np.int64)
             new_time = np.array([t != timestamp for t in last_times])
@@ -97,9 +100,12 @@ class ScanCore:
         per model whether it measures a bearing first), or None when the core cannot take
         the scan's detections."""
         models, bearing, index = [], [], np.empty(len(detections), dtype=np.int64)
+        if not detections:  # (the usual initiator scan: no detection left free)
+            return models, index, np.empty((0, 0)), bearing
         # by model value: equal models in different objects are one group (its first)
-        for raw_model, members in scan_model_groups(detections).values():
-            core = self._core_model(updater, updater._check_measurement_model(raw_model))
+        for key, (raw_model, members) in scan_model_groups(detections).items():
+            model = updater._check_measurement_model(raw_model)
+            core = self._core_model(updater, model, key if model is raw_model else None)
             if core is None:
                 return None
             index[members] = len(models)
@@ -109,10 +115,15 @@ class ScanCore:
             return None
         m = models[0].ndim_meas if models else 0
         vectors = [d.state_vector for d in detections]
-        try:
-            z = np.array(vectors, dtype=np.float64).reshape(len(detections), m)
-        except (TypeError, ValueError):
-            return None
+        z = getattr(detections, "vectors", None)  # (an OrderedDetections' float rows)
+        if isinstance(z, np.ndarray) and z.dtype == np.float64 \
+                and z.shape == (len(detections), m):
+            z = np.ascontiguousarray(z)
+        else:
+            try:
+                z = np.array(vectors, dtype=np.float64).reshape(len(detections), m)
+            except (TypeError, ValueError):
+                return None
         for vector, g in zip(vectors, index.tolist()):
             # the stock z − ẑ wraps the model's bearing (a Bearing or float detection);
             # another angle type in a detection would wrap its own way
@@ -120,10 +131,13 @@ class ScanCore:
                 return None
         return models, index, z, bearing
 
-    def _core_model(self, updater, model):
+    def _core_model(self, updater, model, key=None):
         """(the core's model, whether it measures a bearing first) for detections measured by
-        ``model`` (the updater's resolution of a detection's model), or None."""
-        key = (measurement_model_key(model), type(updater))  # equal models share an entry
+        ``model`` (the updater's resolution of a detection's model; ``key`` its
+        :func:`~ctxmodels.model_key.measurement_model_key` when known), or None."""
+        if key is None:
+            key = measurement_model_key(model)
+        key = (key, type(updater))  # equal models share an entry
         cached = self._core_models.get(key)
         if cached is None:
             core, bearing_row = jpda_core_model(type(updater), model)
@@ -156,7 +170,7 @@ class ScanCore:
 def _typed_as(vector, bearing: bool) -> bool:
     """Whether an object-typed detection vector holds floats, and a :class:`Bearing` first
     if ``bearing`` (the rows the core wraps)."""
-    values = vector.ravel().tolist()
+    values = np.ndarray.ravel(vector).tolist()  # (the elements, without a subclass's ravel)
     for row, value in enumerate(values):
         if row == 0 and bearing and type(value) is Bearing:
             continue

@@ -36,7 +36,7 @@ from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
 from .ordering import context_kwargs, declares_context, in_stable_order, in_track_order
-from .scan_checks import checked_scan, naming_scan_errors
+from .scan_checks import checked_scan_rows, naming_scan_errors
 
 
 class MultiTargetMixtureTracker(_StockMixtureTracker):
@@ -53,7 +53,10 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
     @property
     def tracks_in_order(self) -> list[Track]:
         live = self._tracks
-        order = dict.fromkeys(t for t in self._order if t in live)
+        order = self._order
+        if len(order) == len(live) and live.issuperset(order):
+            return list(order)  # (the usual scan: no track deleted or added from outside)
+        order = dict.fromkeys(t for t in order if t in live)
         order.update(dict.fromkeys(in_track_order(t for t in live if t not in order)))
         self._order = order
         return list(order)
@@ -61,9 +64,9 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
     def __next__(self) -> tuple[datetime.datetime, set[Track]]:
         # the scan checked first (see ctxmodels.stonesoup.scan_checks), so the array and
         # component paths refuse the same scans with the same message
-        time, detections = checked_scan(self, next(self.detector_iter))
+        time, detections, rows = checked_scan_rows(self, next(self.detector_iter))
         with naming_scan_errors(self, time, detections):
-            return self._scan(time, in_stable_order(detections))
+            return self._scan(time, in_stable_order(detections, rows))
 
     def _scan(self, time, detections) -> tuple[datetime.datetime, set[Track]]:
         """One scan of the stock loop on ``detections`` already in stable order."""

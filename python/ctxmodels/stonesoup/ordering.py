@@ -25,6 +25,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from ..model_key import carry_model_groups
+
 
 class OrderedDetections(list):
     """One scan's detections as a list in :func:`detection_key` order, carrying the scan's
@@ -99,26 +101,31 @@ def detection_key(detection) -> tuple:
     return _DetectionKey(detection, head, {}).key()
 
 
-def _float_vectors(detections: list):
+def _float_vectors(detections: list, converted=None):
     """The detections' measurement vectors as float rows (M, m), or None when they do not
-    share one shape."""
-    try:
-        vectors = np.array([d.state_vector for d in detections], dtype=np.float64)
-    except (TypeError, ValueError):
-        return None
+    share one shape; ``converted``: their ``np.array`` as float64, if already made."""
+    vectors = converted
+    if vectors is None or vectors.ndim != 3 or vectors.shape[0] != len(detections):
+        try:
+            vectors = np.array([d.state_vector for d in detections], dtype=np.float64)
+        except (TypeError, ValueError):
+            return None
     if vectors.ndim != 3 or vectors.shape[2] != 1:
         return None
     return vectors[..., 0]
 
 
-def in_stable_order(detections) -> OrderedDetections:
+def in_stable_order(detections, rows=None) -> OrderedDetections:
     """The detections of one scan in :func:`detection_key` order, keeping the scan's
-    ``detector_context`` (if the collection carries one)."""
+    ``detector_context`` (if the collection carries one). ``rows``: the detections'
+    measurement vectors as one float64 array in the collection's iteration order
+    (``np.array`` of them), when the caller has made it
+    (:func:`~ctxmodels.stonesoup.scan_checks.checked_scan_rows`)."""
     context = getattr(detections, "detector_context", None)
     detections = list(detections)
     if not detections:
         return OrderedDetections((), context, None)
-    vectors = _float_vectors(detections)
+    vectors = _float_vectors(detections, rows)
     if len(detections) == 1:  # (most of a 10 Hz sensor's scans: nothing to sort)
         return OrderedDetections(detections, context, vectors)
     times: dict = {}  # str() once per timestamp
@@ -150,6 +157,27 @@ def in_stable_order(detections) -> OrderedDetections:
         start = end
     return OrderedDetections([detections[i] for i in order], context,
                              None if vectors is None else vectors[order])
+
+
+def ordered_subset(detections, keep=None) -> OrderedDetections:
+    """The detections of a scan in stable order (a list) whose entry of ``keep`` (booleans
+    aligned with them; None: all) is true, in that order, as an :class:`OrderedDetections`
+    without a context. Their float rows and the scan's measurement-model groups
+    (:func:`~ctxmodels.model_key.carry_model_groups`) come along when ``detections`` holds
+    them, so nothing is converted or keyed again."""
+    rows = getattr(detections, "vectors", None)
+    if not (isinstance(rows, np.ndarray) and rows.shape[0] == len(detections)):
+        rows = None
+    if keep is None:
+        kept = range(len(detections))
+        subset = OrderedDetections(detections, None, rows)
+    else:
+        mask = np.asarray(keep, dtype=bool)
+        kept = mask.nonzero()[0].tolist()
+        subset = OrderedDetections([detections[k] for k in kept], None,
+                                   None if rows is None else rows[mask])
+    carry_model_groups(detections, subset, kept)
+    return subset
 
 
 class _TrackKey:
@@ -220,4 +248,4 @@ def _names_context(function) -> bool:
 
 
 __all__ = ["OrderedDetections", "context_kwargs", "declares_context", "detection_key",
-           "in_stable_order", "in_track_order", "track_key"]
+           "in_stable_order", "in_track_order", "ordered_subset", "track_key"]

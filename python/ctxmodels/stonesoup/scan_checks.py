@@ -49,6 +49,22 @@ def _where(index: int, time) -> str:
     return f"scan {index} at {time}"
 
 
+class _Where:
+    """:func:`_where`, formatted only when a message is (the time's text costs more than
+    the checks of a small scan)."""
+
+    __slots__ = ("index", "time")
+
+    def __init__(self, index: int, time):
+        self.index, self.time = index, time
+
+    def __str__(self) -> str:
+        return _where(self.index, self.time)
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self), spec)
+
+
 def _vector_text(detection) -> str:
     try:
         return str(np.asarray(detection.state_vector, dtype=np.float64).ravel().tolist())
@@ -66,6 +82,14 @@ def checked_scan(tracker, scan):
     (see the module docstring); raises TypeError/ValueError naming the scan (its index in
     the tracker's run and its time) and the detection. Remembers the scan's time on the
     tracker for the next check."""
+    return checked_scan_rows(tracker, scan)[:2]
+
+
+def checked_scan_rows(tracker, scan):
+    """:func:`checked_scan`, and the detections' measurement vectors as the check converted
+    them, in iteration order (``np.array`` of the vectors as float64; None when they do not
+    convert to one array, or the detections are no plain set, list or tuple, whose second
+    iteration could visit them in another order): ``(time, detections, rows)``."""
     index, previous = tracker.__dict__.get("_scan_checks", (0, None))
     if not (isinstance(scan, (tuple, list)) and len(scan) == 2):
         raise TypeError(f"detector: scan {index}: expected a (time, detections) pair, got "
@@ -75,7 +99,7 @@ def checked_scan(tracker, scan):
     if not isinstance(time, datetime.datetime):
         raise TypeError(f"detector: scan {index}: the time must be a datetime.datetime, got "
                         f"{type(time).__name__} {time!r}")
-    where = _where(index, time)
+    where = _Where(index, time)
     if detections is None or isinstance(detections, (str, bytes)) \
             or not hasattr(detections, "__iter__"):
         raise TypeError(f"detector: {where}: expected a collection of detections, got "
@@ -114,9 +138,14 @@ def checked_scan(tracker, scan):
             last_stamp = stamp
         vectors.append(vector)
         models.append(model)
-    _check_vectors(items, vectors, models, where)
+    rows = _check_vectors(items, vectors, models, where)
     tracker.__dict__["_scan_checks"] = (index + 1, time)
-    return time, items
+    if type(items).__iter__ not in _PLAIN_ITERATION:
+        rows = None
+    return time, items, rows
+
+
+_PLAIN_ITERATION = (set.__iter__, frozenset.__iter__, list.__iter__, tuple.__iter__)
 
 
 def _length(vector) -> int:
@@ -124,10 +153,12 @@ def _length(vector) -> int:
     return shape[0] if shape else 1
 
 
-def _check_vectors(items, vectors, models, where) -> None:
-    """Every measurement vector finite, and as long as its own measurement model measures."""
+def _check_vectors(items, vectors, models, where):
+    """Every measurement vector finite, and as long as its own measurement model measures;
+    returns the vectors as one float64 array (None if they do not make one)."""
+    rows = None
     if not vectors:
-        return
+        return rows
     try:
         rows = np.array(vectors, dtype=np.float64)
         finite = np.isfinite(rows)
@@ -142,7 +173,7 @@ def _check_vectors(items, vectors, models, where) -> None:
             except (TypeError, ValueError):
                 finite.append(False)
         finite = np.array(finite)
-        length = None
+        length = rows = None
     if finite is not None and not finite.all():
         bad = [d for d, ok in zip(items, finite.tolist()) if not ok]
         row = min(_ordered_index(items, d) for d in bad)
@@ -153,7 +184,7 @@ def _check_vectors(items, vectors, models, where) -> None:
     distinct = {id(model): model for model in models if model is not None}
     sizes = {key: getattr(model, "ndim_meas", None) for key, model in distinct.items()}
     if length is not None and all(size in (None, length) for size in sizes.values()):
-        return  # one length, which every model measures
+        return rows  # one length, which every model measures
     for detection, vector, model in zip(items, vectors, models):
         size = None if model is None else sizes[id(model)]
         if size is not None and _length(vector) != size:
@@ -212,4 +243,4 @@ class naming_scan_errors:
             "updater one") from error
 
 
-__all__ = ["checked_scan", "naming_scan_errors"]
+__all__ = ["checked_scan", "checked_scan_rows", "naming_scan_errors"]

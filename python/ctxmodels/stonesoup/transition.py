@@ -9,6 +9,7 @@ prediction's control terms (the array JPDA and initiator ask it whether there ar
 """
 from __future__ import annotations
 
+import numpy as np
 from stonesoup.models.control.linear import LinearControlModel
 from stonesoup.models.transition.linear import CombinedLinearGaussianTransitionModel
 
@@ -24,8 +25,9 @@ class CachedCombinedLinearGaussianTransitionModel(CombinedLinearGaussianTransiti
     def _memo(self, kind, compute, kwargs):
         # A linear Gaussian model's F and Q depend on Δt only; predictors also pass the
         # `prior`, which they do not use. Anything else: no caching.
-        if set(kwargs) - {"time_interval", "prior"}:
-            return compute(**kwargs)
+        for name in kwargs:
+            if name != "time_interval" and name != "prior":
+                return compute(**kwargs)
         cache = self.__dict__.setdefault("_cached_arrays", {})
         key = (kind, kwargs.get("time_interval"))
         value = cache.get(key)
@@ -58,6 +60,25 @@ class ControlTerms:
 
     def __init__(self):
         self._cache: dict = {}
+        self._answers: dict = {}  # the same keys -> (control, adds_input's answer)
+
+    def adds_input(self, control, prior, interval) -> bool:
+        """Whether the terms over ``interval`` are not all zero (as float64 arrays), the
+        answer kept with the terms (the stock model's)."""
+        key = None
+        if type(control) is LinearControlModel:
+            key = (id(control), id(control.control_matrix), id(control.control_noise), interval)
+            found = self._answers.get(key)
+            if found is not None and found[0] is control:
+                return found[1]
+        offset, noise = self(control, prior, interval)
+        answer = bool(np.asarray(offset, dtype=np.float64).any()
+                      or np.asarray(noise, dtype=np.float64).any())
+        if key is not None:
+            if len(self._answers) >= 256:
+                self._answers.clear()
+            self._answers[key] = (control, answer)
+        return answer
 
     def __call__(self, control, prior, interval):
         cacheable = type(control) is LinearControlModel
