@@ -10,7 +10,7 @@ import sys
 
 from ctxmodels.experiment.runner import simulated_run, track_scans
 from ctxmodels.experiment.trackers import build_tracker
-from ctxmodels.stonesoup.array_jpda import ArrayJPDATracker
+from ctxmodels.stonesoup.jpda.array_tracker import ArrayJPDATracker
 from ctxmodels.trackers import TRACKERS
 
 

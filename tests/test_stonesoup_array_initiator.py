@@ -195,14 +195,14 @@ def test_only_released_tracks_are_built(monkeypatch):
     deleter drops (clutter) never get a Track or a state."""
     from ctxmodels.experiment import trackers
     from ctxmodels.experiment.scenarios import make_scenario
-    from ctxmodels.stonesoup.initiator_births import Births
+    from ctxmodels.stonesoup.jpda._initiator_births import Births
     from test_stonesoup_array_jpda import _array_initiator, _component
     built = []
     real = Births.track
     monkeypatch.setattr(Births, "track", lambda self, *birth: built.append(1) or real(self, *birth))
     run = make_scenario("mixed-range", 0, 30.0)
-    built = trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker
-    ours = _array_initiator(_component(built).initiator)
+    jpda = trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker
+    ours = _array_initiator(_component(jpda).initiator)
     released = 0
     for time, detections in trackers.build_tracker(trackers.TRACKERS["jpda"], run).tracker.detector:
         released += len(ours.initiate(set(detections), time))

@@ -345,7 +345,7 @@ def test_covariance_verdict_is_the_deleters_at_the_boundary():
     mapping the deleter would index otherwise (a tuple, NumPy integers) asks the deleter."""
     from stonesoup.types.state import GaussianState as State
     from stonesoup.types.track import Track
-    from ctxmodels.stonesoup.array_deletion import _covariance_check
+    from ctxmodels.stonesoup.jpda._array_deletion import _covariance_check
     threshold = 2.0 * 200.0 ** 2
     for pxx in (40000.0, np.nextafter(40000.0, 0.0), np.nextafter(40000.0, np.inf), 7e4, 1e3):
         track = Track([State(np.zeros((4, 1)), np.diag([pxx, 1.0, 40000.0, 1.0]))])
@@ -364,7 +364,7 @@ def test_covariance_verdicts_from_the_scans_covariances_are_the_deleters():
     from stonesoup.types.array import CovarianceMatrix
     from stonesoup.types.state import GaussianState as State
     from stonesoup.types.track import Track
-    from ctxmodels.stonesoup.array_deletion import _covariance_check
+    from ctxmodels.stonesoup.jpda._array_deletion import _covariance_check
     threshold = 2.0 * 200.0 ** 2
     diagonals = [40000.0, np.nextafter(40000.0, 0.0), np.nextafter(40000.0, np.inf), 7e4, 1e3]
     covars = np.stack([np.diag([pxx, 1.0, 40000.0, 1.0]) for pxx in diagonals])

@@ -53,8 +53,8 @@ from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate
 from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
 
-from ctxmodels.stonesoup import ComponentPathWarning, fast_association
-from ctxmodels.stonesoup.fast_association import FastGNNWith2DAssignment
+from ctxmodels.stonesoup import ComponentPathWarning, gnn
+from ctxmodels.stonesoup.gnn import FastGNNWith2DAssignment
 
 T0 = datetime.datetime(2025, 3, 1, 9, 0, 0)
 TRANSITION = CombinedLinearGaussianTransitionModel([ConstantVelocity(0.5), ConstantVelocity(0.5)])
@@ -458,7 +458,7 @@ def test_value_equal_detections_run_stock(monkeypatch):
 def test_screen_keeps_nan_and_drops_non_positive_gates():
     """The screening rule's corner cases: a NaN distance stays a candidate (the stock
     measure and gate decide); no square root is below a non-positive or NaN gate."""
-    from ctxmodels.stonesoup.fast import measurement_batch
+    from ctxmodels.stonesoup._batch import measurement_batch
     rng = np.random.default_rng(1)
     tracks = track_histories(rng, 1.0, count=3)
     detections = list(scan(rng, tracks, 1.0, clutter=2))
@@ -474,7 +474,7 @@ def test_screen_keeps_nan_and_drops_non_positive_gates():
         assert not associators(missed_distance=gate)[1]._screen(batch, detections).any()
     squared = associators(measure=SquaredMahalanobis(), missed_distance=1e12)[1]
     assert squared._screen(batch, detections).all()
-    assert fast_association.SCREEN_MARGIN < 1e-3
+    assert gnn.SCREEN_MARGIN < 1e-3
     # and the whole scan with the NaN detection is still the stock one (with include_all,
     # NaN distances and all, sorted as the stock comparisons sort them)
     for options in ({}, {"include_all": True}):

@@ -1,4 +1,4 @@
-"""The batched Gaussian maths and object factories in ``ctxmodels.stonesoup.fast`` (used by
+"""The batched Gaussian maths and object factories in ``ctxmodels.stonesoup._batch`` (used by
 the fast GNN association, the array JPDA initiator and the array trackers), held against
 the stock Stone Soup calls they replace."""
 import datetime
@@ -12,7 +12,7 @@ from stonesoup.types.prediction import TaggedWeightedGaussianStatePrediction
 from stonesoup.types.state import TaggedWeightedGaussianState
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
-from ctxmodels.stonesoup.fast import ObjectFactory, gaussian_arrays, measurement_batch
+from ctxmodels.stonesoup._batch import ObjectFactory, gaussian_arrays, measurement_batch
 
 from gmphd_setups import seeded_uuids
 

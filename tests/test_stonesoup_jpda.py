@@ -794,5 +794,5 @@ def test_gate_threshold_is_stone_soups(prob_gate, ndim):
     gate_threshold) is exactly the value Stone Soup's PDA hypothesiser compares with (its
     private _gate_threshold: pinned here, so a change upstream fails this test)."""
     from stonesoup.hypothesiser.probability import PDAHypothesiser as StockPDAHypothesiser
-    from ctxmodels.stonesoup.hypothesiser import gate_threshold
+    from ctxmodels.stonesoup.jpda.hypothesiser import gate_threshold
     assert gate_threshold(prob_gate, ndim) == StockPDAHypothesiser._gate_threshold(prob_gate, ndim)

@@ -33,9 +33,9 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 import ctxmodels.stonesoup as ctx_stonesoup
 from ctxmodels.stonesoup import AnalyticCartesianToBearingRange
-from ctxmodels.stonesoup import fast_association
-from ctxmodels.stonesoup.fast import measurement_batch
-from ctxmodels.stonesoup.fast_association import FastGNNWith2DAssignment
+from ctxmodels.stonesoup import gnn
+from ctxmodels.stonesoup._batch import measurement_batch
+from ctxmodels.stonesoup.gnn import FastGNNWith2DAssignment
 
 T0 = datetime.datetime(2025, 3, 1, 9, 0, 0)
 NOISE = np.diag([np.radians(0.5) ** 2, 4.0])
@@ -328,8 +328,8 @@ def test_fast_association_batches_the_analytic_model_and_stays_stock(monkeypatch
                                      timestamp=T0 + datetime.timedelta(seconds=1),
                                      measurement_model=analytic))
     batched = []
-    real_batch = fast_association.measurement_batch
-    monkeypatch.setattr(fast_association, "measurement_batch",
+    real_batch = gnn.measurement_batch
+    monkeypatch.setattr(gnn, "measurement_batch",
                         lambda *a, **k: batched.append(a[1]) or real_batch(*a, **k))
     when = T0 + datetime.timedelta(seconds=1)
     results = []

@@ -5,8 +5,9 @@
   time order; :class:`PlatformContextFeeder` gives each scan of Stone Soup's platform
   simulator the context of the radar that made it (:func:`sensor_context`, which decides
   the range edge as the radar does). Either is the ``detector`` of a stock tracker.
-* PDA/JPDA: :class:`PDAHypothesiser`, the stock hypothesiser with :math:`P_D` per track and
-  :math:`\\lambda` per detection taken from the scan's context (stock behaviour without one).
+* PDA/JPDA (:mod:`~ctxmodels.stonesoup.jpda`): :class:`PDAHypothesiser`, the stock
+  hypothesiser with :math:`P_D` per track and :math:`\\lambda` per detection taken from the
+  scan's context (stock behaviour without one).
 * Track management: :class:`ExpectedMissesDeleter` deletes JPDA tracks on the expected, not
   the counted, number of missed detections; :class:`UpdateTimeStepsDeleter` is the stock
   miss-counting deleter reading only a track's trailing states;
@@ -42,22 +43,19 @@
   its exact Jacobian instead of a finite difference, so an extended Kalman filter's output
   does not depend on the last bit of its inputs.
 """
-from .array_initiator import ArrayMultiMeasurementInitiator
-from .array_jpda import ArrayJPDATracker
-from .composite_deleter import CompositeDeleter
-from .deleter import (DuplicateTrackDeleter, ExpectedMissesDeleter, MissesNotWeighedWarning,
-                      UpdateTimeStepsDeleter)
-from .fast_association import FastGNNWith2DAssignment
 from .feeder import ContextFeeder, MultiSensorFeeder
 from .gmphd import (ArrayPointProcessTracker, CircularRegion, LCCUpdater, MeasurementDrivenBirth,
                     PHDUpdater, PointProcessMultiTargetTracker, PoseCentredRegion)
-from .hypothesiser import PDAHypothesiser
+from .gnn import FastGNNWith2DAssignment
+from .jpda import (ArrayJPDATracker, ArrayMultiMeasurementInitiator, CompositeDeleter,
+                   DuplicateTrackDeleter, ExpectedMissesDeleter, MissesNotWeighedWarning,
+                   MultiMeasurementInitiator, MultiTargetMixtureTracker, PDAHypothesiser,
+                   UpdateTimeStepsDeleter)
 from .learning import ClutterMapLearner, DetectionLearner, LearningTracker
 from .measurement import AnalyticCartesianToBearingRange
-from .mixture_tracker import MultiMeasurementInitiator, MultiTargetMixtureTracker
-from .paths import ComponentPathWarning
 from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
+from .paths import ComponentPathWarning
 from .sensor_adapter import (PlatformContextFeeder, SensorContext, SensorPose, sensor_context,
                              sensor_model_from_stonesoup, sensor_pose)
 from .transition import CachedCombinedLinearGaussianTransitionModel

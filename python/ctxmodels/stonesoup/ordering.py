@@ -80,7 +80,7 @@ class _DetectionKey:
     def key(self) -> tuple:
         return self.head + self.tail()
 
-    def __lt__(self, other: "_DetectionKey") -> bool:
+    def __lt__(self, other: _DetectionKey) -> bool:
         if self.head != other.head:
             return self.head < other.head
         return self.tail() < other.tail()
@@ -198,7 +198,7 @@ class _TrackKey:
     def _all(self) -> list:
         return [(str(s.timestamp), _vector_bytes(s)) for s in self.track.states]
 
-    def __lt__(self, other: "_TrackKey") -> bool:
+    def __lt__(self, other: _TrackKey) -> bool:
         if self.head != other.head:
             return self.head < other.head
         return self._all() < other._all()
@@ -239,7 +239,7 @@ def declares_context(method) -> bool:
     return _names_context(getattr(method, "__func__", method))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _names_context(function) -> bool:
     try:
         return "detector_context" in inspect.signature(function).parameters

@@ -18,7 +18,7 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
 from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
 
 from ... import _core
-from ..fast import supports_predictor
+from .._batch import supports_predictor
 from ..measurement import AnalyticCartesianToBearingRange
 from .updater import PHDUpdater
 

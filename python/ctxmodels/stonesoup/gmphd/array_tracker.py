@@ -59,7 +59,7 @@ from ...context import DetectorContext, detection_positions
 from ...model_key import scan_model_groups
 from ...foreign import as_array_context
 from ._plan import _Plan
-from ..fast import ObjectFactory, plain_track_lists
+from .._batch import ObjectFactory, plain_track_lists
 from ..ordering import declares_context, in_stable_order
 from ..paths import PathCounts
 from .tracker import PointProcessMultiTargetTracker

@@ -60,7 +60,7 @@ States: an update when some detection's marginal exceeds the missed detection's 
 reads it), else a :class:`~stonesoup.types.prediction.GaussianStatePrediction`; track
 metadata follow the stock rule (metadata of the hypotheses' detections, most likely last).
 
-Deletion (:mod:`~ctxmodels.stonesoup.array_deletion`): with a ctxmodels or stock
+Deletion (:mod:`~ctxmodels.stonesoup.jpda._array_deletion`): with a ctxmodels or stock
 :class:`~stonesoup.deleter.time.UpdateTimeStepsDeleter`, a ctxmodels
 :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` or a stock
 :class:`~stonesoup.deleter.time.UpdateTimeDeleter` (``delete_last_pred`` off), each track's
@@ -95,20 +95,20 @@ from stonesoup.types.prediction import GaussianMeasurementPrediction, GaussianSt
 from stonesoup.types.state import GaussianState
 from stonesoup.types.update import GaussianStateUpdate
 
-from .. import _core
-from ..context import DetectorContext
-from ..model_key import measurement_model_key, scan_model_groups
-from .array_deletion import ArrayDeletion
+from ... import _core
+from ...context import DetectorContext
+from ...model_key import measurement_model_key, scan_model_groups
+from ._array_deletion import ArrayDeletion
 from .array_initiator import ArrayMultiMeasurementInitiator
-from .transition import ControlTerms
-from .initiator_history import PRIOR_PREDICTION as _PRIOR_PREDICTION
-from .fast import KALMAN_UPDATERS, ObjectFactory, plain_track_lists, supports_predictor
-from .fast_association import _copied_properties
+from ..transition import ControlTerms
+from ._initiator_history import PRIOR_PREDICTION as _PRIOR_PREDICTION
+from .._batch import KALMAN_UPDATERS, ObjectFactory, plain_track_lists, supports_predictor
+from ..gnn import _copied_properties
 from .hypothesiser import PDAHypothesiser, gate_threshold, is_detection_backed, scan_context
-from .measurement import jpda_core_model
-from .mixture_tracker import MultiTargetMixtureTracker
-from .paths import PathCounts
-from .ordering import context_kwargs, in_track_order, ordered_subset
+from ..measurement import jpda_core_model
+from .tracker import MultiTargetMixtureTracker
+from ..paths import PathCounts
+from ..ordering import context_kwargs, in_track_order, ordered_subset
 
 _ASSOCIATORS = (JPDAwithEHM2, JPDAwithEHM, JPDA)
 #: Prior state vector and covariance types the array path takes: float64 and the integer

@@ -34,7 +34,7 @@ from stonesoup.types.numeric import Probability
 from stonesoup.types.state import State, StateMutableSequence
 from stonesoup.types.update import Update
 
-from ..foreign import PerCallContext, as_array_context
+from ...foreign import PerCallContext, as_array_context
 
 
 

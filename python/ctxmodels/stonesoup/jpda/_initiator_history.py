@@ -1,4 +1,4 @@
-"""The holding tracks' history in :class:`~ctxmodels.stonesoup.array_initiator.ArrayMultiMeasurementInitiator`:
+"""The holding tracks' history in :class:`~ctxmodels.stonesoup.ArrayMultiMeasurementInitiator`:
 each scan is a block of the core's arrays (every holding row's prediction, and for the rows
 it updated: the update, the detection, the distance and the measurement prediction). A
 holding track's Stone Soup states are built from the blocks only when it is released or
@@ -16,8 +16,8 @@ from stonesoup.types.hypothesis import SingleDistanceHypothesis
 from stonesoup.types.prediction import GaussianMeasurementPrediction, GaussianStatePrediction
 from stonesoup.types.update import GaussianStateUpdate
 
-from .fast import ObjectFactory, plain_track_lists
-from .fast_association import _copied_properties, _weaken_prior_chain
+from .._batch import ObjectFactory, plain_track_lists
+from ..gnn import _copied_properties, _weaken_prior_chain
 
 #: A prediction as ``Prediction.from_state`` builds it (transition model and prior).
 PRIOR_PREDICTION = ObjectFactory(GaussianStatePrediction, dict(
@@ -41,7 +41,7 @@ _UPDATE = ObjectFactory(GaussianStateUpdate, dict(
 class Holding:
     """A holding track: its Track (states up to the last materialisation; None until
     built, then ``birth`` holds the arguments of
-    :meth:`~ctxmodels.stonesoup.initiator_births.Births.track`), the first scan block whose
+    :meth:`~ctxmodels.stonesoup.jpda._initiator_births.Births.track`), the first scan block whose
     states it does not hold yet, and its serial number (rows are kept in serial order, so a
     block finds a track's row by bisection)."""
 

@@ -1,4 +1,4 @@
-"""The holding tracks' deletion in :class:`~ctxmodels.stonesoup.array_initiator.ArrayMultiMeasurementInitiator`:
+"""The holding tracks' deletion in :class:`~ctxmodels.stonesoup.ArrayMultiMeasurementInitiator`:
 per holding row, what its deleter reads, kept as the rows advance instead of walking the
 tracks (whose coasting predictions are not even appended yet).
 
@@ -6,7 +6,7 @@ tracks (whose coasting predictions are not even appended yet).
   the row's last detection-backed state; delete when it exceeds ``time_steps_since_update``.
 * Stone Soup's ``UpdateTimeDeleter``: the latest timestamp of a detection-backed state;
   delete when there is none at or after ``last - time_since_update`` (``last``: the row's
-  last state's time), as :func:`~ctxmodels.stonesoup.array_deletion.update_time_verdict`
+  last state's time), as :func:`~ctxmodels.stonesoup.jpda._array_deletion.update_time_verdict`
   decides.
 * :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` without a hypothesiser (an initiator's:
   each miss weighed by the P_D of the row's prediction in the scan's context): the P_D of
@@ -22,7 +22,7 @@ import numpy as np
 from stonesoup.deleter.time import UpdateTimeDeleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 
-from .array_deletion import latest_backed_time, update_time_verdict
+from ._array_deletion import latest_backed_time, update_time_verdict
 from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .hypothesiser import is_detection_backed
 

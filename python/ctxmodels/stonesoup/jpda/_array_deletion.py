@@ -29,9 +29,9 @@ from stonesoup.types.array import CovarianceMatrix
 
 from .composite_deleter import CompositeDeleter as _PairwiseCompositeDeleter
 from .deleter import DuplicateTrackDeleter, ExpectedMissesDeleter, UpdateTimeStepsDeleter
-from .fast import plain_track_lists
+from .._batch import plain_track_lists
 from .hypothesiser import is_detection_backed
-from .ordering import context_kwargs
+from ..ordering import context_kwargs
 
 _COMPOSITES = (CompositeDeleter, _PairwiseCompositeDeleter)
 

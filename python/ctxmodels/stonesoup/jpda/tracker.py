@@ -35,8 +35,8 @@ from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
-from .ordering import context_kwargs, declares_context, in_stable_order, in_track_order
-from .scan_checks import checked_scan_rows, naming_scan_errors
+from ..ordering import context_kwargs, declares_context, in_stable_order, in_track_order
+from ..scan_checks import checked_scan_rows, naming_scan_errors
 
 
 class MultiTargetMixtureTracker(_StockMixtureTracker):

@@ -27,11 +27,11 @@ from stonesoup.deleter.base import Deleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 from stonesoup.types.update import Update
 
-from ..foreign import as_array_context
+from ...foreign import as_array_context
 from .composite_deleter import PairwiseDeleter
-from .fast import plain_track_lists
+from .._batch import plain_track_lists
 from .hypothesiser import PDAHypothesiser, is_detection_backed, prob_detect_at
-from .ordering import track_key
+from ..ordering import track_key
 
 
 class MissesNotWeighedWarning(UserWarning):

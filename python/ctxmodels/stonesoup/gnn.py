@@ -9,10 +9,10 @@ distance for each detection in turn, in Python. This one works a scan at a time:
 :math:`N` tracks with last states :math:`(x_n, P_n)` and :math:`M` detections :math:`z_j`,
 
 * all tracks are predicted to each distinct time of the scan in stacked arrays
-  (:func:`~ctxmodels.stonesoup.fast.predict_batch`),
+  (:func:`~ctxmodels.stonesoup._batch.predict_batch`),
 * the predicted measurements :math:`\hat z_n` and innovation covariances :math:`S_n` of all
   tracks are computed once per measurement model
-  (:func:`~ctxmodels.stonesoup.fast.measurement_batch`), and
+  (:func:`~ctxmodels.stonesoup._batch.measurement_batch`), and
 * the squared Mahalanobis distances of all :math:`N \times M` pairs,
 
   .. math::
@@ -74,7 +74,7 @@ from stonesoup.types.prediction import (
 from stonesoup.types.state import GaussianState, State, StateMutableSequence
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
-from .fast import (
+from ._batch import (
     KALMAN_UPDATERS,
     ObjectFactory,
     apply_wrap,

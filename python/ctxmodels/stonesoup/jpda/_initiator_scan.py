@@ -1,4 +1,4 @@
-"""The core call of a scan of :class:`~ctxmodels.stonesoup.array_initiator.ArrayMultiMeasurementInitiator`:
+"""The core call of a scan of :class:`~ctxmodels.stonesoup.ArrayMultiMeasurementInitiator`:
 what :func:`ctxmodels._core.initiator_scan` takes, read from the initiator's components and
 the scan's detections — the core's measurement models (one per model *value*, see
 :func:`~ctxmodels.model_key.scan_model_groups`), the detections' values, each holding row's
@@ -7,17 +7,18 @@ component path).
 """
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from typing import NamedTuple
+from collections.abc import Callable
 
 import numpy as np
 from stonesoup.measures import SquaredMahalanobis
 from stonesoup.models.control.linear import LinearControlModel
 from stonesoup.types.angle import Bearing
 
-from .. import _core
-from ..model_key import measurement_model_key, scan_model_groups
-from .measurement import jpda_core_model
-from .transition import ControlTerms
+from ... import _core
+from ...model_key import measurement_model_key, scan_model_groups
+from ..measurement import jpda_core_model
+from ..transition import ControlTerms
 
 
 class Rows(NamedTuple):

@@ -1,4 +1,4 @@
-"""The new holding tracks of :class:`~ctxmodels.stonesoup.array_initiator.ArrayMultiMeasurementInitiator`:
+"""The new holding tracks of :class:`~ctxmodels.stonesoup.ArrayMultiMeasurementInitiator`:
 what Stone Soup's :class:`~stonesoup.initiator.simple.SimpleMeasurementInitiator` returns for
 a scan's unassociated detections, computed per measurement model in stacked arrays with the
 stock operations (the same numbers, bit for bit), and the tracks built without Stone Soup's
@@ -20,9 +20,9 @@ from stonesoup.types.state import GaussianState
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
-from ..model_key import models_by_value, scan_model_groups
-from .fast import ObjectFactory, _analytic_bearing_range_batch, _bearing_range_batch
-from .measurement import AnalyticCartesianToBearingRange
+from ...model_key import models_by_value, scan_model_groups
+from .._batch import ObjectFactory, _analytic_bearing_range_batch, _bearing_range_batch
+from ..measurement import AnalyticCartesianToBearingRange
 
 #: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
 UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(

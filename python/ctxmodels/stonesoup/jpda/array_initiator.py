@@ -10,7 +10,7 @@ stacked arrays, and one core call per scan (:func:`ctxmodels._core.initiator_sca
 Mahalanobis distance, solves the GNN 2-D assignment (the shortest augmenting path method
 SciPy's ``linear_sum_assignment`` uses, ties broken the same way), runs the Kalman update of
 the assigned pairs and advances the M-of-N counts. Stone Soup states are built only for the
-tracks released (:mod:`~ctxmodels.stonesoup.initiator_history`).
+tracks released (:mod:`~ctxmodels.stonesoup.jpda._initiator_history`).
 
 **"The same tracks"** (tested in ``tests/test_stonesoup_array_initiator.py`` and, through the
 JPDA, ``tests/test_stonesoup_array_jpda.py``): scan by scan the same tracks are released;
@@ -23,7 +23,7 @@ to rounding. Not bit for bit: the core inverts S its own way where Stone Soup ca
 finite-difference Jacobian, whose step follows the last bit of a state, included), ~1e-15
 with linear models. A decision could differ only where two costs tie to within that
 rounding; exact ties go as SciPy breaks them (tested). A new track's first state is the
-stock initiator's, bit for bit (:mod:`~ctxmodels.stonesoup.initiator_births`, NumPy), so new
+stock initiator's, bit for bit (:mod:`~ctxmodels.stonesoup.jpda._initiator_births`, NumPy), so new
 tracks are ordered (:func:`~ctxmodels.stonesoup.in_track_order`, by their first state's
 bytes) as the reference orders them.
 
@@ -45,7 +45,7 @@ all of a scan's models measuring the same number of values), a stock or ctxmodel
 ``UpdateTimeStepsDeleter``, Stone Soup's ``UpdateTimeDeleter`` with a ``timedelta``
 window, or an :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` without a hypothesiser
 given each scan's context (``delete_last_pred`` off; the verdicts from per-row counts, see
-:mod:`~ctxmodels.stonesoup.initiator_deletion`), Gaussian float64 states, and detections
+:mod:`~ctxmodels.stonesoup.jpda._initiator_deletion`), Gaussian float64 states, and detections
 stamped with the scan time.
 """
 from __future__ import annotations
@@ -60,16 +60,16 @@ from stonesoup.measures import Mahalanobis, SquaredMahalanobis
 from stonesoup.models.base import LinearModel, ReversibleModel
 from stonesoup.types.state import GaussianState
 
-from ..foreign import as_array_context
+from ...foreign import as_array_context
 from .deleter import ExpectedMissesDeleter
-from .fast import KALMAN_UPDATERS, supports_predictor
-from .fast_association import FastGNNWith2DAssignment, _copied_properties
-from . import initiator_deletion
-from .initiator_births import Births
-from .initiator_history import Block, Holding, Update, materialise
-from .initiator_scan import Rows, ScanCore
-from .mixture_tracker import MultiMeasurementInitiator
-from .ordering import OrderedDetections, in_stable_order, in_track_order, ordered_subset
+from .._batch import KALMAN_UPDATERS, supports_predictor
+from ..gnn import FastGNNWith2DAssignment, _copied_properties
+from . import _initiator_deletion as initiator_deletion
+from ._initiator_births import Births
+from ._initiator_history import Block, Holding, Update, materialise
+from ._initiator_scan import Rows, ScanCore
+from .tracker import MultiMeasurementInitiator
+from ..ordering import OrderedDetections, in_stable_order, in_track_order, ordered_subset
 
 
 class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
@@ -136,7 +136,7 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
     def _materialise(self, record: Holding) -> None:
         """Build the record's track if it is not built yet and append the states the
         component path would have appended since its last materialisation (see
-        :func:`~ctxmodels.stonesoup.initiator_history.materialise`)."""
+        :func:`~ctxmodels.stonesoup.jpda._initiator_history.materialise`)."""
         if record.track is None:
             record.track = self._births.track(*record.birth)
             record.birth = None
