@@ -20,10 +20,16 @@ use crate::error::{ModelError, Result};
 /// minimising the total cost.
 pub fn assign(cost: &[f64], rows: usize, cols: usize) -> Result<Vec<usize>> {
     if rows > cols {
-        return Err(ModelError::shape("cost", format!("must have at least as many columns as rows, got ({rows}, {cols})")));
+        return Err(ModelError::shape(
+            "cost",
+            format!("must have at least as many columns as rows, got ({rows}, {cols})"),
+        ));
     }
     if cost.len() != rows * cols {
-        return Err(ModelError::shape("cost", format!("must be ({rows}, {cols}), got {} values", cost.len())));
+        return Err(ModelError::shape(
+            "cost",
+            format!("must be ({rows}, {cols}), got {} values", cost.len()),
+        ));
     }
     if cost.iter().any(|c| c.is_nan() || *c == f64::NEG_INFINITY) {
         return Err(ModelError::invalid("cost", "contains NaN or -inf"));
@@ -65,7 +71,10 @@ pub fn assign(cost: &[f64], rows: usize, cols: usize) -> Result<Vec<usize>> {
             }
             reached = lowest;
             if reached == f64::INFINITY || chosen == usize::MAX {
-                return Err(ModelError::invalid("cost", format!("row {current} can reach no column: the assignment is not feasible")));
+                return Err(ModelError::invalid(
+                    "cost",
+                    format!("row {current} can reach no column: the assignment is not feasible"),
+                ));
             }
             let j = remaining[chosen];
             seen_col[j] = true;
@@ -127,13 +136,23 @@ mod tests {
     fn finds_the_minimum_of_random_problems() {
         let mut state = 99u64;
         let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((state >> 11) as f64) / ((1u64 << 53) as f64)
         };
         for trial in 0..200 {
             let rows = 1 + trial % 4;
             let cols = rows + trial % 3;
-            let cost: Vec<f64> = (0..rows * cols).map(|_| if next() < 0.3 { f64::INFINITY } else { (next() * 5.0).floor() }).collect();
+            let cost: Vec<f64> = (0..rows * cols)
+                .map(|_| {
+                    if next() < 0.3 {
+                        f64::INFINITY
+                    } else {
+                        (next() * 5.0).floor()
+                    }
+                })
+                .collect();
             let best = brute(&cost, rows, cols);
             match assign(&cost, rows, cols) {
                 Ok(col4row) => {
@@ -155,7 +174,10 @@ mod tests {
         assert_eq!(assign(&[1.0, 1.0, 1.0, 1.0], 2, 2).unwrap(), vec![0, 1]);
         assert_eq!(assign(&[0.0, 0.0, 0.0], 1, 3).unwrap(), vec![0]);
         let inf = f64::INFINITY;
-        assert_eq!(assign(&[2.0, 2.0, 3.0, inf, 2.0, 2.0, inf, 3.0], 2, 4).unwrap(), vec![0, 1]);
+        assert_eq!(
+            assign(&[2.0, 2.0, 3.0, inf, 2.0, 2.0, inf, 3.0], 2, 4).unwrap(),
+            vec![0, 1]
+        );
     }
 
     #[test]

@@ -98,12 +98,18 @@ fn check(models: &[MeasurementModel], input: &InitiatorInput) -> Result<usize> {
     let rows = input.points.len();
     check_states(input.dim, rows, input.means, input.covars)?;
     if input.since.len() != rows || input.new_time.len() != rows || input.transition_index.len() != rows {
-        return Err(ModelError::shape("since", format!("since, new_time and transition_index must have {rows} entries (one per row)")));
+        return Err(ModelError::shape(
+            "since",
+            format!("since, new_time and transition_index must have {rows} entries (one per row)"),
+        ));
     }
     let m = models.first().map_or(0, MeasurementModel::ndim_meas);
     for model in models {
         if model.ndim_meas() != m {
-            return Err(ModelError::shape("models", "every model must measure the same number of values"));
+            return Err(ModelError::shape(
+                "models",
+                "every model must measure the same number of values",
+            ));
         }
         model.check_dim(input.dim)?;
     }
@@ -112,17 +118,30 @@ fn check(models: &[MeasurementModel], input: &InitiatorInput) -> Result<usize> {
         return Err(ModelError::shape("models", "detections need at least one model"));
     }
     if let Some(j) = input.model_index.iter().position(|&g| g >= models.len()) {
-        return Err(ModelError::invalid("model_index", format!("detection {j}: index {} is out of range for {} models", input.model_index[j], models.len())));
+        return Err(ModelError::invalid(
+            "model_index",
+            format!(
+                "detection {j}: index {} is out of range for {} models",
+                input.model_index[j],
+                models.len()
+            ),
+        ));
     }
     if input.detections.len() != dets * m {
-        return Err(ModelError::shape("detections", format!("must be ({dets}, {m}), got {} values", input.detections.len())));
+        return Err(ModelError::shape(
+            "detections",
+            format!("must be ({dets}, {m}), got {} values", input.detections.len()),
+        ));
     }
     check_finite("detections", input.detections)?;
     if input.missed_distance.is_nan() {
         return Err(ModelError::invalid("missed_distance", "must not be NaN"));
     }
     if input.min_points < 0 {
-        return Err(ModelError::invalid("min_points", format!("must be >= 0, got {}", input.min_points)));
+        return Err(ModelError::invalid(
+            "min_points",
+            format!("must be >= 0, got {}", input.min_points),
+        ));
     }
     Ok(m)
 }
@@ -132,8 +151,22 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
     let m = check(models, input)?;
     let (dim, rows, dets) = (input.dim, input.points.len(), input.model_index.len());
     let dd = dim * dim;
-    let (pred_means, pred_covars) = predict(dim, input.means, input.covars, input.transition_index, input.matrices, input.noises)?;
-    let z: Vec<DVector<f64>> = memory::collected("detections", input.detections.chunks_exact(m.max(1)).take(dets).map(DVector::from_row_slice))?;
+    let (pred_means, pred_covars) = predict(
+        dim,
+        input.means,
+        input.covars,
+        input.transition_index,
+        input.matrices,
+        input.noises,
+    )?;
+    let z: Vec<DVector<f64>> = memory::collected(
+        "detections",
+        input
+            .detections
+            .chunks_exact(m.max(1))
+            .take(dets)
+            .map(DVector::from_row_slice),
+    )?;
     let used: Vec<bool> = (0..models.len()).map(|g| input.model_index.contains(&g)).collect();
 
     // 2. gate: each row's hypotheses (detection, distance) and its measurement predictions
@@ -152,7 +185,12 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
             let (z_hat, h) = model.linearise(&x);
             let cross = &p * h.transpose();
             let s = &h * &cross + model.noise();
-            let s_inv = s.clone().try_inverse().ok_or_else(|| ModelError::invalid("covars", format!("row {row}: the innovation covariance H P Hᵀ + R is singular")))?;
+            let s_inv = s.clone().try_inverse().ok_or_else(|| {
+                ModelError::invalid(
+                    "covars",
+                    format!("row {row}: the innovation covariance H P Hᵀ + R is singular"),
+                )
+            })?;
             per_model.push(Some(Predicted { z_hat, s, s_inv, cross }));
         }
         for (j, zj) in z.iter().enumerate() {
@@ -175,7 +213,9 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
     if !detected.is_empty() {
         let n = detected.len();
         let cols = dets + n;
-        let size = n.checked_mul(cols).ok_or_else(|| ModelError::memory("detections", (n as u128) * (cols as u128) * 8))?;
+        let size = n
+            .checked_mul(cols)
+            .ok_or_else(|| ModelError::memory("detections", (n as u128) * (cols as u128) * 8))?;
         let mut cost = memory::filled("detections", size, f64::INFINITY)?;
         for (i, &row) in detected.iter().enumerate() {
             cost[i * cols + dets + i] = input.missed_distance;
@@ -183,7 +223,8 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
                 cost[i * cols + j] = d;
             }
         }
-        let col4row = assign(&cost, n, cols).map_err(|e| ModelError::invalid("missed_distance", format!("the assignment is not feasible ({e})")))?;
+        let col4row = assign(&cost, n, cols)
+            .map_err(|e| ModelError::invalid("missed_distance", format!("the assignment is not feasible ({e})")))?;
         for (i, &row) in detected.iter().enumerate() {
             let j = col4row[i];
             if j < dets {
@@ -208,7 +249,9 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
         if updated {
             let j = assigned[row] as usize;
             let g = input.model_index[j];
-            let pm = predicted[row][g].as_ref().ok_or_else(|| ModelError::invalid("model_index", "an assigned detection's model was not predicted"))?;
+            let pm = predicted[row][g]
+                .as_ref()
+                .ok_or_else(|| ModelError::invalid("model_index", "an assigned detection's model was not predicted"))?;
             let x = DVector::from_row_slice(&pred_means[row * dim..(row + 1) * dim]);
             let p = DMatrix::from_row_slice(dim, dim, &pred_covars[row * dd..(row + 1) * dd]);
             let gain = &pm.cross * &pm.s_inv;
@@ -232,12 +275,17 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
             out.covars.extend_from_slice(&pred_covars[row * dd..(row + 1) * dd]);
         }
         let points = input.points[row] + i64::from(updated || !input.updates_only);
-        let since = if updated { 1 } else { input.since[row] + i64::from(input.new_time[row]) };
+        let since = if updated {
+            1
+        } else {
+            input.since[row] + i64::from(input.new_time[row])
+        };
         let released = points >= input.min_points;
         out.points.push(points);
         out.since.push(since);
         out.released.push(released);
-        out.expired.push(!released && input.max_since.is_some_and(|limit| since > limit));
+        out.expired
+            .push(!released && input.max_since.is_some_and(|limit| since > limit));
     }
     out.pred_means = pred_means;
     out.pred_covars = pred_covars;
@@ -251,7 +299,11 @@ fn innovation(model: &MeasurementModel, z: &DVector<f64>, z_hat: &DVector<f64>, 
     let angle = model.angle_row();
     for (i, d) in delta.iter_mut().enumerate() {
         let diff = z[i] - z_hat[i];
-        *d = if angle == Some(i) { mod_bearing(-mod_bearing(diff)) } else { -diff };
+        *d = if angle == Some(i) {
+            mod_bearing(-mod_bearing(diff))
+        } else {
+            -diff
+        };
     }
 }
 
@@ -272,7 +324,9 @@ fn quadratic(a: &DMatrix<f64>, delta: &[f64]) -> f64 {
 mod tests {
     use super::*;
 
-    const IDENTITY4: [f64; 16] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+    const IDENTITY4: [f64; 16] = [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    ];
 
     fn linear() -> MeasurementModel {
         MeasurementModel::linear(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], 2, 4, &[1.0, 0.0, 0.0, 1.0]).unwrap()
@@ -314,7 +368,11 @@ mod tests {
         // rows at x = 0 and x = 1 (P = I, so S = 2I), one detection at x = 0.9
         let means = [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0];
         let covars: Vec<f64> = IDENTITY4.iter().chain(IDENTITY4.iter()).copied().collect();
-        let out = initiator_scan(&[linear()], &input(&means, &covars, &[0.9, 0.0], &[0, 0], &[0], &[1, 2], &[true, true])).unwrap();
+        let out = initiator_scan(
+            &[linear()],
+            &input(&means, &covars, &[0.9, 0.0], &[0, 0], &[0], &[1, 2], &[true, true]),
+        )
+        .unwrap();
         assert_eq!(out.assigned, vec![-1, 0]);
         assert!((out.distances[0] - (0.01f64 / 2.0).sqrt()).abs() < 1e-15);
         // K = ½ on the measured rows: x = 1 + ½(0.9 − 1), P₀₀ = 1 − ½
@@ -335,7 +393,10 @@ mod tests {
         assert!(out.released[0]);
         probe.updates_only = true;
         let out = initiator_scan(&[linear()], &probe).unwrap();
-        assert_eq!((out.points[0], out.since[0], out.released[0], out.expired[0]), (2, 3, false, true));
+        assert_eq!(
+            (out.points[0], out.since[0], out.released[0], out.expired[0]),
+            (2, 3, false, true)
+        );
         probe.new_time = &[false]; // the same time again: no new step
         let out = initiator_scan(&[linear()], &probe).unwrap();
         assert_eq!((out.since[0], out.expired[0]), (2, false));
@@ -344,9 +405,28 @@ mod tests {
     #[test]
     fn a_bearing_innovation_is_wrapped() {
         // a target north of a sensor at the origin; a detection across the ±π wrap
-        let model = MeasurementModel::bearing_range([0, 2], [0.0, 0.0], &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &[1e-2, 0.0, 0.0, 1.0], Jacobian::Analytic).unwrap();
+        let model = MeasurementModel::bearing_range(
+            [0, 2],
+            [0.0, 0.0],
+            &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+            &[1e-2, 0.0, 0.0, 1.0],
+            Jacobian::Analytic,
+        )
+        .unwrap();
         let means = [-100.0, 0.0, 1e-9, 0.0]; // bearing ≈ π
-        let out = initiator_scan(&[model], &input(&means, &IDENTITY4, &[-std::f64::consts::PI + 0.001, 100.0], &[0], &[0], &[1], &[true])).unwrap();
+        let out = initiator_scan(
+            &[model],
+            &input(
+                &means,
+                &IDENTITY4,
+                &[-std::f64::consts::PI + 0.001, 100.0],
+                &[0],
+                &[0],
+                &[1],
+                &[true],
+            ),
+        )
+        .unwrap();
         assert_eq!(out.assigned, vec![0]);
         assert!(out.distances[0] < 0.1);
     }
@@ -355,16 +435,29 @@ mod tests {
     fn bad_inputs_are_errors_naming_the_argument() {
         let means = [0.0; 4];
         let run = |i: &InitiatorInput| initiator_scan(&[linear()], i).unwrap_err().argument();
-        assert_eq!(run(&input(&means, &IDENTITY4[..15], &[], &[0], &[], &[1], &[true])), "covars");
-        assert_eq!(run(&input(&means, &IDENTITY4, &[0.0, 0.0], &[0], &[1], &[1], &[true])), "model_index");
-        assert_eq!(run(&input(&means, &IDENTITY4, &[0.0], &[0], &[0], &[1], &[true])), "detections");
+        assert_eq!(
+            run(&input(&means, &IDENTITY4[..15], &[], &[0], &[], &[1], &[true])),
+            "covars"
+        );
+        assert_eq!(
+            run(&input(&means, &IDENTITY4, &[0.0, 0.0], &[0], &[1], &[1], &[true])),
+            "model_index"
+        );
+        assert_eq!(
+            run(&input(&means, &IDENTITY4, &[0.0], &[0], &[0], &[1], &[true])),
+            "detections"
+        );
         assert_eq!(run(&input(&means, &IDENTITY4, &[], &[0], &[], &[1], &[])), "since");
         let mut nan = input(&means, &IDENTITY4, &[], &[0], &[], &[1], &[true]);
         nan.missed_distance = f64::NAN;
         assert_eq!(run(&nan), "missed_distance");
         // a singular innovation covariance (P = 0, R = 0)
         let zero = MeasurementModel::linear(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], 2, 4, &[0.0; 4]).unwrap();
-        let err = initiator_scan(&[zero], &input(&means, &[0.0; 16], &[0.0, 0.0], &[0], &[0], &[1], &[true])).unwrap_err();
+        let err = initiator_scan(
+            &[zero],
+            &input(&means, &[0.0; 16], &[0.0, 0.0], &[0], &[0], &[1], &[true]),
+        )
+        .unwrap_err();
         assert_eq!(err.argument(), "covars");
     }
 }

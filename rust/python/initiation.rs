@@ -12,16 +12,27 @@ use pyo3::types::PyDict;
 
 /// A 1-D array argument of `len` entries as a slice.
 fn entries<'a, T: Element>(array: &'a PyReadonlyArray1<'_, T>, argument: &str, len: usize) -> PyResult<&'a [T]> {
-    let values = array.as_slice().map_err(|_| value_error(argument, "must be C-contiguous"))?;
+    let values = array
+        .as_slice()
+        .map_err(|_| value_error(argument, "must be C-contiguous"))?;
     if values.len() != len {
-        return Err(value_error(argument, format_args!("must have {len} entries, got {}", values.len())));
+        return Err(value_error(
+            argument,
+            format_args!("must have {len} entries, got {}", values.len()),
+        ));
     }
     Ok(values)
 }
 
 /// Indices (`>= 0`) of a 1-D int64 array argument.
 fn indices(values: &[i64], argument: &str) -> PyResult<Vec<usize>> {
-    values.iter().enumerate().map(|(k, &v)| usize::try_from(v).map_err(|_| value_error(argument, format_args!("entry {k}: must be >= 0, got {v}")))).collect()
+    values
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| {
+            usize::try_from(v).map_err(|_| value_error(argument, format_args!("entry {k}: must be >= 0, got {v}")))
+        })
+        .collect()
 }
 
 /// One scan of the M-of-N initiator's holding rows (see `ctxmodels.stonesoup.array_initiator`):
@@ -54,21 +65,41 @@ fn initiator_scan<'py>(
     max_since: Option<i64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (rows, dim) = check_covars(&means, &covars)?;
-    for (name, array) in [("transition_matrices", &transition_matrices), ("transition_covars", &transition_covars)] {
+    for (name, array) in [
+        ("transition_matrices", &transition_matrices),
+        ("transition_covars", &transition_covars),
+    ] {
         let shape = array.shape();
         if shape[1] != dim || shape[2] != dim {
-            return Err(value_error(name, format_args!("must have shape (K, {dim}, {dim}), got {shape:?}")));
+            return Err(value_error(
+                name,
+                format_args!("must have shape (K, {dim}, {dim}), got {shape:?}"),
+            ));
         }
     }
     if transition_matrices.shape() != transition_covars.shape() {
-        return Err(value_error("transition_covars", "must have the shape of transition_matrices"));
+        return Err(value_error(
+            "transition_covars",
+            "must have the shape of transition_matrices",
+        ));
     }
     let dets = detections.shape()[0];
-    let meas_dim = models.first().map_or(detections.shape()[1], |model| model.0.ndim_meas());
+    let meas_dim = models
+        .first()
+        .map_or(detections.shape()[1], |model| model.0.ndim_meas());
     if detections.shape()[1] != meas_dim && dets > 0 {
-        return Err(value_error("detections", format_args!("must have {meas_dim} columns (the models' measurement size), got {}", detections.shape()[1])));
+        return Err(value_error(
+            "detections",
+            format_args!(
+                "must have {meas_dim} columns (the models' measurement size), got {}",
+                detections.shape()[1]
+            ),
+        ));
     }
-    let transition_index = indices(entries(&transition_index, "transition_index", rows)?, "transition_index")?;
+    let transition_index = indices(
+        entries(&transition_index, "transition_index", rows)?,
+        "transition_index",
+    )?;
     let model_index = indices(entries(&model_index, "model_index", dets)?, "model_index")?;
     let points = entries(&points, "points", rows)?;
     let since = entries(&since, "since", rows)?;
