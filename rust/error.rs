@@ -25,6 +25,10 @@ pub enum ModelError {
     /// raises `ctxmodels.NotPositiveDefiniteError`, so callers need not read the message.
     #[error("{argument}: {message}")]
     NotPositiveDefinite { argument: &'static str, message: String },
+    /// An assignment problem has no complete assignment of finite cost: the binding raises
+    /// `ctxmodels.InfeasibleAssignmentError`.
+    #[error("{argument}: {message}")]
+    Infeasible { argument: &'static str, message: String },
 }
 
 impl ModelError {
@@ -61,6 +65,13 @@ impl ModelError {
         }
     }
 
+    pub fn infeasible(argument: &'static str, message: impl Into<String>) -> Self {
+        ModelError::Infeasible {
+            argument,
+            message: message.into(),
+        }
+    }
+
     /// The argument the error is about.
     pub fn argument(&self) -> &'static str {
         match self {
@@ -68,7 +79,8 @@ impl ModelError {
             | ModelError::NonFinite { argument, .. }
             | ModelError::Shape { argument, .. }
             | ModelError::Memory { argument, .. }
-            | ModelError::NotPositiveDefinite { argument, .. } => argument,
+            | ModelError::NotPositiveDefinite { argument, .. }
+            | ModelError::Infeasible { argument, .. } => argument,
         }
     }
 }

@@ -41,10 +41,18 @@ pyo3::create_exception!(
     "A covariance the computation needs positive definite is not (a ValueError naming the argument)."
 );
 
+pyo3::create_exception!(
+    ctxmodels._core,
+    InfeasibleAssignmentError,
+    PyValueError,
+    "An assignment problem has no complete assignment of finite cost (a ValueError naming the argument)."
+);
+
 fn to_py(err: ModelError) -> PyErr {
     match err {
         ModelError::Memory { .. } => PyMemoryError::new_err(err.to_string()),
         ModelError::NotPositiveDefinite { .. } => NotPositiveDefiniteError::new_err(err.to_string()),
+        ModelError::Infeasible { .. } => InfeasibleAssignmentError::new_err(err.to_string()),
         _ => PyValueError::new_err(err.to_string()),
     }
 }
@@ -681,6 +689,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add(
         "NotPositiveDefiniteError",
         m.py().get_type::<NotPositiveDefiniteError>(),
+    )?;
+    m.add(
+        "InfeasibleAssignmentError",
+        m.py().get_type::<InfeasibleAssignmentError>(),
     )?;
     gmphd::register(m)?;
     jpda::register(m)?;

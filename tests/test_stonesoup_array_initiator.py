@@ -264,6 +264,46 @@ def test_core_scan_errors_name_the_argument():
         _core.initiator_scan(**args)
 
 
+def test_infeasible_assignment_is_its_own_error_and_the_initiator_raises_the_stocks(
+        monkeypatch):
+    """With an infinite gate a holding row cannot stay unassigned: more rows than detections
+    has no assignment. The core raises :class:`ctxmodels.InfeasibleAssignmentError` (a
+    ValueError naming the argument, picklable); the array initiator turns it into the
+    RuntimeError the stock initiator's associator raises, by type."""
+    import pickle
+
+    import ctxmodels
+    assert issubclass(ctxmodels.InfeasibleAssignmentError, ValueError)
+    assert ctxmodels.InfeasibleAssignmentError is _core.InfeasibleAssignmentError
+    error = pickle.loads(pickle.dumps(ctxmodels.InfeasibleAssignmentError("cost: row 1")))
+    assert type(error) is ctxmodels.InfeasibleAssignmentError and str(error) == "cost: row 1"
+    args = {**_scan_args(rows=2, dets=1), "missed_distance": float("inf")}
+    with pytest.raises(ctxmodels.InfeasibleAssignmentError, match="^missed_distance: .*not feasible"):
+        _core.initiator_scan(**args, min_points=2, max_since=1)
+    from ctxmodels.stonesoup.jpda import _initiator_scan
+    raised, core_scan = [], _core.initiator_scan
+
+    def spy(*a, **k):
+        try:
+            return core_scan(*a, **k)
+        except ctxmodels.InfeasibleAssignmentError:
+            raised.append(1)
+            raise
+    monkeypatch.setattr(_initiator_scan._core, "initiator_scan", spy)
+    scans = tutorial_scans(seed=9, steps=6, clutter_max=1)
+    outcomes = []
+    for initiator in _tutorial_pair(gate=float("inf")):
+        try:
+            for time, detections in scans:
+                initiator.initiate(set(list(detections)[:1]) if time > scans[2][0] else
+                                   detections, time)
+            outcomes.append(None)
+        except RuntimeError as err:
+            outcomes.append(str(err))
+    assert outcomes == ["Assignment was not feasible"] * 2
+    assert raised == [1]  # the array initiator's came from the core's error
+
+
 @pytest.mark.parametrize("layout", [
     [(-1.0, 0.0), (1.0, 0.0)],  # two tracks, one detection midway: an exact tie
     [(-1.0, 0.0), (1.0, 0.0), (0.0, 1.0)],  # three equidistant tracks

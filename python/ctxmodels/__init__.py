@@ -5,7 +5,7 @@ depend on the predicted state, the measurement and the sensor's state at each sc
 range bands, blind sectors, land, line of sight), evaluated over whole arrays in a Rust core
 and handed to Stone Soup trackers as per-scan :class:`DetectorContext` objects.
 """
-from ._core import NotPositiveDefiniteError, rule_points
+from ._core import InfeasibleAssignmentError, NotPositiveDefiniteError, rule_points
 from .clutter import ClutterDensityModel, MetadataThreshold
 from .clutter_map import ClutterMap
 from .coast import CoastalClutter
@@ -35,6 +35,7 @@ __all__ = [
     "MetadataThreshold",
     "Mounting",
     "NavigationTrack",
+    "InfeasibleAssignmentError",
     "NotPositiveDefiniteError",
     "Pose",
     "PoseSource",

@@ -27,6 +27,7 @@ __all__ = [
     "LandMask",
     "LineOfSight",
     "MetadataThreshold",
+    "InfeasibleAssignmentError",
     "NotPositiveDefiniteError",
     "RangeBands",
     "ScanMeasurementModel",
@@ -47,6 +48,10 @@ _Mapping: TypeAlias = tuple[int, int]
 _Floats: TypeAlias = NDArray[np.float64]
 _Bools: TypeAlias = NDArray[np.bool_]
 _Rule: TypeAlias = Literal["mean", "cubature", "unscented", "gauss-hermite"]
+
+class InfeasibleAssignmentError(ValueError):
+    """An assignment problem has no complete assignment of finite cost (a ValueError naming
+    the argument)."""
 
 class NotPositiveDefiniteError(ValueError):
     """A covariance the computation needs positive definite is not (a ValueError naming the

@@ -71,7 +71,7 @@ pub fn assign(cost: &[f64], rows: usize, cols: usize) -> Result<Vec<usize>> {
             }
             reached = lowest;
             if reached == f64::INFINITY || chosen == usize::MAX {
-                return Err(ModelError::invalid(
+                return Err(ModelError::infeasible(
                     "cost",
                     format!("row {current} can reach no column: the assignment is not feasible"),
                 ));

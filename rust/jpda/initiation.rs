@@ -224,7 +224,7 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
             }
         }
         let col4row = assign(&cost, n, cols)
-            .map_err(|e| ModelError::invalid("missed_distance", format!("the assignment is not feasible ({e})")))?;
+            .map_err(|e| ModelError::infeasible("missed_distance", format!("the assignment is not feasible ({e})")))?;
         for (i, &row) in detected.iter().enumerate() {
             let j = col4row[i];
             if j < dets {

@@ -88,9 +88,9 @@ class ScanCore:
                 force_symmetric=bool(initiator.updater.force_symmetric_covariance),
                 updates_only=bool(initiator.updates_only), min_points=int(initiator.min_points),
                 max_since=None if steps is None else int(steps))
-        except ValueError as error:
-            if str(error).startswith("missed_distance: the assignment is not feasible"):
-                raise RuntimeError("Assignment was not feasible") from None
+        except _core.InfeasibleAssignmentError:
+            raise RuntimeError("Assignment was not feasible") from None  # (the stock error)
+        except ValueError:
             return None  # (a singular innovation covariance: the component path decides)
         out["bearing"] = bearing
         out["model_index"] = model_index
