@@ -18,8 +18,6 @@ model, so they are interchangeable: which comes first changes no number.
 """
 from __future__ import annotations
 
-import functools
-import inspect
 
 from collections.abc import Iterable
 
@@ -218,34 +216,5 @@ def in_track_order(tracks: Iterable) -> list:
     return sorted(tracks, key=track_key)
 
 
-def context_kwargs(detections, method) -> dict:
-    """``{"detector_context": context}`` when the scan's detections carry a context and the
-    component ``method`` (a bound ``hypothesise``, ``associate``, ``initiate`` or
-    ``delete_tracks``) declares a ``detector_context`` parameter; else ``{}``.
-
-    A component opts in by naming the parameter. Stock Stone Soup components, which take
-    only ``**kwargs``, are called as the stock tracker calls them: their keyword arguments
-    travel on into predictors, transition and measurement models, and some of those were
-    not written for it (1.9.1's ``CompositeHypothesiser`` takes no ``**kwargs``; cached
-    transition models and ``predict_lru_cache`` would key on the context)."""
-    context = getattr(detections, "detector_context", None)
-    if context is None or not declares_context(method):
-        return {}
-    return {"detector_context": context}
-
-
-def declares_context(method) -> bool:
-    """Whether ``method``'s signature names a ``detector_context`` parameter."""
-    return _names_context(getattr(method, "__func__", method))
-
-
-@functools.cache
-def _names_context(function) -> bool:
-    try:
-        return "detector_context" in inspect.signature(function).parameters
-    except (TypeError, ValueError):
-        return False
-
-
-__all__ = ["OrderedDetections", "context_kwargs", "declares_context", "detection_key",
-           "in_stable_order", "in_track_order", "ordered_subset", "track_key"]
+__all__ = ["OrderedDetections", "detection_key", "in_stable_order", "in_track_order",
+           "ordered_subset", "track_key"]

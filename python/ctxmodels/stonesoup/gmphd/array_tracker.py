@@ -60,7 +60,8 @@ from ...model_key import scan_model_groups
 from ...foreign import as_array_context
 from ._plan import _Plan
 from .._batch import ObjectFactory, plain_track_lists
-from ..ordering import declares_context, in_stable_order
+from ..ordering import in_stable_order
+from ..scan_context import declares_context
 from ..paths import PathCounts
 from .tracker import PointProcessMultiTargetTracker
 from .region import CircularRegion, scan_region

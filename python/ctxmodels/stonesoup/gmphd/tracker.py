@@ -21,7 +21,8 @@ from stonesoup.tracker.pointprocess import \
 from stonesoup.types.state import TaggedWeightedGaussianState
 from stonesoup.types.track import Track
 
-from ..ordering import context_kwargs, declares_context, in_stable_order
+from ..ordering import in_stable_order
+from ..scan_context import context_kwargs, declares_context
 from ..scan_checks import checked_scan, naming_scan_errors
 from .birth import MeasurementDrivenBirth
 from .reduction import reduce_mixture

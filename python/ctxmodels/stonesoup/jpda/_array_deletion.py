@@ -31,7 +31,7 @@ from .composite_deleter import CompositeDeleter as _PairwiseCompositeDeleter
 from .deleter import DuplicateTrackDeleter, ExpectedMissesDeleter, UpdateTimeStepsDeleter
 from .._batch import plain_track_lists
 from .hypothesiser import is_detection_backed
-from ..ordering import context_kwargs
+from ..scan_context import context_kwargs
 
 _COMPOSITES = (CompositeDeleter, _PairwiseCompositeDeleter)
 

@@ -104,11 +104,12 @@ from ..transition import ControlTerms
 from ._initiator_history import PRIOR_PREDICTION as _PRIOR_PREDICTION
 from .._batch import KALMAN_UPDATERS, ObjectFactory, plain_track_lists, supports_predictor
 from ..gnn import _copied_properties
-from .hypothesiser import PDAHypothesiser, gate_threshold, is_detection_backed, scan_context
+from .hypothesiser import PDAHypothesiser, gate_threshold, is_detection_backed
 from ..measurement import jpda_core_model
 from .tracker import MultiTargetMixtureTracker
 from ..paths import PathCounts
-from ..ordering import context_kwargs, in_track_order, ordered_subset
+from ..ordering import in_track_order, ordered_subset
+from ..scan_context import context_kwargs, scan_context
 
 _ASSOCIATORS = (JPDAwithEHM2, JPDAwithEHM, JPDA)
 #: Prior state vector and covariance types the array path takes: float64 and the integer

@@ -35,17 +35,7 @@ from stonesoup.types.state import State, StateMutableSequence
 from stonesoup.types.update import Update
 
 from ...foreign import PerCallContext, as_array_context
-
-
-
-def scan_context(detections, kwargs: dict):
-    """The detector context of a scan: the ``detector_context`` keyword (removed from
-    ``kwargs``, so it is not forwarded to predictors and updaters) or else the
-    ``detector_context`` attribute of the detection set; ``None`` if neither."""
-    context = kwargs.pop("detector_context", None)
-    if context is None:
-        context = getattr(detections, "detector_context", None)
-    return context
+from ..scan_context import scan_context
 
 
 @functools.lru_cache(maxsize=256)
@@ -258,5 +248,4 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         self.__dict__.update(state)
 
 
-__all__ = ["PDAHypothesiser", "gate_threshold", "is_detection_backed", "prob_detect_at",
-           "scan_context"]
+__all__ = ["PDAHypothesiser", "gate_threshold", "is_detection_backed", "prob_detect_at"]

@@ -18,7 +18,7 @@ detection) to the initiator. The scan's ``detector_context`` (a
 :class:`~ctxmodels.DetectionSet`'s) stays with the ordered detections, so context-aware
 hypothesisers read it as before, and is also handed to the data associator, the deleter
 and the initiator as the keyword ``detector_context`` when they declare that parameter
-(see :func:`~ctxmodels.stonesoup.ordering.context_kwargs`), as the upstream
+(see :func:`~ctxmodels.stonesoup.scan_context.context_kwargs`), as the upstream
 DetectorContext proposal's trackers hand it on; stock components are called as stock.
 """
 from __future__ import annotations
@@ -35,7 +35,8 @@ from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
-from ..ordering import context_kwargs, declares_context, in_stable_order, in_track_order
+from ..ordering import in_stable_order, in_track_order
+from ..scan_context import context_kwargs, declares_context
 from ..scan_checks import checked_scan_rows, naming_scan_errors
 
 
