@@ -78,9 +78,13 @@ all say so (``intersect``) or when any does. Any other deleter is called.
 
 Determinism: detections in :func:`~ctxmodels.stonesoup.in_stable_order`, tracks in creation
 order; the core runs on one thread in index order.
+
+Why one long module: the scan's steps (the configuration check, the priors read off the
+tracks, the core call, one Stone Soup state per track and its metadata) share the scan's
+arrays and run in one pass per scan; split across modules they would pass those arrays
+through several layers on the hot path.
 """
 from __future__ import annotations
-
 
 import numpy as np
 from stonesoup.dataassociator.probability import JPDA, JPDAwithEHM, JPDAwithEHM2
