@@ -428,3 +428,26 @@ def test_ctrl_c_stops_the_run(target, workers, previous, tmp_path):
         assert (out / "results.md").read_text() == "previous"
     else:
         assert not out.exists()  # made for this run, left empty, so removed
+
+
+def _sleep(seconds):
+    time.sleep(seconds)
+
+
+def test_stopping_the_pool_leaves_nothing_for_the_exit_hook():
+    """The pool's manager thread has ended (its wake-up pipe closed) when ``stop_now``
+    returns: CPython's exit hook writes to every live pool's pipe, and if the manager thread
+    is closing that pipe at the same moment the write fails with EBADF and prints a
+    traceback after the CLI's last line (seen in CI, about one run in fifty)."""
+    import concurrent.futures
+
+    from ctxmodels.experiment.executors import stop_now, worker_ignores_sigint
+    executor = concurrent.futures.ProcessPoolExecutor(2, initializer=worker_ignores_sigint)
+    futures = [executor.submit(_sleep, 30) for _ in range(6)]
+    _wait_for(lambda: sum(f.running() for f in futures) >= 2, 30, "two running jobs")
+    manager = executor._executor_manager_thread
+    processes = list(executor._processes.values())
+    stop_now(executor)
+    assert not manager.is_alive()
+    assert not any(process.is_alive() for process in processes)
+    assert all(f.cancelled() for f in futures if not f.running() and not f.done())

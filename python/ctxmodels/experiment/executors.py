@@ -116,6 +116,7 @@ def stop_now(executor: concurrent.futures.Executor) -> None:
         return
     with sigint_deferred():  # a second Ctrl-C must not leave workers behind
         processes = list((getattr(executor, "_processes", None) or {}).values())
+        manager = getattr(executor, "_executor_manager_thread", None)
         executor.shutdown(wait=False, cancel_futures=True)
         for process in processes:
             process.terminate()
@@ -124,6 +125,11 @@ def stop_now(executor: concurrent.futures.Executor) -> None:
             if process.is_alive():
                 process.kill()
                 process.join(timeout=5)
+        # The pool's manager thread closes its wake-up pipe as it ends; if it is still ending
+        # at interpreter exit, CPython's exit hook can write to that pipe as it closes
+        # (EBADF, printed as a traceback). Once it has ended, the hook sees it closed.
+        if manager is not None:
+            manager.join(timeout=10)
 
 
 class InlineExecutor(concurrent.futures.Executor):
