@@ -442,11 +442,15 @@ class GaussianMixtureArrays:
 
 @final
 class JPDAMeasurementModel:
-    """The measurement model of one scan's detections, for `jpda_scan`."""
+    """The measurement model of one scan's detections, for `jpda_scan`, `initiator_scan` and
+    `initiator_births`."""
 
     @staticmethod
-    def linear(matrix: _Floats, noise_covar: _Floats) -> JPDAMeasurementModel:
-        """A linear Gaussian model: `matrix` (m, D), `noise_covar` (m, m)."""
+    def linear(
+        matrix: _Floats, noise_covar: _Floats, pseudo_inverse: _Floats | None = None
+    ) -> JPDAMeasurementModel:
+        """A linear Gaussian model: `matrix` (m, D), `noise_covar` (m, m); `pseudo_inverse`
+        (D, m): the H⁺ of new tracks (default: the core's SVD)."""
     @staticmethod
     def bearing_range(
         mapping: tuple[int, int],
@@ -454,8 +458,10 @@ class JPDAMeasurementModel:
         rotation_matrix: _Floats,
         noise_covar: _Floats,
         jacobian: Literal["finite-difference", "analytic"] = "finite-difference",
+        inverse_rotation_matrix: _Floats | None = None,
     ) -> JPDAMeasurementModel:
-        """A 2-D bearing–range model (Stone Soup's `CartesianToBearingRange`)."""
+        """A 2-D bearing–range model (Stone Soup's `CartesianToBearingRange`);
+        `inverse_rotation_matrix`: the inverse function's R⁻¹ (default: the core's inverse)."""
     @property
     def ndim_meas(self) -> int:
         """Number of measured values per detection."""
@@ -524,5 +530,20 @@ def initiator_scan(
     update of the assigned rows and the M-of-N counts. Keys pred_means, pred_covars, means,
     covars, assigned (−1: missed), distances, meas_means, meas_covars, cross_covars (per
     updated row, in row order), points, since, released, expired."""
+
+def initiator_births(
+    models: Sequence[JPDAMeasurementModel],
+    detections: _Floats,
+    model_index: NDArray[np.int64],
+    prior_mean: _Floats,
+    prior_covar: _Floats,
+    diag_load: float = 0.0,
+) -> tuple[_Floats, _Floats]:
+    """The M-of-N initiator's new tracks, as Stone Soup's `SimpleMeasurementInitiator` builds
+    them (to rounding): for `detections` (M, m), detection j measured by
+    `models[model_index[j]]`, the means (M, D) and covariances (M, D, D) from the prior
+    `prior_mean` (D,) / `prior_covar` (D, D) with its mapped entries zeroed, the model's
+    inverse (H⁺ z, or the bearing–range inverse function), `J⁺ R J⁺ᵀ` and `diag_load` on
+    the diagonal."""
 
 # --- end of whole-scan JPDA -------------------------------------------------------------------

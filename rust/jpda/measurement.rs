@@ -7,7 +7,7 @@ use super::check_finite;
 use crate::error::{ModelError, Result};
 pub use crate::gmphd::measurement::mod_bearing;
 pub(super) use crate::gmphd::measurement::spacing;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix3};
 
 /// How the bearing–range model is linearised: the GM-PHD's choice, the same two kinds.
 pub use crate::gmphd::Jacobian;
@@ -15,8 +15,12 @@ pub use crate::gmphd::Jacobian;
 /// The measurement model of a scan's detections.
 #[derive(Debug, Clone)]
 pub enum MeasurementModel {
-    /// `z = H x + v`, `v ~ N(0, R)`.
-    Linear { matrix: DMatrix<f64>, noise: DMatrix<f64> },
+    /// `z = H x + v`, `v ~ N(0, R)`; `H⁺` of new tracks when the caller gives it.
+    Linear {
+        matrix: DMatrix<f64>,
+        noise: DMatrix<f64>,
+        pseudo_inverse: Option<DMatrix<f64>>,
+    },
     /// Stone Soup's `CartesianToBearingRange` in 2-D: `r = R·[x_{m₀} − t₀, x_{m₁} − t₁, 0]`,
     /// `z = [atan2(r₁, r₀), √(r₀² + r₁²)]`, bearing wrapped to `[−π, π)`.
     BearingRange {
@@ -25,6 +29,8 @@ pub enum MeasurementModel {
         rotation: [[f64; 3]; 3],
         noise: DMatrix<f64>,
         jacobian: Jacobian,
+        /// `R⁻¹` of the inverse function (new tracks), None if `R` is singular.
+        inverse_rotation: Option<[[f64; 3]; 3]>,
     },
 }
 
@@ -54,6 +60,7 @@ impl MeasurementModel {
         Ok(MeasurementModel::Linear {
             matrix: DMatrix::from_row_slice(rows, cols, matrix),
             noise: DMatrix::from_row_slice(rows, rows, noise),
+            pseudo_inverse: None,
         })
     }
 
@@ -93,13 +100,65 @@ impl MeasurementModel {
             [r(1, 0), r(1, 1), r(1, 2)],
             [r(2, 0), r(2, 1), r(2, 2)],
         ];
+        let inverse_rotation = Matrix3::from_fn(|i, j| rotation[i][j])
+            .try_inverse()
+            .map(|inverse| std::array::from_fn(|i| std::array::from_fn(|j| inverse[(i, j)])));
         Ok(MeasurementModel::BearingRange {
             mapping,
             offset,
             rotation,
             noise: DMatrix::from_row_slice(2, 2, noise),
             jacobian,
+            inverse_rotation,
         })
+    }
+
+    /// The model with the inverse of its measurement as the caller computes it: `H⁺`
+    /// (row-major D×m) of a linear model, `R⁻¹` (row-major 3×3) of a bearing–range one.
+    /// Stone Soup computes both with NumPy (`pinv`, `inv`); given them, a new track's mean is
+    /// Stone Soup's to the bit (and so is a finite-difference Jacobian there, which one ulp of
+    /// the mean moves by ~10⁻⁵).
+    pub fn with_inverse(self, inverse: &[f64]) -> Result<Self> {
+        check_finite("inverse", inverse)?;
+        match self {
+            MeasurementModel::Linear { matrix, noise, .. } => {
+                let (rows, cols) = matrix.shape();
+                if inverse.len() != rows * cols {
+                    return Err(ModelError::shape(
+                        "inverse",
+                        format!("must be ({cols}, {rows}), got {} values", inverse.len()),
+                    ));
+                }
+                Ok(MeasurementModel::Linear {
+                    matrix,
+                    noise,
+                    pseudo_inverse: Some(DMatrix::from_row_slice(cols, rows, inverse)),
+                })
+            }
+            MeasurementModel::BearingRange {
+                mapping,
+                offset,
+                rotation,
+                noise,
+                jacobian,
+                ..
+            } => {
+                if inverse.len() != 9 {
+                    return Err(ModelError::shape(
+                        "inverse",
+                        format!("must be 3×3, got {} values", inverse.len()),
+                    ));
+                }
+                Ok(MeasurementModel::BearingRange {
+                    mapping,
+                    offset,
+                    rotation,
+                    noise,
+                    jacobian,
+                    inverse_rotation: Some(std::array::from_fn(|i| std::array::from_fn(|j| inverse[3 * i + j]))),
+                })
+            }
+        }
     }
 
     /// Number of measured values per detection.

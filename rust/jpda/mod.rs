@@ -31,6 +31,7 @@
 //! All loops run in index order on one thread: the same inputs give the same bits.
 
 mod assignment;
+mod births;
 mod initiation;
 mod marginals;
 mod measurement;
@@ -38,6 +39,7 @@ mod measurement;
 mod tests;
 
 pub use assignment::assign;
+pub use births::{initiator_births, BirthPrior};
 pub use initiation::{initiator_scan, InitiatorInput, InitiatorOutput};
 pub use marginals::{brute_force_marginals, joint_marginals, MAX_TREE_EDGES, MAX_TREE_NODES};
 pub use measurement::{mod_bearing, Jacobian, MeasurementModel};

@@ -543,3 +543,70 @@ fn shared_bearing_helpers_are_the_jpda_formulae() {
         assert_eq!(spacing(v).to_bits(), numpy_spacing(v).to_bits(), "spacing({v:e})");
     }
 }
+
+#[test]
+fn a_birth_inverts_the_measurement_and_its_covariance_maps_back_to_the_noise() {
+    // h(x − x₀') = z (the inverse function), and J P Jᵀ = R where the prior is not mapped
+    // (J J⁺ = I for a full-rank J): the birth's spread is the noise carried back to the state.
+    let model = bearing_range(Jacobian::Analytic);
+    let prior_mean = [1.0, 2.0, 3.0, 4.0];
+    let prior_covar: Vec<f64> = (0..16).map(|k| if k % 5 == 0 { 9.0 } else { 0.5 }).collect();
+    let detections = [0.3, 120.0, -2.9, 40.0, 3.1, 500.0];
+    let prior = BirthPrior {
+        mean: &prior_mean,
+        covar: &prior_covar,
+        diag_load: 0.0,
+    };
+    let (means, covars) = initiator_births(std::slice::from_ref(&model), &detections, &[0, 0, 0], prior).unwrap();
+    for j in 0..3 {
+        let mut x = DVector::from_column_slice(&means[4 * j..4 * j + 4]);
+        assert_eq!((x[1], x[3]), (2.0, 4.0)); // unmapped: the prior's
+        x[1] = 0.0;
+        x[3] = 0.0;
+        let (z, h) = model.linearise(&x);
+        assert!((z[0] - detections[2 * j]).abs() < 1e-12 && (z[1] / detections[2 * j + 1] - 1.0).abs() < 1e-12);
+        let p = DMatrix::from_row_slice(4, 4, &covars[16 * j..16 * j + 16]);
+        let back = &h * &p * h.transpose();
+        let noise = [1e-4, 0.0, 0.0, 25.0];
+        for (k, &r) in noise.iter().enumerate() {
+            assert!((back[(k / 2, k % 2)] - r).abs() <= 1e-9 * (1.0 + r.abs()), "{back}");
+        }
+        // the unmapped block is the prior's (rows and columns 1 and 3), the cross terms zero
+        // (to the SVD's rounding: J⁺ has no exact zeros)
+        for (a, b, want) in [(1, 1, 9.0), (1, 3, 0.5), (3, 3, 9.0), (0, 1, 0.0), (2, 3, 0.0)] {
+            assert!((p[(a, b)] - want).abs() <= 1e-12 * p.amax(), "{p}");
+        }
+    }
+}
+
+#[test]
+fn a_linear_birth_uses_the_pseudo_inverse_given_or_the_svds() {
+    let selection = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let model = MeasurementModel::linear(&selection, 2, 4, &[4.0, 0.0, 0.0, 9.0]).unwrap();
+    let prior = BirthPrior {
+        mean: &[0.0; 4],
+        covar: &[0.0; 16],
+        diag_load: 0.5,
+    };
+    let z = [3.0, -7.0];
+    let (svd_mean, svd_covar) = initiator_births(std::slice::from_ref(&model), &z, &[0], prior).unwrap();
+    let (given_mean, given_covar) = initiator_births(
+        &[model.with_inverse(&[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]).unwrap()],
+        &z,
+        &[0],
+        prior,
+    )
+    .unwrap();
+    assert_eq!(given_mean, vec![3.0, 0.0, -7.0, 0.0]);
+    assert_eq!(
+        given_covar,
+        vec![4.5, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 9.5, 0.0, 0.0, 0.0, 0.0, 0.5]
+    );
+    for (a, b) in svd_mean
+        .iter()
+        .zip(&given_mean)
+        .chain(svd_covar.iter().zip(&given_covar))
+    {
+        assert!((a - b).abs() <= 1e-14 * 10.0, "{a} vs {b}");
+    }
+}

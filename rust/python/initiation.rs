@@ -1,12 +1,12 @@
-//! Python binding of the M-of-N initiator's scan ([`crate::jpda::initiator_scan`]):
-//! `initiator_scan`. Arguments are converted as in the parent module (C-contiguous arrays,
+//! Python binding of the M-of-N initiator's scan ([`crate::jpda::initiator_scan`]) and new
+//! tracks ([`crate::jpda::initiator_births`]): `initiator_scan`, `initiator_births`. Arguments are converted as in the parent module (C-contiguous arrays,
 //! errors naming the argument); the work runs with the GIL released and a panic becomes a
 //! RuntimeError.
 
 use super::jpda::{array2, array3, check_covars, PyJPDAMeasurementModel};
 use super::{borrow, detached, slice, value_error};
 use crate::jpda::{self, InitiatorInput};
-use numpy::{Element, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyUntypedArrayMethods};
+use numpy::{Element, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -150,7 +150,43 @@ fn initiator_scan<'py>(
     Ok(result)
 }
 
+/// The new holding tracks of the M-of-N initiator (see `ctxmodels.stonesoup.array_initiator`):
+/// for `detections` (M, m), each measured by `models[model_index[j]]`, what Stone Soup's
+/// `SimpleMeasurementInitiator` builds from `prior_mean` (D,), `prior_covar` (D, D) and
+/// `diag_load`. Returns the means (M, D) and covariances (M, D, D).
+#[pyfunction]
+#[pyo3(signature = (models, detections, model_index, prior_mean, prior_covar, diag_load = 0.0))]
+#[allow(clippy::type_complexity)]
+fn initiator_births<'py>(
+    py: Python<'py>,
+    models: Vec<PyRef<'py, PyJPDAMeasurementModel>>,
+    detections: PyReadonlyArray2<'py, f64>,
+    model_index: PyReadonlyArray1<'py, i64>,
+    prior_mean: PyReadonlyArray1<'py, f64>,
+    prior_covar: PyReadonlyArray2<'py, f64>,
+    diag_load: f64,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray3<f64>>)> {
+    let dets = detections.shape()[0];
+    let model_index = indices(entries(&model_index, "model_index", dets)?, "model_index")?;
+    let dim = prior_mean.len();
+    if prior_covar.shape() != [dim, dim] {
+        return Err(value_error(
+            "prior_covar",
+            format_args!("must have shape ({dim}, {dim}), got {:?}", prior_covar.shape()),
+        ));
+    }
+    let contiguous = |name: &str| value_error(name, "must be C-contiguous");
+    let core: Vec<_> = models.iter().map(|model| model.0.clone()).collect();
+    let z = detections.as_slice().map_err(|_| contiguous("detections"))?;
+    let mean = prior_mean.as_slice().map_err(|_| contiguous("prior_mean"))?;
+    let covar = prior_covar.as_slice().map_err(|_| contiguous("prior_covar"))?;
+    let prior = jpda::BirthPrior { mean, covar, diag_load };
+    let (means, covars) = detached(py, || jpda::initiator_births(&core, z, &model_index, prior))?;
+    Ok((array2(py, means, dets, dim)?, array3(py, covars, dets, dim, dim)?))
+}
+
 pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(initiator_scan, m)?)?;
+    m.add_function(wrap_pyfunction!(initiator_births, m)?)?;
     Ok(())
 }

@@ -22,9 +22,15 @@ fn matrix_of(array: &Bound<'_, PyArray2<f64>>, argument: &str) -> PyResult<(Vec<
 
 #[pymethods]
 impl PyJPDAMeasurementModel {
-    /// A linear Gaussian model: `matrix` (m, D), `noise_covar` (m, m).
+    /// A linear Gaussian model: `matrix` (m, D), `noise_covar` (m, m); `pseudo_inverse`
+    /// (D, m), the `H⁺` of new tracks (default: the core's SVD).
     #[staticmethod]
-    fn linear(matrix: Bound<'_, PyArray2<f64>>, noise_covar: Bound<'_, PyArray2<f64>>) -> PyResult<Self> {
+    #[pyo3(signature = (matrix, noise_covar, pseudo_inverse = None))]
+    fn linear(
+        matrix: Bound<'_, PyArray2<f64>>,
+        noise_covar: Bound<'_, PyArray2<f64>>,
+        pseudo_inverse: Option<Bound<'_, PyArray2<f64>>>,
+    ) -> PyResult<Self> {
         let (h, rows, cols) = matrix_of(&matrix, "matrix")?;
         let (r, r_rows, r_cols) = matrix_of(&noise_covar, "noise_covar")?;
         if (r_rows, r_cols) != (rows, rows) {
@@ -33,22 +39,24 @@ impl PyJPDAMeasurementModel {
                 format_args!("must have shape ({rows}, {rows}) to match matrix, got ({r_rows}, {r_cols})"),
             ));
         }
-        Ok(PyJPDAMeasurementModel(
-            MeasurementModel::linear(&h, rows, cols, &r).map_err(to_py)?,
-        ))
+        let model = MeasurementModel::linear(&h, rows, cols, &r).map_err(to_py)?;
+        with_inverse(model, pseudo_inverse, "pseudo_inverse", (cols, rows))
     }
 
     /// A 2-D bearing–range model (Stone Soup's `CartesianToBearingRange`): state indices
     /// `mapping` of x and y, `translation_offset` (x, y), `rotation_matrix` (3, 3),
-    /// `noise_covar` (2, 2); `jacobian` 'finite-difference' (Stone Soup's) or 'analytic'.
+    /// `noise_covar` (2, 2); `jacobian` 'finite-difference' (Stone Soup's) or 'analytic';
+    /// `inverse_rotation_matrix` (3, 3), the inverse function's `R⁻¹` (default: the core's
+    /// inverse of `rotation_matrix`; Stone Soup's is NumPy's).
     #[staticmethod]
-    #[pyo3(signature = (mapping, translation_offset, rotation_matrix, noise_covar, jacobian = "finite-difference"))]
+    #[pyo3(signature = (mapping, translation_offset, rotation_matrix, noise_covar, jacobian = "finite-difference", inverse_rotation_matrix = None))]
     fn bearing_range(
         mapping: (i64, i64),
         translation_offset: (f64, f64),
         rotation_matrix: Bound<'_, PyArray2<f64>>,
         noise_covar: Bound<'_, PyArray2<f64>>,
         jacobian: &str,
+        inverse_rotation_matrix: Option<Bound<'_, PyArray2<f64>>>,
     ) -> PyResult<Self> {
         let index = |i: i64| {
             usize::try_from(i)
@@ -80,9 +88,8 @@ impl PyJPDAMeasurementModel {
             ));
         }
         let offset = [translation_offset.0, translation_offset.1];
-        Ok(PyJPDAMeasurementModel(
-            MeasurementModel::bearing_range(mapping, offset, &rotation, &noise, jacobian).map_err(to_py)?,
-        ))
+        let model = MeasurementModel::bearing_range(mapping, offset, &rotation, &noise, jacobian).map_err(to_py)?;
+        with_inverse(model, inverse_rotation_matrix, "inverse_rotation_matrix", (3, 3))
     }
 
     /// Number of measured values per detection.
@@ -90,6 +97,29 @@ impl PyJPDAMeasurementModel {
     fn ndim_meas(&self) -> usize {
         self.0.ndim_meas()
     }
+}
+
+/// `model` with the inverse the caller gave (`argument`, of `shape`), if any.
+fn with_inverse(
+    model: MeasurementModel,
+    inverse: Option<Bound<'_, PyArray2<f64>>>,
+    argument: &str,
+    shape: (usize, usize),
+) -> PyResult<PyJPDAMeasurementModel> {
+    let Some(inverse) = inverse else {
+        return Ok(PyJPDAMeasurementModel(model));
+    };
+    let (values, rows, cols) = matrix_of(&inverse, argument)?;
+    if (rows, cols) != shape {
+        return Err(value_error(
+            argument,
+            format_args!("must have shape {shape:?}, got ({rows}, {cols})"),
+        ));
+    }
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(value_error(argument, format_args!("element {i} is not finite")));
+    }
+    Ok(PyJPDAMeasurementModel(model.with_inverse(&values).map_err(to_py)?))
 }
 
 pub(super) fn array2<'py>(

@@ -385,11 +385,10 @@ def _bearing_range_prediction(rotated):
                      0.0 + np.sqrt(rotated[:, 0] ** 2 + rotated[:, 1] ** 2)], axis=1)
 
 
-def _analytic_bearing_range_batch(model, means, covars, timestamp, jacobians_only=False):
+def _analytic_bearing_range_batch(model, means, covars, timestamp):
     """:class:`AnalyticCartesianToBearingRange`: the model's closed-form Jacobian for all
     states at once (the same elementwise code its ``jacobian`` runs for one state); a state
-    at the sensor (ρ = 0) takes the model's own finite-difference fallback. With
-    ``jacobians_only`` the other three results are None (not computed)."""
+    at the sensor (ρ = 0) takes the model's own finite-difference fallback."""
     ndim = means.shape[1]
     x = means[..., 0]
     rotation = model.rotation_matrix
@@ -402,8 +401,6 @@ def _analytic_bearing_range_batch(model, means, covars, timestamp, jacobians_onl
         state = GaussianStatePrediction(means[i].view(StateVector),
                                         covars[i].view(CovarianceMatrix), timestamp=timestamp)
         jac[i] = model.jacobian(state)
-    if jacobians_only:
-        return None, None, None, jac
     pred = _bearing_range_prediction(rotated)
     cross = covars @ jac.transpose(0, 2, 1)
     innov = (jac @ cross) + np.asarray(model.covar(), dtype=np.float64)

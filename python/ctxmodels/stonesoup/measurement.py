@@ -168,10 +168,12 @@ def jpda_core_model(updater_kind, model):
     """The JPDA core's model for a Stone Soup measurement model (and the row of its bearing,
     or None), or (None, None) if the core does not take it."""
     kind = type(model)
+    # (new tracks invert the measurement with Stone Soup's NumPy inverse: their means to the bit)
     if kind is LinearGaussian:
+        matrix = np.ascontiguousarray(model.matrix(), dtype=np.float64)
         return _core.JPDAMeasurementModel.linear(
-            np.ascontiguousarray(model.matrix(), dtype=np.float64),
-            np.ascontiguousarray(model.covar(), dtype=np.float64)), None
+            matrix, np.ascontiguousarray(model.covar(), dtype=np.float64),
+            pseudo_inverse=np.ascontiguousarray(np.linalg.pinv(matrix))), None
     if updater_kind is not ExtendedKalmanUpdater or len(getattr(model, "mapping", ())) != 2:
         return None, None
     if kind is CartesianToBearingRange:
@@ -184,7 +186,12 @@ def jpda_core_model(updater_kind, model):
     rotation = np.ascontiguousarray(model.rotation_matrix, dtype=np.float64)
     if offset.size < 2 or rotation.shape != (3, 3):
         return None, None
+    try:
+        inverse = np.ascontiguousarray(np.linalg.inv(rotation), dtype=np.float64)
+    except np.linalg.LinAlgError:
+        inverse = None
     core = _core.JPDAMeasurementModel.bearing_range(
         (int(model.mapping[0]), int(model.mapping[1])), (float(offset[0]), float(offset[1])),
-        rotation, np.ascontiguousarray(model.covar(), dtype=np.float64), jacobian)
+        rotation, np.ascontiguousarray(model.covar(), dtype=np.float64), jacobian,
+        inverse_rotation_matrix=inverse)
     return core, 0

@@ -1,28 +1,41 @@
-"""The new holding tracks of :class:`~ctxmodels.stonesoup.ArrayMultiMeasurementInitiator`:
+r"""The new holding tracks of :class:`~ctxmodels.stonesoup.ArrayMultiMeasurementInitiator`:
 what Stone Soup's :class:`~stonesoup.initiator.simple.SimpleMeasurementInitiator` returns for
-a scan's unassociated detections, computed per measurement model in stacked arrays with the
-stock operations (the same numbers, bit for bit), and the tracks built without Stone Soup's
+a scan's unassociated detections, computed in the core
+(:func:`ctxmodels._core.initiator_births`), and the tracks built without Stone Soup's
 per-Property constructor.
+
+A detection ``z`` measured by a model with mapped state indices ``m`` starts a track at
+
+.. math::
+    x = x_0' + h^{-1}(z), \qquad P = (J^+ R J^{+\mathsf T} + P_0') + l I,
+
+with :math:`x_0', P_0'` the prior with the mapped entries zeroed, :math:`h^{-1}` the model's
+inverse (:math:`H^+ z` for a linear model), :math:`J` its matrix or its Jacobian at
+:math:`h^{-1}(z)` and :math:`l` the initiator's ``diag_load``. The means are Stone Soup's to
+the bit (the core is given NumPy's :math:`H^+` and :math:`R^{-1}`); the covariances to
+rounding with a linear model or the closed-form Jacobian, and to ~1e-5 relative with the
+finite-difference Jacobian (see ``rust/jpda/births.rs``). Other initiators, other models and
+detections the core cannot read run the stock initiator.
 """
 from __future__ import annotations
 
 import uuid
+from itertools import compress
 
 import numpy as np
 from stonesoup.initiator.simple import SimpleMeasurementInitiator
-from stonesoup.models.measurement import nonlinear as _nonlinear
-from stonesoup.models.measurement.linear import LinearGaussian
-from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.angle import Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.hypothesis import SingleHypothesis
 from stonesoup.types.state import GaussianState
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
+from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
+from ... import _core
 from ...model_key import models_by_value, scan_model_groups
-from .._batch import ObjectFactory, _analytic_bearing_range_batch, _bearing_range_batch
-from ..measurement import AnalyticCartesianToBearingRange
+from .._batch import ObjectFactory
+from ..measurement import jpda_core_model
 
 #: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
 UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(
@@ -33,7 +46,6 @@ UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(
 _HYPOTHESIS = ObjectFactory(SingleHypothesis, dict(prediction=None, measurement=None))
 
 _FLOATS = (float, np.float64)
-
 
 class _TrackFactory:
     """``Track([state])`` for a :class:`Track` (exactly): the instance dictionary its
@@ -63,66 +75,13 @@ class _TrackFactory:
         return self._build(state) if self.fast else Track([state])
 
 
-def inverse_bearing_range(model, detections, rows=None) -> list:
-    """``model.inverse_function(det)`` of a 2-D bearing–range model for each detection, with
-    the same operations. A detection typed (Bearing, float), as the model's own measurements
-    are, runs the stock code on object arrays: ``ρ cos φ`` and ``ρ sin φ`` (the Bearing's own
-    NumPy cosine and sine), then the inverse rotation as an object product (Python floats,
-    ``(a₀x + a₁y) + a₂·0``, in order) plus the offset; float arrays compute the same bits
-    for all such detections at once. Others take the stock function's steps one by one.
-    ``rows``: the detections' vectors converted to float rows ``(M, 2)``, if known."""
-    if not (model.rotation_offset[0] == 0 and model.rotation_offset[1] == 0):
-        return [model.inverse_function(det) for det in detections]  # the stock error
-    inverse_rotation = _nonlinear.inv(model.rotation_matrix)
-    offset = model.translation_offset[:2, :]
-    mapping = model.mapping[:2]
-    out: list = [None] * len(detections)
-    typed = [k for k, det in enumerate(detections) if _bearing_typed(det.state_vector)]
-    if typed and type(inverse_rotation) is np.ndarray and inverse_rotation.shape == (3, 3) \
-            and inverse_rotation.dtype == np.float64 and offset.dtype == np.float64:
-        if rows is not None:
-            z = rows[typed]
-        else:
-            z = np.array([detections[k].state_vector for k in typed], dtype=np.float64)[:, :, 0]
-        x, y = z[:, 1] * np.cos(z[:, 0]), z[:, 1] * np.sin(z[:, 0])
-        vectors = np.zeros((len(typed), model.ndim_state, 1))
-        for r in range(2):
-            a = inverse_rotation[r]
-            vectors[:, mapping[r], 0] = ((a[0] * x + a[1] * y) + a[2] * 0.0) + offset[r, 0]
-        for k, vector in zip(typed, vectors):
-            out[k] = vector.view(StateVector)
-    for k, det in enumerate(detections):
-        if out[k] is None:
-            vector = det.state_vector
-            x, y = _nonlinear.pol2cart(vector[1, :], vector[0, :])
-            xyz = inverse_rotation @ np.array([x, y, np.zeros(vector.shape[1])])
-            res = np.zeros((model.ndim_state, vector.shape[1])).view(StateVector)
-            res[mapping, :] = xyz[0:2] + offset
-            out[k] = res
-    return out
-
-
-def _bearing_typed(vector) -> bool:
-    if vector.dtype != object or vector.shape != (2, 1):
-        return False
-    (phi,), (rho,) = vector.tolist()  # (an object array's own elements)
-    return type(phi) is Bearing and type(rho) in _FLOATS
-
-
-def _bearing_range(model) -> bool:
-    return type(model) in (CartesianToBearingRange, AnalyticCartesianToBearingRange) \
-        and len(model.mapping) == 2
-
-
 class Births:
-    """What the inner initiator returns for a scan's detections (see the module
-    docstring). A linear model's pseudo-inverse and initial covariance are computed once
-    while its numbers stay the same; a bearing–range model's Jacobians (finite difference
-    or closed form), pseudo-inverses and covariances as stacked arrays (the stock
-    expressions, matrix by matrix); other initiators and models run their own code."""
+    """What the inner initiator returns for a scan's detections (see the module docstring):
+    one core call for the detections of the models the core takes, the inner initiator's
+    own code for the rest."""
 
     def __init__(self):
-        self._linear_cache: dict = {}
+        self._core_models: dict = {}  # model key -> (core model, bearing first) or None
         self._track = _TrackFactory()
 
     def __call__(self, inner, detections, timestamp) -> set:
@@ -131,17 +90,17 @@ class Births:
         return tracks
 
     def arrays(self, inner, detections, timestamp) -> tuple[set, list]:
-        """What :meth:`__call__` returns, with the new tracks of the detections this class
-        computes itself not yet built: ``(tracks the inner initiator built, births)``, a
-        birth being the arguments of :meth:`track` (the detection, the state's mean
-        ``(D, 1)`` and covariance, the prior state)."""
+        """What :meth:`__call__` returns, with the new tracks of the detections the core
+        computes not yet built: ``(tracks the inner initiator built, births)``, a birth
+        being the arguments of :meth:`track` (the detection, the state's mean ``(D, 1)``
+        and covariance, the prior state)."""
         births: list = []
         if not isinstance(detections, list):
             detections = list(detections)
-        if type(inner) is not SimpleMeasurementInitiator:
-            return inner.initiate(set(detections), timestamp), births
-        if not detections:
-            return set(), births
+        prior = inner.prior_state
+        if type(inner) is not SimpleMeasurementInitiator or not detections \
+                or not _float_prior(prior):
+            return (inner.initiate(set(detections), timestamp) if detections else set()), births
         # by value: equal models in different objects are one group (its first), each
         # model object keyed once (the scan's groups, when remembered on the collection)
         by_value = scan_model_groups(detections)
@@ -150,69 +109,50 @@ class Births:
             by_value = models_by_value([
                 fallback if det.measurement_model is None else det.measurement_model
                 for det in detections])
-        rows = getattr(detections, "vectors", None)  # (an OrderedDetections' float rows)
-        if not (isinstance(rows, np.ndarray) and rows.dtype == np.float64
-                and rows.shape == (len(detections), 2)):
-            rows = None
-        groups = []
+        models, index, members_of = [], [], []
         other = []
-        for model, members in by_value.values():
-            if type(model) is LinearGaussian or _bearing_range(model):
-                groups.append((model, [detections[i] for i in members],
-                               None if rows is None else rows[members]))
-            else:
+        for key, (model, members) in by_value.items():
+            core = self._core_model(model, key)
+            if core is None or (models and core[0].ndim_meas != models[0][0].ndim_meas):
                 other.extend(detections[i] for i in members)
+                continue
+            index.extend([len(models)] * len(members))
+            members_of.extend(members)
+            models.append(core)
+        if models:
+            z, readable = _rows(detections, members_of, [models[g][1] for g in index],
+                                models[0][0].ndim_meas)
+            if not readable.all():
+                other.extend(detections[i] for i, ok in zip(members_of, readable) if not ok)
+                members_of = list(compress(members_of, readable))
+                index = list(compress(index, readable))
+                z = z[readable]
         tracks = inner.initiate(set(other), timestamp) if other else set()
-        prior = inner.prior_state
-        load = np.diag(np.array([inner.diag_load] * len(prior.state_vector)))
-        for model, dets, dets_rows in groups:
-            prior_vector = prior.state_vector.copy()
-            prior_covar = prior.covar.copy()
-            mapped = model.mapping
-            prior_vector[mapped, :] = 0
-            for dim in mapped:
-                prior_covar[dim, :] = prior_covar[:, dim] = 0
-            noise = model.covar()
-            if type(model) is LinearGaussian:
-                inverse, covar = self._linear(model, noise, prior_covar, load)
-                vectors = [prior_vector + (inverse @ det.state_vector) for det in dets]
-                covars = [covar.copy() for _ in dets]  # one array per state, as stock
-            else:
-                vectors = inverse_bearing_range(model, dets, dets_rows)
-                means = np.array(vectors, dtype=np.float64)
-                zeros = np.zeros((len(dets),) + (means.shape[1],) * 2)
-                # the model's own Jacobian, state by state, bit for bit
-                if type(model) is AnalyticCartesianToBearingRange:
-                    jacobians = _analytic_bearing_range_batch(model, means, zeros, None,
-                                                              jacobians_only=True)[3]
-                else:
-                    _, _, _, jacobians = _bearing_range_batch(model, means, zeros)
-                inverses = np.linalg.pinv(jacobians)
-                stacked = (inverses @ np.asarray(noise)[np.newaxis]) @ inverses.transpose(0, 2, 1)
-                # (C + P₀) + L matrix by matrix, as the stock sum of the three
-                covars = list((stacked + np.asarray(prior_covar)) + np.asarray(load))
-                if prior_vector.dtype == np.float64:  # (as every vector: one addition for all)
-                    vectors = [mean.view(StateVector) for mean in np.asarray(prior_vector) + means]
-                else:
-                    vectors = [prior_vector + vector for vector in vectors]
-            births.extend((det, vector, covar, prior)
-                          for det, vector, covar in zip(dets, vectors, covars))
+        if not members_of:
+            return tracks, births
+        try:
+            means, covars = _core.initiator_births(
+                [core for core, _ in models], z, np.array(index, dtype=np.int64),
+                np.ascontiguousarray(prior.state_vector[:, 0], dtype=np.float64),
+                np.ascontiguousarray(prior.covar, dtype=np.float64), float(inner.diag_load))
+        except ValueError:  # (e.g. a non-finite detection: the stock code decides)
+            return tracks | inner.initiate({detections[i] for i in members_of}, timestamp), births
+        means = means[:, :, np.newaxis]
+        births.extend((detections[i], mean, covar, prior)
+                      for i, mean, covar in zip(members_of, means, covars))
         return tracks, births
 
-    def _linear(self, model, noise, prior_covar, load):
-        """The pseudo-inverse and covariance of a linear model, while its numbers are the same."""
-        matrix = model.matrix()
-        key = (matrix.tobytes(), np.asarray(noise).tobytes(), prior_covar.tobytes(),
-               load.tobytes())
-        cached = self._linear_cache.get(id(model))
-        if cached is None or cached[0] is not model or cached[1] != key:
-            inverse = np.linalg.pinv(matrix)
-            covar = inverse @ noise @ inverse.T
-            covar = covar + prior_covar + load
-            cached = self._linear_cache[id(model)] = (model, key, inverse, covar)
-            if len(self._linear_cache) > 16:
-                self._linear_cache = {id(model): cached}
-        return cached[2], cached[3]
+    def _core_model(self, model, key):
+        """(the core's model, whether it measures a bearing first) for ``model`` (of
+        :func:`~ctxmodels.model_key.measurement_model_key` ``key``: equal models share an
+        entry), or None when the core does not take it."""
+        if key not in self._core_models:
+            core, bearing_row = (None, None) if key is None else \
+                jpda_core_model(ExtendedKalmanUpdater, model)
+            if len(self._core_models) >= 64:
+                self._core_models.clear()
+            self._core_models[key] = None if core is None else (core, bearing_row is not None)
+        return self._core_models[key]
 
     def track(self, detection, mean, covar, prior):
         """The inner initiator's track of one birth (see :meth:`arrays`): its one state,
@@ -225,3 +165,34 @@ class Births:
         return self._track(Update.from_state(
             prior, state_vector=mean, covar=covar,
             hypothesis=SingleHypothesis(None, detection), timestamp=detection.timestamp))
+
+
+def _float_prior(prior) -> bool:
+    return type(prior) is GaussianState and prior.state_vector.dtype == np.float64 \
+        and prior.covar.dtype == np.float64 and prior.state_vector.shape[1:] == (1,)
+
+
+def _rows(detections, members, bearing, m):
+    """The detections ``members`` as float rows (M, ``m``), and which of them the core
+    reads: float values, with a :class:`Bearing` (or a float) first where its model
+    measures a bearing first (``bearing``, per member)."""
+    rows = np.zeros((len(members), m))
+    readable = np.ones(len(members), dtype=bool)
+    vectors = getattr(detections, "vectors", None)  # (an OrderedDetections' float rows)
+    known = isinstance(vectors, np.ndarray) and vectors.dtype == np.float64 \
+        and vectors.shape == (len(detections), m)
+    for k, (i, first_is_bearing) in enumerate(zip(members, bearing)):
+        vector = detections[i].state_vector
+        if vector.shape != (m, 1):
+            readable[k] = False
+        elif vector.dtype == np.float64:
+            rows[k] = vectors[i] if known else vector[:, 0]
+        else:
+            values = np.ndarray.ravel(vector).tolist()  # (the elements, not a subclass's ravel)
+            if all(type(value) in _FLOATS or (row == 0 and first_is_bearing
+                                               and type(value) is Bearing)
+                   for row, value in enumerate(values)):
+                rows[k] = [float(value) for value in values]
+            else:
+                readable[k] = False
+    return rows, readable

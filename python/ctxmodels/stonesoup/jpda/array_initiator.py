@@ -22,10 +22,12 @@ to rounding. Not bit for bit: the core inverts S its own way where Stone Soup ca
 1e-12 relative at worst over 120 s of scenario 1 (603 tracks released; its radar's
 finite-difference Jacobian, whose step follows the last bit of a state, included), ~1e-15
 with linear models. A decision could differ only where two costs tie to within that
-rounding; exact ties go as SciPy breaks them (tested). A new track's first state is the
-stock initiator's, bit for bit (:mod:`~ctxmodels.stonesoup.jpda._initiator_births`, NumPy), so new
-tracks are ordered (:func:`~ctxmodels.stonesoup.in_track_order`, by their first state's
-bytes) as the reference orders them.
+rounding; exact ties go as SciPy breaks them (tested). New tracks come from a second core
+call (:func:`ctxmodels._core.initiator_births`, see
+:mod:`~ctxmodels.stonesoup.jpda._initiator_births`): their means are the stock initiator's
+bit for bit, so new tracks are ordered (:func:`~ctxmodels.stonesoup.in_track_order`, by
+their first state's bytes) as the reference orders them; their covariances are the stock
+ones to rounding (to ~1e-5 relative with the finite-difference Jacobian).
 
 :attr:`holding_tracks` is the live set, as stock; reading it builds the holding tracks not
 built yet and adds the states of the scans since their last materialisation, so the tracks
