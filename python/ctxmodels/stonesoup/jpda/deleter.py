@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 import warnings
-import weakref
 from collections.abc import Sequence
 from numbers import Integral, Real
 
@@ -30,6 +29,7 @@ from stonesoup.types.update import Update
 from ...foreign import as_array_context
 from .composite_deleter import PairwiseDeleter
 from .._batch import plain_track_lists
+from ._pd_record import PDRecord
 from .hypothesiser import PDAHypothesiser, is_detection_backed, prob_detect_at
 from ..ordering import track_key
 
@@ -166,11 +166,9 @@ class ExpectedMissesDeleter(Deleter):
         context, and the array initiator for the holding tracks it builds)."""
         log = self.__dict__.get("_context_log")
         if log is None:
-            log = self.__dict__["_context_log"] = weakref.WeakKeyDictionary()
-        entries = log.get(track)
-        if entries is None or is_detection_backed(track[index - 1]):
-            entries = log[track] = {}  # only the states since the last detection matter
-        entries[index] = (track[index].timestamp, float(prob_detect))
+            log = self.__dict__["_context_log"] = PDRecord()
+        log.record(track, index, track[index].timestamp, float(prob_detect),
+                   restart=is_detection_backed(track[index - 1]))
 
     def prob_detect_since_detection(self, track) -> list[float]:
         """The P_D of each state after the track's last detection-backed one, oldest first
@@ -185,21 +183,8 @@ class ExpectedMissesDeleter(Deleter):
 
     def _from_context(self, track, index: int):
         log = self.__dict__.get("_context_log")
-        entry = None if log is None else log.get(track, {}).get(index % len(track))
-        return None if entry is None or entry[0] != track[index].timestamp else entry[1]
-
-    # Tracks are weakly referenced at run time; pickle the record as plain pairs.
-    def __getstate__(self):
-        state = dict(self.__dict__)
-        if "_context_log" in state:
-            state["_context_log"] = list(state["_context_log"].items())
-        return state
-
-    def __setstate__(self, state):
-        state = dict(state)
-        if "_context_log" in state:
-            state["_context_log"] = weakref.WeakKeyDictionary(state["_context_log"])
-        self.__dict__.update(state)
+        return None if log is None else \
+            log.get(track, index % len(track), track[index].timestamp)
 
     def expected_misses_since_detection(self, track, stop_at: float = math.inf) -> float:
         """:math:`\\sum P_D` over the states after the track's last detection-backed one

@@ -20,7 +20,6 @@ forwards; it takes precedence over the set's.
 from __future__ import annotations
 
 import functools
-import weakref
 
 import numpy as np
 from scipy.stats import chi2
@@ -36,6 +35,7 @@ from stonesoup.types.update import Update
 
 from ...foreign import PerCallContext, as_array_context
 from ..scan_context import scan_context
+from ._pd_record import PDRecord
 
 
 @functools.lru_cache(maxsize=256)
@@ -208,12 +208,8 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         detection-backed already known (the array JPDA path knows both)."""
         log = self.__dict__.get("_pd_log")
         if log is None:
-            log = self.__dict__["_pd_log"] = weakref.WeakKeyDictionary()
-        entries: dict[int, tuple[object, float]] | None = log.get(track)
-        # Only states after the last detection-backed one matter to deleters: keep it small.
-        if entries is None or last_backed:
-            entries = log[track] = {}
-        entries[length] = (timestamp, prob_detect)
+            log = self.__dict__["_pd_log"] = PDRecord()
+        log.record(track, length, timestamp, prob_detect, restart=last_backed)
 
     def recorded_prob_detect(self, track, index: int = -1) -> float | None:
         """The :math:`P_D` this hypothesiser used for the state at ``index`` of ``track``
@@ -228,24 +224,10 @@ class PDAHypothesiser(_StockPDAHypothesiser):
         if not 0 <= index < n:
             raise IndexError(f"index: {index} out of range for a track of {n} states")
         log = self.__dict__.get("_pd_log")
-        entry = None if log is None else log.get(track, {}).get(index)
-        if entry is None or entry[0] != track[index].timestamp:
-            return None
-        return entry[1]
+        return None if log is None else log.get(track, index, track[index].timestamp)
 
-    # Tracks are weakly referenced at run time; pickle the record as plain pairs and drop
-    # the per-scan clutter cache.
-    def __getstate__(self):
-        state = {k: v for k, v in self.__dict__.items() if k != "_clutter_cache"}
-        if "_pd_log" in state:
-            state["_pd_log"] = list(state["_pd_log"].items())
-        return state
-
-    def __setstate__(self, state):
-        state = dict(state)
-        if "_pd_log" in state:
-            state["_pd_log"] = weakref.WeakKeyDictionary(state["_pd_log"])
-        self.__dict__.update(state)
+    def __getstate__(self):  # (without the per-scan clutter cache)
+        return {k: v for k, v in self.__dict__.items() if k != "_clutter_cache"}
 
 
 __all__ = ["PDAHypothesiser", "gate_threshold", "is_detection_backed", "prob_detect_at"]
