@@ -18,6 +18,7 @@ pub mod error;
 mod fuzz;
 pub mod gmphd;
 pub mod jpda;
+pub mod kalman;
 pub mod land;
 mod memory;
 pub mod pose;

@@ -32,6 +32,7 @@ mod detection_estimate;
 mod gmphd;
 mod initiation;
 mod jpda;
+mod kalman;
 mod particles;
 
 pyo3::create_exception!(
@@ -694,6 +695,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "InfeasibleAssignmentError",
         m.py().get_type::<InfeasibleAssignmentError>(),
     )?;
+    kalman::register(m)?;
     gmphd::register(m)?;
     jpda::register(m)?;
     initiation::register(m)?;

@@ -24,7 +24,7 @@ def _linear(noise):
 
 
 def test_jpda_scan_names_the_track_whose_innovation_covariance_is_not_positive_definite():
-    model = _core.JPDAMeasurementModel.linear(*_linear(1.0))
+    model = _core.MeasurementModel.linear(*_linear(1.0))
     means = np.zeros((2, 4))
     covars = np.stack([np.eye(4), -10.0 * np.eye(4)])  # track 1: H P Hᵀ + R = -9 I
     z = np.array([[0.5, 0.5]])
@@ -38,7 +38,7 @@ def test_jpda_scan_names_the_track_whose_innovation_covariance_is_not_positive_d
 def test_gmphd_update_names_the_measurement_model():
     mixture = _core.GaussianMixtureArrays(4)
     mixture.extend(np.zeros((1, 4)), (-10.0 * np.eye(4))[np.newaxis], np.ones(1), [0], [0])
-    model = _core.ScanMeasurementModel.linear(*_linear(1.0))
+    model = _core.MeasurementModel.linear(*_linear(1.0))
     with pytest.raises(ctxmodels.NotPositiveDefiniteError,
                        match=r"^measurement_model: the innovation covariance of component 0"):
         mixture.update(model, np.array([[0.5, 0.5]]), np.full(1, 0.9), np.full(1, 1e-3),

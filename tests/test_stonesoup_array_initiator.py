@@ -212,7 +212,7 @@ def test_only_released_tracks_are_built(monkeypatch):
 
 
 def _scan_args(rows=2, dets=3):
-    model = _core.JPDAMeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
+    model = _core.MeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
                                               np.eye(2))
     f = np.eye(4)[np.newaxis]
     return dict(
@@ -258,7 +258,7 @@ def test_core_scan_errors_name_the_argument():
     args = _scan_args()
     args["covars"] = np.zeros((2, 4, 4))  # S = R: fine; a singular S is an error
     _core.initiator_scan(**args)
-    args["models"] = [_core.JPDAMeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
+    args["models"] = [_core.MeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
                                                         np.zeros((2, 2)))]
     with pytest.raises(ValueError, match="^covars"):
         _core.initiator_scan(**args)

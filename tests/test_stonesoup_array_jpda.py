@@ -226,7 +226,7 @@ def test_scan_with_transitions_and_at_pose_p_d_is_predict_then_scan():
     P_D at the predicted means: the bits of ``jpda_predict``, ``DetectionAtPose.evaluate``
     and a scan of the prediction."""
     rng = np.random.default_rng(3)
-    model = _core.JPDAMeasurementModel.bearing_range(
+    model = _core.MeasurementModel.bearing_range(
         (0, 2), (0.0, 0.0), np.eye(3), np.diag([1e-4, 4.0]))
     means = rng.uniform(-800, 800, (6, 4))
     covars = np.stack([np.diag(rng.uniform(1.0, 30.0, 4)) for _ in range(6)])
@@ -573,7 +573,7 @@ def test_bad_context_values_raise_the_drop_in_errors():
 
 
 def test_core_errors_name_the_argument_and_no_panic_escapes():
-    model = _core.JPDAMeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
+    model = _core.MeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
                                               np.eye(2))
     means, covars = np.zeros((2, 4)), np.stack([np.eye(4)] * 2)
     z, pd, lam = np.zeros((1, 2)), np.array([0.5, 0.5]), np.array([1.0])
@@ -590,17 +590,17 @@ def test_core_errors_name_the_argument_and_no_panic_escapes():
         (dict(covars=np.asfortranarray(np.stack([np.eye(4)] * 2))), "covars"),
         (dict(prob_gate=1.5), "prob_gate"),
         (dict(gate_threshold=float("nan")), "gate_threshold"),
-        (dict(covars=np.zeros((2, 4, 4)), model=_core.JPDAMeasurementModel.linear(
+        (dict(covars=np.zeros((2, 4, 4)), model=_core.MeasurementModel.linear(
             np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]), np.zeros((2, 2)))), "covars"),
     ]:
         with pytest.raises(ValueError, match=f"^{argument}"):
             _core.jpda_scan(**{**good, **change})
     with pytest.raises(ValueError, match="^jacobian"):
-        _core.JPDAMeasurementModel.bearing_range((0, 2), (0.0, 0.0), np.eye(3), np.eye(2), "exact")
+        _core.MeasurementModel.bearing_range((0, 2), (0.0, 0.0), np.eye(3), np.eye(2), "exact")
     with pytest.raises(ValueError, match="^mapping"):
-        _core.JPDAMeasurementModel.bearing_range((0, -1), (0.0, 0.0), np.eye(3), np.eye(2))
+        _core.MeasurementModel.bearing_range((0, -1), (0.0, 0.0), np.eye(3), np.eye(2))
     with pytest.raises(ValueError, match="^noise_covar"):
-        _core.JPDAMeasurementModel.linear(np.eye(2, 4), np.eye(3))
+        _core.MeasurementModel.linear(np.eye(2, 4), np.eye(3))
     with pytest.raises(ValueError, match="^transition_index"):
         _core.jpda_predict(means, covars, [0, 3], np.stack([np.eye(4)]), np.stack([np.eye(4)]))
     with pytest.raises(ValueError, match="^weights"):
@@ -617,7 +617,7 @@ def test_intractable_cluster_is_a_value_error_naming_its_size():
     with pytest.raises(ValueError, match=r"^weights: .*cluster of 60 tracks and 60 detections"
                                          r".* is intractable"):
         _core.jpda_marginals(weights, np.ones((tracks, dets), dtype=bool))
-    model = _core.JPDAMeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
+    model = _core.MeasurementModel.linear(np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]]),
                                               np.eye(2))
     tracks, dets = 40, 40
     z = np.sin(np.arange(2 * dets) * 0.37).reshape(dets, 2)

@@ -159,7 +159,7 @@ def test_mixed_scan_runs_the_core_where_it_can_and_the_stock_code_elsewhere(monk
 
 def test_core_births_errors_name_the_argument():
     from ctxmodels import _core
-    model = _core.JPDAMeasurementModel.linear(np.eye(2, 4), np.eye(2))
+    model = _core.MeasurementModel.linear(np.eye(2, 4), np.eye(2))
     z, index = np.zeros((2, 2)), np.zeros(2, dtype=np.int64)
     mean, covar = np.zeros(4), np.eye(4)
     cases = [
@@ -171,7 +171,7 @@ def test_core_births_errors_name_the_argument():
         (([model], z, index, np.full(4, np.nan), covar), "prior_mean"),
         (([model], np.full((2, 2), np.inf), index, mean, covar), "detections"),
         (([], z, index, mean, covar), "models"),
-        (([_core.JPDAMeasurementModel.linear(np.eye(2, 3), np.eye(2))], z, index, mean, covar),
+        (([_core.MeasurementModel.linear(np.eye(2, 3), np.eye(2))], z, index, mean, covar),
          "model"),
     ]
     for args, argument in cases:
@@ -180,11 +180,11 @@ def test_core_births_errors_name_the_argument():
     with pytest.raises(ValueError, match="diag_load"):
         _core.initiator_births([model], z, index, mean, covar, float("nan"))
     with pytest.raises(ValueError, match="pseudo_inverse"):
-        _core.JPDAMeasurementModel.linear(np.eye(2, 4), np.eye(2), pseudo_inverse=np.eye(2))
+        _core.MeasurementModel.linear(np.eye(2, 4), np.eye(2), pseudo_inverse=np.eye(2))
     with pytest.raises(ValueError, match="inverse_rotation_matrix"):
-        _core.JPDAMeasurementModel.bearing_range((0, 2), (0.0, 0.0), np.eye(3), np.eye(2),
+        _core.MeasurementModel.bearing_range((0, 2), (0.0, 0.0), np.eye(3), np.eye(2),
                                                  inverse_rotation_matrix=np.full((3, 3), np.nan))
-    singular = _core.JPDAMeasurementModel.bearing_range((0, 2), (0.0, 0.0), np.zeros((3, 3)),
+    singular = _core.MeasurementModel.bearing_range((0, 2), (0.0, 0.0), np.zeros((3, 3)),
                                                         np.eye(2))
     with pytest.raises(ValueError, match="rotation_matrix"):
         _core.initiator_births([singular], np.array([[0.1, 5.0]]), np.zeros(1, dtype=np.int64),

@@ -23,17 +23,17 @@ __all__ = [
     "DetectionAtPose",
     "DetectionModel",
     "GaussianMixtureArrays",
-    "JPDAMeasurementModel",
+    "MeasurementModel",
     "LandMask",
     "LineOfSight",
     "MetadataThreshold",
     "InfeasibleAssignmentError",
     "NotPositiveDefiniteError",
     "RangeBands",
-    "ScanMeasurementModel",
     "jpda_marginals",
     "jpda_predict",
     "jpda_scan",
+    "initiator_births",
     "initiator_scan",
     "mount",
     "rule_points",
@@ -320,25 +320,30 @@ def simd_backend() -> Literal["avx2", "portable"]:
 # --- GM-PHD scan core (rust/gmphd, binding rust/python/mixture.rs) -----------------------
 
 @final
-class ScanMeasurementModel:
-    """A measurement model the scan core can linearise."""
+class MeasurementModel:
+    """A measurement model of the scan cores (`GaussianMixtureArrays.update`, `jpda_scan`,
+    `initiator_scan`, `initiator_births`)."""
 
     @staticmethod
-    def linear(matrix: _Floats, noise: _Floats) -> ScanMeasurementModel:
-        """`z = H x + v`, `v ~ N(0, R)`: `matrix` (m, D), `noise` (m, m)."""
+    def linear(
+        matrix: _Floats, noise_covar: _Floats, pseudo_inverse: _Floats | None = None
+    ) -> MeasurementModel:
+        """A linear Gaussian model: `matrix` (m, D), `noise_covar` (m, m); `pseudo_inverse`
+        (D, m): the H⁺ of new tracks (default: the core's SVD)."""
     @staticmethod
     def bearing_range(
         mapping: tuple[int, int],
-        offset: tuple[float, float],
-        rotation: _Floats,
-        noise: _Floats,
-        analytic: bool,
-    ) -> ScanMeasurementModel:
-        """Bearing–range of the state's `mapping` (x, y) seen from `offset` (x, y) through the
-        3×3 `rotation`; `noise` (2, 2); `analytic`: closed-form Jacobian, else Stone Soup's
-        finite difference."""
+        translation_offset: tuple[float, float],
+        rotation_matrix: _Floats,
+        noise_covar: _Floats,
+        jacobian: Literal["finite-difference", "analytic"] = "finite-difference",
+        inverse_rotation_matrix: _Floats | None = None,
+    ) -> MeasurementModel:
+        """A 2-D bearing–range model (Stone Soup's `CartesianToBearingRange`);
+        `inverse_rotation_matrix`: the inverse function's R⁻¹ (default: the core's inverse)."""
     @property
-    def ndim_meas(self) -> int: ...
+    def ndim_meas(self) -> int:
+        """Number of measured values per detection."""
 
 @final
 class GaussianMixtureArrays:
@@ -381,7 +386,7 @@ class GaussianMixtureArrays:
         `transitions[g]`, `noises[g]`; all then take the time `now`."""
     def update(
         self,
-        model: ScanMeasurementModel,
+        model: MeasurementModel,
         detections: _Floats,
         prob_detection: _Floats,
         clutter: _Floats,
@@ -440,32 +445,6 @@ class GaussianMixtureArrays:
 # --- whole-scan JPDA (source: rust/python/jpda.rs) ------------------------------------------
 # Used by ctxmodels.stonesoup.ArrayJPDATracker; see rust/jpda.rs for the mathematics.
 
-@final
-class JPDAMeasurementModel:
-    """The measurement model of one scan's detections, for `jpda_scan`, `initiator_scan` and
-    `initiator_births`."""
-
-    @staticmethod
-    def linear(
-        matrix: _Floats, noise_covar: _Floats, pseudo_inverse: _Floats | None = None
-    ) -> JPDAMeasurementModel:
-        """A linear Gaussian model: `matrix` (m, D), `noise_covar` (m, m); `pseudo_inverse`
-        (D, m): the H⁺ of new tracks (default: the core's SVD)."""
-    @staticmethod
-    def bearing_range(
-        mapping: tuple[int, int],
-        translation_offset: tuple[float, float],
-        rotation_matrix: _Floats,
-        noise_covar: _Floats,
-        jacobian: Literal["finite-difference", "analytic"] = "finite-difference",
-        inverse_rotation_matrix: _Floats | None = None,
-    ) -> JPDAMeasurementModel:
-        """A 2-D bearing–range model (Stone Soup's `CartesianToBearingRange`);
-        `inverse_rotation_matrix`: the inverse function's R⁻¹ (default: the core's inverse)."""
-    @property
-    def ndim_meas(self) -> int:
-        """Number of measured values per detection."""
-
 def jpda_predict(
     means: _Floats,
     covars: _Floats,
@@ -477,7 +456,7 @@ def jpda_predict(
     `transition_index[t]` of `transition_matrices` / `transition_covars` (K, D, D)."""
 
 def jpda_scan(
-    model: JPDAMeasurementModel,
+    model: MeasurementModel,
     means: _Floats,
     covars: _Floats,
     detections: _Floats,
@@ -503,7 +482,7 @@ def jpda_marginals(weights: _Floats, gated: _Bools) -> _Floats:
     and the (T, M) gated hypotheses."""
 
 def initiator_scan(
-    models: Sequence[JPDAMeasurementModel],
+    models: Sequence[MeasurementModel],
     means: _Floats,
     covars: _Floats,
     transition_index: NDArray[np.int64],
@@ -532,7 +511,7 @@ def initiator_scan(
     updated row, in row order), points, since, released, expired."""
 
 def initiator_births(
-    models: Sequence[JPDAMeasurementModel],
+    models: Sequence[MeasurementModel],
     detections: _Floats,
     model_index: NDArray[np.int64],
     prior_mean: _Floats,

@@ -18,16 +18,14 @@
 //! order), so components, tags and weights come out in the stock order; the arithmetic is
 //! the same formulae, so values agree with the stock pipeline to rounding.
 
-pub mod linalg;
-pub mod measurement;
 mod reduce;
 mod update;
 
-pub use measurement::{Jacobian, MeasurementModel};
 pub use reduce::ReduceParams;
 pub use update::UpdateParams;
 
 use crate::error::{ModelError, Result};
+use crate::kalman;
 use crate::memory;
 
 /// The tag of a birth component: never a track; a detected birth gets a fresh tag.
@@ -386,20 +384,15 @@ impl Mixture {
                 "transition matrices and noise covariances must be finite",
             ));
         }
-        let mut mean = memory::filled("means", d, 0.0)?;
-        let mut fp = memory::filled("means", d2, 0.0)?;
-        let mut fpf = memory::filled("means", d2, 0.0)?;
+        let mut scratch = memory::filled("means", 2 * d2 + d, 0.0)?;
         for (i, &g) in group.iter().enumerate() {
-            let f = &transitions[g * d2..(g + 1) * d2];
-            let q = &noises[g * d2..(g + 1) * d2];
-            linalg::matvec(f, &self.means[i * d..(i + 1) * d], d, d, &mut mean);
-            self.means[i * d..(i + 1) * d].copy_from_slice(&mean);
-            let covar = &mut self.covars[i * d2..(i + 1) * d2];
-            linalg::matmul(f, covar, d, d, d, &mut fp);
-            linalg::symmetric_product(&fp, f, d, d, &mut fpf); // (F P) Fᵀ
-            for k in 0..d2 {
-                covar[k] = fpf[k] + q[k];
-            }
+            kalman::predict_state(
+                &transitions[g * d2..(g + 1) * d2],
+                &noises[g * d2..(g + 1) * d2],
+                &mut self.means[i * d..(i + 1) * d],
+                &mut self.covars[i * d2..(i + 1) * d2],
+                &mut scratch,
+            );
         }
         Ok(())
     }

@@ -2,11 +2,11 @@
 //! (Vo & Ma), unique tags, truncate — in its order, with the shared-tag pass in
 //! first-appearance order (stock iterates a set of random tag strings there).
 
-use super::linalg::{
-    cholesky_into, general_inverse_into, inverse_from_cholesky, pseudo_inverse, quadratic_form, spd_inverse_into,
-};
 use super::Mixture;
 use crate::error::{ModelError, Result};
+use crate::kalman::linalg::{
+    cholesky_into, general_inverse_into, inverse_from_cholesky, pseudo_inverse, quadratic_form, spd_inverse_into,
+};
 use crate::memory;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};

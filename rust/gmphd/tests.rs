@@ -1,4 +1,5 @@
 use super::*;
+use crate::kalman::MeasurementModel;
 
 fn cv(dt: f64) -> (Vec<f64>, Vec<f64>) {
     // constant velocity on [x, vx, y, vy], q = 1
@@ -25,11 +26,7 @@ fn diagonal(values: [f64; 4]) -> Vec<f64> {
 }
 
 fn position_model() -> MeasurementModel {
-    MeasurementModel::Linear {
-        matrix: vec![1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-        noise: vec![1.0, 0.0, 0.0, 1.0],
-        ndim_meas: 2,
-    }
+    MeasurementModel::linear(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], 2, 4, &[1.0, 0.0, 0.0, 1.0]).unwrap()
 }
 
 fn params() -> UpdateParams {
@@ -229,11 +226,7 @@ fn a_scan_without_detections_keeps_only_missed_terms() {
             &[0, 0],
         )
         .unwrap();
-    let empty = MeasurementModel::Linear {
-        matrix: vec![0.0; 4],
-        noise: vec![1.0],
-        ndim_meas: 1,
-    };
+    let empty = MeasurementModel::linear(&[0.0; 4], 1, 4, &[1.0]).unwrap();
     mixture.update(&empty, &[], &[0.4, 0.4], &[], &params()).unwrap();
     assert_eq!(mixture.tags, vec![tag]);
     assert!((mixture.weights[0] - 0.3).abs() < 1e-15);

@@ -1,11 +1,11 @@
 //! The GM-PHD measurement update of one scan (see the module docs of [`super`]).
 
-use super::linalg::{
-    general_inverse_into, matmul, matmul_bt, matvec, quadratic_form, spd_inverse_into, symmetric_product,
-};
-use super::measurement::MeasurementModel;
 use super::{Mixture, BIRTH};
 use crate::error::{ModelError, Result};
+use crate::kalman::linalg::{
+    general_inverse_into, matmul, matmul_bt, matvec, quadratic_form, spd_inverse_into, symmetric_product,
+};
+use crate::kalman::MeasurementModel;
 use crate::memory;
 
 /// The settings of the stock components that take part in the update.
@@ -139,7 +139,7 @@ fn check_inputs(
     clutter: &[f64],
     params: &UpdateParams,
 ) -> Result<usize> {
-    model.validate(mixture.ndim)?;
+    model.check_dim(mixture.ndim)?;
     let m = model.ndim_meas();
     if !detections.len().is_multiple_of(m) {
         return Err(ModelError::shape("detections", format!("expected rows of {m} values")));

@@ -9,9 +9,7 @@
 //! * **linear** `z = H x + v`: `x = x₀' + H⁺ z` and `J = H`;
 //! * **bearing–range**: the inverse of the measurement function, `(x_{m₀}, x_{m₁}) =
 //!   (R⁻¹ [ρ cos φ, ρ sin φ, 0]ᵀ)_{0,1} + t` and zeros elsewhere, is `u`; `x = x₀' + u` and
-//!   `J` is the model's Jacobian at `u` (finite difference or closed form, as the scan
-//!   linearises; where the closed form is not finite — at the sensor, `ρ = 0`, bearing has
-//!   no derivative — the finite difference);
+//!   `J` is the model's Jacobian at `u`, as the scans linearise (see [`crate::kalman`]);
 //! * `P = (J⁺ R J⁺ᵀ + P₀') + l I`, with `J⁺` the Moore–Penrose pseudo-inverse (singular
 //!   values below `10⁻¹⁵ σ_max` dropped, as NumPy's `pinv`).
 //!
@@ -22,10 +20,10 @@
 //! difference, whose bearing row divides differences of `atan2` by steps of 10⁻⁸: NumPy's own
 //! `arctan2` and the C library's differ in the last bit for a few per cent of arguments.
 
-use super::measurement::MeasurementModel;
-use super::{check_finite, push_row_major, Jacobian};
+use super::{check_detections, check_finite, push_row_major};
 use crate::error::{ModelError, Result};
-use nalgebra::{DMatrix, DVector, Matrix3, SVD};
+use crate::kalman::MeasurementModel;
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3, SVD};
 
 /// The prior of every new track: mean (D), covariance (D×D, row-major), diagonal load.
 #[derive(Debug, Clone, Copy)]
@@ -58,36 +56,7 @@ pub fn initiator_births(
             format!("must be finite, got {}", prior.diag_load),
         ));
     }
-    let m = models.first().map_or(0, MeasurementModel::ndim_meas);
-    for model in models {
-        if model.ndim_meas() != m {
-            return Err(ModelError::shape(
-                "models",
-                "every model must measure the same number of values",
-            ));
-        }
-        model.check_dim(dim)?;
-    }
-    if !model_index.is_empty() && models.is_empty() {
-        return Err(ModelError::shape("models", "detections need at least one model"));
-    }
-    if detections.len() != model_index.len() * m {
-        return Err(ModelError::shape(
-            "detections",
-            format!(
-                "must hold {} rows of {m} values, got {} values",
-                model_index.len(),
-                detections.len()
-            ),
-        ));
-    }
-    if let Some(j) = model_index.iter().position(|&g| g >= models.len()) {
-        return Err(ModelError::shape(
-            "model_index",
-            format!("entry {j} is {}, but there are {} models", model_index[j], models.len()),
-        ));
-    }
-    check_finite("detections", detections)?;
+    let m = check_detections(models, dim, detections, model_index)?;
     let prepared = models
         .iter()
         .map(|model| Prepared::new(model, dim))
@@ -119,14 +88,18 @@ impl Prepared {
     fn new(model: &MeasurementModel, dim: usize) -> Result<Self> {
         match model {
             MeasurementModel::Linear {
-                matrix, pseudo_inverse, ..
+                matrix,
+                ndim_meas,
+                pseudo_inverse,
+                ..
             } => {
+                let matrix = DMatrix::from_row_slice(*ndim_meas, dim, matrix);
                 let mapped = (0..dim)
                     .filter(|&c| matrix.column(c).iter().any(|&v| v != 0.0))
                     .collect();
                 let inverse = match pseudo_inverse {
-                    Some(given) => given.clone(),
-                    None => pseudo_inverse_of("matrix", matrix.clone())?,
+                    Some(given) => DMatrix::from_row_slice(dim, *ndim_meas, given),
+                    None => pseudo_inverse_of("matrix", matrix)?,
                 };
                 Ok(Prepared {
                     mapped,
@@ -143,7 +116,7 @@ impl Prepared {
                 })?;
                 Ok(Prepared {
                     mapped: mapping.to_vec(),
-                    inverse: Inverse::Rotation(Matrix3::from_fn(|i, j| inverse[i][j])),
+                    inverse: Inverse::Rotation(Matrix3::from_row_slice(&inverse)),
                 })
             }
         }
@@ -158,44 +131,26 @@ impl Prepared {
             covar.row_mut(i).fill(0.0);
             covar.column_mut(i).fill(0.0);
         }
-        let (state, jacobian_inverse) = match (&self.inverse, model) {
-            (Inverse::Linear(inverse), _) => (inverse * DVector::from_column_slice(z), inverse.clone()),
-            (
-                Inverse::Rotation(inverse),
-                MeasurementModel::BearingRange {
-                    mapping,
-                    offset,
-                    rotation,
-                    noise,
-                    jacobian,
-                    inverse_rotation,
-                },
-            ) => {
+        let (state, jacobian_inverse) = match &self.inverse {
+            Inverse::Linear(inverse) => (inverse * DVector::from_column_slice(z), inverse.clone()),
+            Inverse::Rotation(inverse) => {
                 let (phi, rho) = (z[0], z[1]);
-                let xyz = inverse * nalgebra::Vector3::new(rho * phi.cos(), rho * phi.sin(), 0.0);
+                let xyz = inverse * Vector3::new(rho * phi.cos(), rho * phi.sin(), 0.0);
                 let mut state = DVector::zeros(dim);
+                let (mapping, offset) = match model {
+                    MeasurementModel::BearingRange { mapping, offset, .. } => (mapping, offset),
+                    MeasurementModel::Linear { .. } => {
+                        unreachable!("a rotation is prepared from a bearing–range model")
+                    }
+                };
                 state[mapping[0]] = xyz[0] + offset[0];
                 state[mapping[1]] = xyz[1] + offset[1];
-                let mut linearised = model.linearise(&state).1;
-                if *jacobian == Jacobian::Analytic && linearised.iter().any(|v| !v.is_finite()) {
-                    // At the sensor (ρ = 0) bearing has no derivative: the finite difference,
-                    // which is finite, as the closed-form model falls back to.
-                    let fallback = MeasurementModel::BearingRange {
-                        mapping: *mapping,
-                        offset: *offset,
-                        rotation: *rotation,
-                        noise: noise.clone(),
-                        jacobian: Jacobian::FiniteDifference,
-                        inverse_rotation: *inverse_rotation,
-                    };
-                    linearised = fallback.linearise(&state).1;
-                }
-                (state, pseudo_inverse_of("jacobian", linearised)?)
+                let jacobian = model.linearised(&state).1;
+                (state, pseudo_inverse_of("jacobian", jacobian)?)
             }
-            (Inverse::Rotation(_), MeasurementModel::Linear { .. }) => unreachable!("prepared from this model"),
         };
         mean += state;
-        let spread = (&jacobian_inverse * model.noise()) * jacobian_inverse.transpose();
+        let spread = (&jacobian_inverse * model.noise_matrix()) * jacobian_inverse.transpose();
         let mut covar = spread + covar;
         for i in 0..dim {
             covar[(i, i)] += prior.diag_load;

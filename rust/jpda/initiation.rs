@@ -23,11 +23,11 @@
 //! All loops run in index order on one thread: the same inputs give the same bits.
 
 use super::assignment::assign;
-use super::measurement::{mod_bearing, MeasurementModel};
-#[cfg(test)]
-use super::Jacobian;
-use super::{check_finite, check_states, predict, push_row_major};
+use super::{check_detections, check_states, predict, push_row_major};
 use crate::error::{ModelError, Result};
+#[cfg(test)]
+use crate::kalman::Jacobian;
+use crate::kalman::{mod_bearing, MeasurementModel};
 use crate::memory;
 use nalgebra::{DMatrix, DVector};
 
@@ -103,37 +103,7 @@ fn check(models: &[MeasurementModel], input: &InitiatorInput) -> Result<usize> {
             format!("since, new_time and transition_index must have {rows} entries (one per row)"),
         ));
     }
-    let m = models.first().map_or(0, MeasurementModel::ndim_meas);
-    for model in models {
-        if model.ndim_meas() != m {
-            return Err(ModelError::shape(
-                "models",
-                "every model must measure the same number of values",
-            ));
-        }
-        model.check_dim(input.dim)?;
-    }
-    let dets = input.model_index.len();
-    if dets > 0 && models.is_empty() {
-        return Err(ModelError::shape("models", "detections need at least one model"));
-    }
-    if let Some(j) = input.model_index.iter().position(|&g| g >= models.len()) {
-        return Err(ModelError::invalid(
-            "model_index",
-            format!(
-                "detection {j}: index {} is out of range for {} models",
-                input.model_index[j],
-                models.len()
-            ),
-        ));
-    }
-    if input.detections.len() != dets * m {
-        return Err(ModelError::shape(
-            "detections",
-            format!("must be ({dets}, {m}), got {} values", input.detections.len()),
-        ));
-    }
-    check_finite("detections", input.detections)?;
+    let m = check_detections(models, input.dim, input.detections, input.model_index)?;
     if input.missed_distance.is_nan() {
         return Err(ModelError::invalid("missed_distance", "must not be NaN"));
     }
@@ -173,6 +143,7 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
     let mut hypotheses: Vec<Vec<(usize, f64)>> = memory::collected("means", (0..rows).map(|_| Vec::new()))?;
     let mut predicted: Vec<Vec<Option<Predicted>>> = memory::with_room("means", rows)?;
     let mut delta = memory::filled("detections", m, 0.0)?;
+    let noises: Vec<DMatrix<f64>> = models.iter().map(MeasurementModel::noise_matrix).collect();
     for (row, found) in hypotheses.iter_mut().enumerate() {
         let x = DVector::from_row_slice(&pred_means[row * dim..(row + 1) * dim]);
         let p = DMatrix::from_row_slice(dim, dim, &pred_covars[row * dd..(row + 1) * dd]);
@@ -182,9 +153,9 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
                 per_model.push(None);
                 continue;
             }
-            let (z_hat, h) = model.linearise(&x);
+            let (z_hat, h) = model.linearised(&x);
             let cross = &p * h.transpose();
-            let s = &h * &cross + model.noise();
+            let s = &h * &cross + &noises[g];
             let s_inv = s.clone().try_inverse().ok_or_else(|| {
                 ModelError::invalid(
                     "covars",

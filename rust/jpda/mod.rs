@@ -3,9 +3,8 @@
 //!
 //! For `T` predicted tracks `(x̂_t, P̂_t)` and `M` detections `z_j` measured by one model:
 //!
-//! 1. **Measurement prediction** per track: `ẑ_t = h(x̂_t)`, `H_t` (the model matrix, Stone
-//!    Soup's forward finite-difference Jacobian reproduced operation for operation, or the
-//!    closed-form bearing–range Jacobian), `C_t = P̂_t H_tᵀ`, `S_t = H_t C_t + R`.
+//! 1. **Measurement prediction** per track: `ẑ_t = h(x̂_t)`, `H_t` (the model matrix or its
+//!    Jacobian, see [`crate::kalman::measurement`]), `C_t = P̂_t H_tᵀ`, `S_t = H_t C_t + R`.
 //! 2. **Single-hypothesis weights** as `PDAHypothesiser` computes them: missed detection
 //!    `1 − P_D,t·P_G`; detection `j`, if its squared Mahalanobis distance is within the χ²
 //!    gate (or `include_all`), `P_D,t·N(z_j; ẑ_t, S_t)/λ_j`. Bearing rows of `z_j − ẑ_t`
@@ -34,7 +33,6 @@ mod assignment;
 mod births;
 mod initiation;
 mod marginals;
-mod measurement;
 #[cfg(test)]
 mod tests;
 
@@ -42,9 +40,9 @@ pub use assignment::assign;
 pub use births::{initiator_births, BirthPrior};
 pub use initiation::{initiator_scan, InitiatorInput, InitiatorOutput};
 pub use marginals::{brute_force_marginals, joint_marginals, MAX_TREE_EDGES, MAX_TREE_NODES};
-pub use measurement::{mod_bearing, Jacobian, MeasurementModel};
 
 use crate::error::{ModelError, Result};
+use crate::kalman::{self, mod_bearing, MeasurementModel};
 use crate::memory;
 use nalgebra::{DMatrix, DVector};
 
@@ -102,26 +100,60 @@ pub fn predict(
     }
     check_finite("transition_matrices", matrices)?;
     check_finite("transition_covars", noises)?;
-    // (nalgebra's matrices allocate infallibly: as large as the given matrices, which exist)
-    let f: Vec<DMatrix<f64>> = memory::collected(
-        "transition_matrices",
-        (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &matrices[k * dd..(k + 1) * dd])),
-    )?;
-    let q: Vec<DMatrix<f64>> = memory::collected(
-        "transition_covars",
-        (0..kinds).map(|k| DMatrix::from_row_slice(dim, dim, &noises[k * dd..(k + 1) * dd])),
-    )?;
-    let mut out_means = memory::with_room("means", means.len())?;
-    let mut out_covars = memory::with_room("covars", covars.len())?;
+    let mut out_means = memory::copied("means", means)?;
+    let mut out_covars = memory::copied("covars", covars)?;
+    let mut scratch = memory::filled("means", 2 * dd + dim, 0.0)?;
     for (t, &k) in index.iter().enumerate() {
-        let x = DVector::from_row_slice(&means[t * dim..(t + 1) * dim]);
-        let p = DMatrix::from_row_slice(dim, dim, &covars[t * dd..(t + 1) * dd]);
-        let x = &f[k] * x;
-        let p = (&f[k] * p) * f[k].transpose() + &q[k];
-        out_means.extend(x.iter());
-        push_row_major(&mut out_covars, &p);
+        kalman::predict_state(
+            &matrices[k * dd..(k + 1) * dd],
+            &noises[k * dd..(k + 1) * dd],
+            &mut out_means[t * dim..(t + 1) * dim],
+            &mut out_covars[t * dd..(t + 1) * dd],
+            &mut scratch,
+        );
     }
     Ok((out_means, out_covars))
+}
+
+/// Checks a call's `models` against states of `dim` values and its `detections` (M×m,
+/// detection `j` measured by `models[model_index[j]]`); returns m.
+fn check_detections(
+    models: &[MeasurementModel],
+    dim: usize,
+    detections: &[f64],
+    model_index: &[usize],
+) -> Result<usize> {
+    let m = models.first().map_or(0, MeasurementModel::ndim_meas);
+    for model in models {
+        if model.ndim_meas() != m {
+            return Err(ModelError::shape(
+                "models",
+                "every model must measure the same number of values",
+            ));
+        }
+        model.check_dim(dim)?;
+    }
+    let dets = model_index.len();
+    if dets > 0 && models.is_empty() {
+        return Err(ModelError::shape("models", "detections need at least one model"));
+    }
+    if let Some(j) = model_index.iter().position(|&g| g >= models.len()) {
+        return Err(ModelError::invalid(
+            "model_index",
+            format!(
+                "detection {j}: index {} is out of range for {} models",
+                model_index[j],
+                models.len()
+            ),
+        ));
+    }
+    if detections.len() != dets * m {
+        return Err(ModelError::shape(
+            "detections",
+            format!("must be ({dets}, {m}), got {} values", detections.len()),
+        ));
+    }
+    check_finite("detections", detections).map(|()| m)
 }
 
 fn push_row_major(out: &mut Vec<f64>, m: &DMatrix<f64>) {
@@ -292,7 +324,7 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
     );
     let dd = dim * dim;
     let angle = model.angle_row();
-    let noise = model.noise();
+    let noise = model.noise_matrix();
     let z: Vec<DVector<f64>> = memory::collected(
         "detections",
         input.detections.chunks_exact(m).map(DVector::from_row_slice),
@@ -324,9 +356,9 @@ pub fn scan(model: &MeasurementModel, input: &ScanInput) -> Result<ScanOutput> {
     for t in 0..tracks {
         let x = DVector::from_row_slice(&input.means[t * dim..(t + 1) * dim]);
         let p = DMatrix::from_row_slice(dim, dim, &input.covars[t * dd..(t + 1) * dd]);
-        let (z_hat, h) = model.linearise(&x);
+        let (z_hat, h) = model.linearised(&x);
         let cross = &p * h.transpose();
-        let s = &h * &cross + noise;
+        let s = &h * &cross + &noise;
         out.meas_means.extend(z_hat.iter());
         push_row_major(&mut out.meas_covars, &s);
         push_row_major(&mut out.cross_covars, &cross);

@@ -2,8 +2,8 @@
 //! measurement model.
 
 use super::marginals::{joint_marginals_within, TreeLimits};
-use super::measurement::spacing;
 use super::*;
+use crate::kalman::Jacobian;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::f64::consts::PI;
@@ -175,36 +175,10 @@ fn scan_of_an_intractable_cluster_is_an_error_not_an_abort() {
     );
 }
 
-#[test]
-fn mod_bearing_is_the_floored_modulo() {
-    assert_eq!(mod_bearing(PI), -PI);
-    assert_eq!(mod_bearing(-PI), -PI);
-    assert_eq!(mod_bearing(0.5), 0.5);
-    assert!((mod_bearing(3.0 * PI + 0.25) - (-PI + 0.25)).abs() < 1e-12);
-    assert_eq!(spacing(1.0), f64::EPSILON);
-    assert_eq!(spacing(-1.0), -f64::EPSILON);
-}
-
 fn bearing_range(jacobian: Jacobian) -> MeasurementModel {
     let h: f64 = 0.7;
     let rotation = [h.cos(), h.sin(), 0.0, -h.sin(), h.cos(), 0.0, 0.0, 0.0, 1.0];
     MeasurementModel::bearing_range([0, 2], [10.0, -5.0], &rotation, &[1e-4, 0.0, 0.0, 25.0], jacobian).unwrap()
-}
-
-#[test]
-fn analytic_and_finite_difference_jacobians_agree() {
-    let x = DVector::from_vec(vec![300.0, 2.0, -150.0, 1.0]);
-    let (z_fd, h_fd) = bearing_range(Jacobian::FiniteDifference).linearise(&x);
-    let (z_an, h_an) = bearing_range(Jacobian::Analytic).linearise(&x);
-    assert_eq!(z_fd, z_an);
-    // Forward differences with steps of 1e-8 (negative coordinates) carry an error of
-    // one ulp of the value over the step: ~6e-14 / 1e-8 for a range of 300 m (Stone Soup's
-    // own Jacobian here is off by 3.7e-6 in ∂ρ/∂y).
-    for (a, b) in h_fd.iter().zip(h_an.iter()) {
-        assert!((a - b).abs() <= 1e-5, "{a} vs {b}");
-    }
-    assert_eq!(h_an[(0, 1)], 0.0);
-    assert_eq!(h_fd[(1, 3)], 0.0);
 }
 
 fn linear_model() -> MeasurementModel {
@@ -411,139 +385,6 @@ fn predict_is_the_kalman_prediction() {
     assert_eq!(p, vec![2.25, 1.5, 1.5, 2.0]);
 }
 
-/// The JPDA's and the GM-PHD's measurement models compute the same function, to rounding, on
-/// random states and sensor poses. They are not bit for bit the same, so they stay two: for
-/// bearing–range about a fifth of the predicted measurements and a third of the Jacobians
-/// differ in the last bits, because the JPDA rounds the 3×3 rotation product as NumPy's
-/// kernels do (one fused multiply-add, `mul_add`) and the GM-PHD as plain products and sums;
-/// for linear models the values are equal, but a row of −0.0 products sums to −0.0
-/// (nalgebra) or +0.0 (the GM-PHD). Sharing one model would change one tracker's numbers.
-#[test]
-fn jpda_and_gmphd_models_agree_to_rounding() {
-    use crate::gmphd;
-    let mut rng = StdRng::seed_from_u64(11);
-    let mut worst = [0.0f64; 4]; // z (analytic, FD), h (analytic, FD): relative differences
-    let mut differ_in_bits = 0;
-    for (slot, (jpda_kind, gm_kind)) in [
-        (Jacobian::Analytic, gmphd::Jacobian::Analytic),
-        (Jacobian::FiniteDifference, gmphd::Jacobian::FiniteDifference),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        for _ in 0..5000 {
-            let yaw = rng.random_range(-PI..PI);
-            let (s, c) = yaw.sin_cos();
-            let rotation = [c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0];
-            let offset = [rng.random_range(-5e4..5e4), rng.random_range(-5e4..5e4)];
-            let noise = [1e-4, 0.0, 0.0, 25.0];
-            let x: Vec<f64> = (0..4).map(|_| rng.random_range(-6e4..6e4)).collect();
-            let ours = MeasurementModel::bearing_range([0, 2], offset, &rotation, &noise, jpda_kind).unwrap();
-            let theirs = gmphd::MeasurementModel::BearingRange {
-                mapping: [0, 2],
-                offset,
-                rotation,
-                noise,
-                jacobian: gm_kind,
-            };
-            let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
-            let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
-            theirs.linearise(&x, &mut z_b, &mut h_b);
-            for i in 0..2 {
-                // the bearing compared as an angle (a difference across ±π is one of 2π)
-                let dz = if i == 0 {
-                    mod_bearing(z_a[i] - z_b[i])
-                } else {
-                    z_a[i] - z_b[i]
-                };
-                worst[slot] = worst[slot].max(dz.abs() / z_b[i].abs().max(1.0));
-                differ_in_bits += usize::from(z_a[i].to_bits() != z_b[i].to_bits());
-                let scale = (0..4).map(|k| h_b[i * 4 + k].abs()).fold(0.0, f64::max);
-                for k in 0..4 {
-                    worst[2 + slot] = worst[2 + slot].max((h_a[(i, k)] - h_b[i * 4 + k]).abs() / scale);
-                }
-            }
-        }
-    }
-    assert!(
-        worst[0] < 1e-12 && worst[1] < 1e-12,
-        "predicted measurements differ by {worst:?}"
-    );
-    assert!(worst[2] < 1e-12, "analytic Jacobians differ by {worst:?}");
-    // Stone Soup's finite difference divides a last-bit difference of the function by its
-    // tiny step: at 60 km such a Jacobian carries ~1 % round-off of its own (measured 1.3 %).
-    assert!(worst[3] < 0.05, "finite-difference Jacobians differ by {worst:?}");
-    assert!(
-        differ_in_bits > 0,
-        "bit-identical after all: the two models could be one"
-    );
-    // Linear models: equal values (only a zero's sign may differ).
-    for _ in 0..5000 {
-        let pick = |rng: &mut StdRng| {
-            if rng.random::<f64>() < 0.3 {
-                [0.0, -0.0][rng.random_range(0..2)]
-            } else {
-                rng.random_range(-1e3..1e3)
-            }
-        };
-        let matrix: Vec<f64> = (0..8).map(|_| pick(&mut rng)).collect();
-        let x: Vec<f64> = (0..4).map(|_| pick(&mut rng)).collect();
-        let ours = MeasurementModel::linear(&matrix, 2, 4, &[1.0, 0.0, 0.0, 1.0]).unwrap();
-        let theirs = gmphd::MeasurementModel::Linear {
-            matrix: matrix.clone(),
-            noise: vec![1.0, 0.0, 0.0, 1.0],
-            ndim_meas: 2,
-        };
-        let (z_a, h_a) = ours.linearise(&DVector::from_column_slice(&x));
-        let (mut z_b, mut h_b) = ([0.0; 2], [0.0; 8]);
-        theirs.linearise(&x, &mut z_b, &mut h_b);
-        for i in 0..2 {
-            assert_eq!(z_a[i], z_b[i], "{matrix:?} {x:?}");
-            for k in 0..4 {
-                assert_eq!(h_a[(i, k)].to_bits(), h_b[i * 4 + k].to_bits());
-            }
-        }
-    }
-}
-
-/// The bearing helpers, shared with the GM-PHD, against their definitions: Stone Soup's
-/// floored `((x + π) mod 2π) − π` (as `rem_euclid`) and NumPy's `spacing` (as a branch on
-/// the sign), bit for bit.
-#[test]
-fn shared_bearing_helpers_are_the_jpda_formulae() {
-    let floored = |x: f64| (x + PI).rem_euclid(2.0 * PI) - PI;
-    let numpy_spacing = |x: f64| {
-        let magnitude = x.abs();
-        let step = f64::from_bits(magnitude.to_bits() + 1) - magnitude;
-        if x.is_sign_negative() {
-            -step
-        } else {
-            step
-        }
-    };
-    let mut rng = StdRng::seed_from_u64(12);
-    let mut values: Vec<f64> = (0..100_000).map(|_| rng.random_range(-40.0..40.0)).collect();
-    values.extend((0..10_000).map(|_| rng.random_range(-1e6..1e6)));
-    values.extend([
-        0.0,
-        -0.0,
-        PI,
-        -PI,
-        3.0 * PI,
-        -3.0 * PI,
-        f64::MIN_POSITIVE,
-        -f64::MIN_POSITIVE,
-        1e300,
-        -1e300,
-        5e-324,
-        -5e-324,
-    ]);
-    for v in values {
-        assert_eq!(mod_bearing(v).to_bits(), floored(v).to_bits(), "mod_bearing({v:e})");
-        assert_eq!(spacing(v).to_bits(), numpy_spacing(v).to_bits(), "spacing({v:e})");
-    }
-}
-
 #[test]
 fn a_birth_inverts_the_measurement_and_its_covariance_maps_back_to_the_noise() {
     // h(x − x₀') = z (the inverse function), and J P Jᵀ = R where the prior is not mapped
@@ -563,7 +404,7 @@ fn a_birth_inverts_the_measurement_and_its_covariance_maps_back_to_the_noise() {
         assert_eq!((x[1], x[3]), (2.0, 4.0)); // unmapped: the prior's
         x[1] = 0.0;
         x[3] = 0.0;
-        let (z, h) = model.linearise(&x);
+        let (z, h) = model.linearised(&x);
         assert!((z[0] - detections[2 * j]).abs() < 1e-12 && (z[1] / detections[2 * j + 1] - 1.0).abs() < 1e-12);
         let p = DMatrix::from_row_slice(4, 4, &covars[16 * j..16 * j + 16]);
         let back = &h * &p * h.transpose();

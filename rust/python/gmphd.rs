@@ -1,87 +1,13 @@
 //! Binding of the GM-PHD scan core ([`crate::gmphd`]): a mutable Gaussian mixture kept as
-//! arrays between scans, and the measurement models it updates with.
+//! arrays between scans.
 
 use super::at_pose::{PyDetectionAtPose, DETACH_ROWS};
+use super::kalman::PyMeasurementModel;
 use super::{borrow, detached, guarded, slice, value_error};
-use crate::gmphd::{Jacobian, MeasurementModel, Mixture, ReduceParams, UpdateParams};
+use crate::gmphd::{Mixture, ReduceParams, UpdateParams};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
-
-/// A measurement model the scan core can linearise.
-#[pyclass(name = "ScanMeasurementModel", module = "ctxmodels._core", frozen)]
-pub struct PyScanMeasurementModel(MeasurementModel);
-
-#[pymethods]
-impl PyScanMeasurementModel {
-    /// `z = H x + v`, `v ~ N(0, R)`: `matrix` (m, D), `noise` (m, m).
-    #[staticmethod]
-    fn linear(matrix: Bound<'_, PyArray2<f64>>, noise: Bound<'_, PyArray2<f64>>) -> PyResult<Self> {
-        let m = matrix.shape()[0];
-        if noise.shape() != [m, m] {
-            return Err(value_error(
-                "noise",
-                format_args!("must be ({m}, {m}) for a ({m}, D) matrix, got {:?}", noise.shape()),
-            ));
-        }
-        let h = borrow(&matrix, "matrix")?;
-        let r = borrow(&noise, "noise")?;
-        // (copies of a model's matrices, as large as the arrays given)
-        Ok(Self(MeasurementModel::Linear {
-            matrix: slice(&h, "matrix")?.to_vec(),
-            noise: slice(&r, "noise")?.to_vec(),
-            ndim_meas: m,
-        }))
-    }
-
-    /// Bearing–range of the state's `mapping` (x, y) seen from `offset` (x, y) through the
-    /// 3×3 `rotation`; `noise` (2, 2); `analytic`: closed-form Jacobian, else Stone Soup's
-    /// finite difference.
-    #[staticmethod]
-    fn bearing_range(
-        mapping: (usize, usize),
-        offset: (f64, f64),
-        rotation: Bound<'_, PyArray2<f64>>,
-        noise: Bound<'_, PyArray2<f64>>,
-        analytic: bool,
-    ) -> PyResult<Self> {
-        if rotation.shape() != [3, 3] {
-            return Err(value_error(
-                "rotation",
-                format_args!("must be (3, 3), got {:?}", rotation.shape()),
-            ));
-        }
-        if noise.shape() != [2, 2] {
-            return Err(value_error(
-                "noise",
-                format_args!("must be (2, 2), got {:?}", noise.shape()),
-            ));
-        }
-        let rotation = borrow(&rotation, "rotation")?;
-        let noise = borrow(&noise, "noise")?;
-        let mut rot = [0.0; 9];
-        rot.copy_from_slice(slice(&rotation, "rotation")?);
-        let mut r = [0.0; 4];
-        r.copy_from_slice(slice(&noise, "noise")?);
-        let jacobian = if analytic {
-            Jacobian::Analytic
-        } else {
-            Jacobian::FiniteDifference
-        };
-        Ok(Self(MeasurementModel::BearingRange {
-            mapping: [mapping.0, mapping.1],
-            offset: [offset.0, offset.1],
-            rotation: rot,
-            noise: r,
-            jacobian,
-        }))
-    }
-
-    #[getter]
-    fn ndim_meas(&self) -> usize {
-        self.0.ndim_meas()
-    }
-}
 
 /// Gaussian components as arrays, updated scan by scan in place (see `ctxmodels.gmphd`).
 #[pyclass(name = "GaussianMixtureArrays", module = "ctxmodels._core")]
@@ -219,7 +145,7 @@ impl PyGaussianMixtureArrays {
     fn update<'py>(
         &mut self,
         py: Python<'py>,
-        model: &PyScanMeasurementModel,
+        model: &PyMeasurementModel,
         detections: Bound<'_, PyArray2<f64>>,
         prob_detection: Bound<'_, PyArray1<f64>>,
         clutter: Bound<'_, PyArray1<f64>>,
@@ -450,7 +376,6 @@ type PickledMixture<'py> = (
 );
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_class::<PyScanMeasurementModel>()?;
     m.add_class::<PyGaussianMixtureArrays>()?;
     Ok(())
 }

@@ -3,7 +3,8 @@
 //! errors naming the argument); the work runs with the GIL released and a panic becomes a
 //! RuntimeError.
 
-use super::jpda::{array2, array3, check_covars, PyJPDAMeasurementModel};
+use super::jpda::{array2, array3, check_covars};
+use super::kalman::PyMeasurementModel;
 use super::{borrow, detached, slice, value_error};
 use crate::jpda::{self, InitiatorInput};
 use numpy::{Element, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -45,7 +46,7 @@ fn indices(values: &[i64], argument: &str) -> PyResult<Vec<usize>> {
 #[allow(clippy::too_many_arguments)]
 fn initiator_scan<'py>(
     py: Python<'py>,
-    models: Vec<PyRef<'py, PyJPDAMeasurementModel>>,
+    models: Vec<PyRef<'py, PyMeasurementModel>>,
     means: Bound<'py, PyArray2<f64>>,
     covars: Bound<'py, PyArray3<f64>>,
     transition_index: PyReadonlyArray1<'py, i64>,
@@ -159,7 +160,7 @@ fn initiator_scan<'py>(
 #[allow(clippy::type_complexity)]
 fn initiator_births<'py>(
     py: Python<'py>,
-    models: Vec<PyRef<'py, PyJPDAMeasurementModel>>,
+    models: Vec<PyRef<'py, PyMeasurementModel>>,
     detections: PyReadonlyArray2<'py, f64>,
     model_index: PyReadonlyArray1<'py, i64>,
     prior_mean: PyReadonlyArray1<'py, f64>,

@@ -164,14 +164,18 @@ class AnalyticCartesianToBearingRange(CartesianToBearingRange):
         return jac[0]
 
 
-def jpda_core_model(updater_kind, model):
-    """The JPDA core's model for a Stone Soup measurement model (and the row of its bearing,
-    or None), or (None, None) if the core does not take it."""
+def core_measurement_model(model, updater_kind=ExtendedKalmanUpdater):
+    """The scan cores' :class:`ctxmodels._core.MeasurementModel` for a Stone Soup measurement
+    model and the row of its bearing (or None), or ``(None, None)`` where the core does not
+    compute what ``updater_kind`` would: a ``LinearGaussian``, or a 2-D
+    ``CartesianToBearingRange`` (finite-difference Jacobian) or
+    :class:`AnalyticCartesianToBearingRange` under an ``ExtendedKalmanUpdater``. The core is
+    given the inverse of the measurement as Stone Soup computes it (NumPy's ``pinv`` of the
+    matrix, ``inv`` of the rotation), so new tracks' means are Stone Soup's to the bit."""
     kind = type(model)
-    # (new tracks invert the measurement with Stone Soup's NumPy inverse: their means to the bit)
     if kind is LinearGaussian:
         matrix = np.ascontiguousarray(model.matrix(), dtype=np.float64)
-        return _core.JPDAMeasurementModel.linear(
+        return _core.MeasurementModel.linear(
             matrix, np.ascontiguousarray(model.covar(), dtype=np.float64),
             pseudo_inverse=np.ascontiguousarray(np.linalg.pinv(matrix))), None
     if updater_kind is not ExtendedKalmanUpdater or len(getattr(model, "mapping", ())) != 2:
@@ -190,7 +194,7 @@ def jpda_core_model(updater_kind, model):
         inverse = np.ascontiguousarray(np.linalg.inv(rotation), dtype=np.float64)
     except np.linalg.LinAlgError:
         inverse = None
-    core = _core.JPDAMeasurementModel.bearing_range(
+    core = _core.MeasurementModel.bearing_range(
         (int(model.mapping[0]), int(model.mapping[1])), (float(offset[0]), float(offset[1])),
         rotation, np.ascontiguousarray(model.covar(), dtype=np.float64), jacobian,
         inverse_rotation_matrix=inverse)

@@ -13,13 +13,11 @@ from stonesoup.hypothesiser.gaussianmixture import GaussianMixtureHypothesiser
 from stonesoup.measures import Mahalanobis, SquaredMahalanobis
 from stonesoup.mixturereducer.gaussianmixture import GaussianMixtureReducer
 from stonesoup.models.measurement.linear import LinearGaussian
-from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
 from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
 
-from ... import _core
 from .._batch import supports_predictor
-from ..measurement import AnalyticCartesianToBearingRange
+from ..measurement import core_measurement_model
 from .updater import PHDUpdater
 
 _KALMAN = (KalmanUpdater, ExtendedKalmanUpdater)
@@ -129,19 +127,7 @@ class _Plan:
 
     def _scan_model(self, model, ndim: int):
         kinds = {type(self.measurement_updater), type(self.gate_updater)}
-        if type(model) is LinearGaussian:
-            if model.ndim_state != ndim:
-                return None
-            return _core.ScanMeasurementModel.linear(
-                np.ascontiguousarray(model.matrix(), dtype=np.float64),
-                np.ascontiguousarray(model.covar(), dtype=np.float64))
-        if type(model) in (CartesianToBearingRange, AnalyticCartesianToBearingRange) \
-                and kinds == {ExtendedKalmanUpdater} and len(model.mapping) == 2 \
-                and model.ndim_state == ndim:
-            offset = np.asarray(model.translation_offset, dtype=np.float64).ravel()
-            return _core.ScanMeasurementModel.bearing_range(
-                (int(model.mapping[0]), int(model.mapping[1])), (float(offset[0]), float(offset[1])),
-                np.ascontiguousarray(model.rotation_matrix, dtype=np.float64),
-                np.ascontiguousarray(model.covar(), dtype=np.float64),
-                type(model) is AnalyticCartesianToBearingRange)
-        return None
+        if getattr(model, "ndim_state", None) != ndim or \
+                (type(model) is not LinearGaussian and kinds != {ExtendedKalmanUpdater}):
+            return None
+        return core_measurement_model(model)[0]

@@ -486,7 +486,7 @@ class _NoDetections(dict):
     missed-detection terms are computed; the model is never evaluated)."""
 
     def __missing__(self, ndim):
-        model = _core.ScanMeasurementModel.linear(np.zeros((1, ndim)), np.ones((1, 1)))
+        model = _core.MeasurementModel.linear(np.zeros((1, ndim)), np.ones((1, 1)))
         self[ndim] = model
         return model
 

@@ -30,12 +30,11 @@ from stonesoup.types.hypothesis import SingleHypothesis
 from stonesoup.types.state import GaussianState
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
-from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from ... import _core
 from ...model_key import models_by_value, scan_model_groups
 from .._batch import ObjectFactory
-from ..measurement import jpda_core_model
+from ..measurement import core_measurement_model
 
 #: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
 UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(
@@ -148,7 +147,7 @@ class Births:
         entry), or None when the core does not take it."""
         if key not in self._core_models:
             core, bearing_row = (None, None) if key is None else \
-                jpda_core_model(ExtendedKalmanUpdater, model)
+                core_measurement_model(model)
             if len(self._core_models) >= 64:
                 self._core_models.clear()
             self._core_models[key] = None if core is None else (core, bearing_row is not None)

@@ -17,7 +17,7 @@ from stonesoup.types.angle import Bearing
 
 from ... import _core
 from ...model_key import measurement_model_key, scan_model_groups
-from ..measurement import jpda_core_model
+from ..measurement import core_measurement_model
 from ..transition import ControlTerms
 
 
@@ -141,7 +141,7 @@ class ScanCore:
         key = (key, type(updater))  # equal models share an entry
         cached = self._core_models.get(key)
         if cached is None:
-            core, bearing_row = jpda_core_model(type(updater), model)
+            core, bearing_row = core_measurement_model(model, type(updater))
             cached = self._core_models[key] = (model, None if core is None
                                                else (core, bearing_row is not None))
             if len(self._core_models) > 64:

@@ -109,7 +109,7 @@ from ._initiator_history import PRIOR_PREDICTION as _PRIOR_PREDICTION
 from .._batch import KALMAN_UPDATERS, ObjectFactory, plain_track_lists, supports_predictor
 from ..gnn import _copied_properties
 from .hypothesiser import PDAHypothesiser, gate_threshold, is_detection_backed
-from ..measurement import jpda_core_model
+from ..measurement import core_measurement_model
 from .tracker import MultiTargetMixtureTracker
 from ..paths import PathCounts
 from ..ordering import in_track_order, ordered_subset
@@ -342,7 +342,7 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
         # cached by value: equal models (a moving radar's recurring ones) share an entry
         cached = self._models.get(key)
         if cached is None:
-            core, bearing_row = jpda_core_model(type(self.updater), model)
+            core, bearing_row = core_measurement_model(model, type(self.updater))
             cached = self._models[key] = (model, core, bearing_row)
             if len(self._models) > 64:  # per-scan models (a moving radar): keep a few
                 self._models = {k: value for k, value in self._models.items()
@@ -446,7 +446,7 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
         ndim = hypothesiser.predictor.transition_model.ndim_state
         cached = self._models.get(("empty", ndim))
         if cached is None:
-            cached = self._models[("empty", ndim)] = _core.JPDAMeasurementModel.linear(
+            cached = self._models[("empty", ndim)] = _core.MeasurementModel.linear(
                 np.eye(1, ndim), np.eye(1))
         return cached
 
