@@ -10,7 +10,7 @@ use crate::simd::{run_on, Backend};
 use std::f64::consts::PI;
 
 /// Every build this CPU runs: the AVX2 one only where the CPU has AVX2 (elsewhere these
-/// tests check the portable build alone; tests/test_simd_dispatch.py checks that a CPU
+/// tests check the portable build alone; tests/core/test_simd_dispatch.py checks that a CPU
 /// with AVX2 runs the AVX2 build).
 fn backends() -> Vec<Backend> {
     [Backend::Portable, Backend::Avx2]

@@ -31,7 +31,7 @@ And how it is proved, per test:
   test, its outcome, which substituted components it built and any leak, and the runner
   script requires each component to be built by at least one passing test;
 * ``--ctx-control`` runs the same with nothing substituted: the checks must then fail every
-  upstream test (``tests/test_upstream_stonesoup.py`` asserts they do).
+  upstream test (``tests/upstream/test_substitution.py`` asserts they do).
 
 The map, stock dotted name -> ctxmodels dotted name, is :data:`PROFILES`; nothing else
 needs to change to substitute another class.

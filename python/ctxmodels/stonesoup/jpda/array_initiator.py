@@ -12,8 +12,8 @@ SciPy's ``linear_sum_assignment`` uses, ties broken the same way), runs the Kalm
 the assigned pairs and advances the M-of-N counts. Stone Soup states are built only for the
 tracks released (:mod:`~ctxmodels.stonesoup.jpda._initiator_history`).
 
-**"The same tracks"** (tested in ``tests/test_stonesoup_array_initiator.py`` and, through the
-JPDA, ``tests/test_stonesoup_array_jpda.py``): scan by scan the same tracks are released;
+**"The same tracks"** (tested in ``tests/stonesoup/jpda/test_array_initiator.py`` and, through
+the JPDA, ``tests/stonesoup/jpda/test_array_tracker.py``): scan by scan the same tracks are released;
 each has the same states in the same order, of the same types, at the same times, its
 updates on the same detection objects (so the same gate and assignment decisions), and the
 numbers (state vectors, covariances, distances, predictions, measurement predictions) agree

@@ -48,7 +48,7 @@ Soup's finite-difference Jacobian steps by max(1e8 ulp(x), 1e-8): at a negative 
 of a few hundred metres the step is 1e-8 while one ulp of the coordinate is ~1e-13, so a
 last-bit difference in a predicted state moves the Jacobian by ~1e-5 relative, and the next
 scans carry that on: with that model the agreement is measured (1.2e-5 on 10 s of scenario
-1), not bit-level (see ``tests/test_stonesoup_array_jpda.py``).
+1), not bit-level (see ``tests/stonesoup/jpda/test_array_tracker.py``).
 
 Initiation: any initiator works; :class:`~ctxmodels.stonesoup.ArrayMultiMeasurementInitiator`
 (the M-of-N initiator with its holding tracks as arrays) is the one that keeps a JPDA run
