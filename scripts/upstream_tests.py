@@ -14,11 +14,13 @@ script
    directory (nothing is copied into this repository);
 3. runs pytest on them with our substitution plugin (``tests/upstream/upstream_substitute.py``,
    which holds the stock -> ctxmodels map and its profiles), and prints which substituted
-   component each passing test constructed.
+   component each passing test constructed. The plugin adds ctxmodels' checks of the Stone
+   Soup internals it relies on (``tests/upstream/test_internals.py``, see
+   ``ctxmodels._upstream``) to the session, reported apart.
 
 Exit status 0 only if every selected upstream test passed (none deselected but those in
-:data:`DESELECT`, each with its reason) and every substituted component was constructed by
-at least one passing test.
+:data:`DESELECT`, each with its reason), every substituted component was constructed by
+at least one passing test, and every internals check ran and passed.
 
     python scripts/upstream_tests.py                      # default profile
     python scripts/upstream_tests.py --profile array
@@ -230,8 +232,18 @@ def summarise(report: dict, status: int) -> int:
     for test in tests:
         if test["outcome"] == "skipped":
             print(f"SKIPPED {test['nodeid']}: {test.get('skip_reason')}")
+    internals = report.get("internals", [])
+    broken = [check for check in internals if check["outcome"] != "passed"]
+    print(f"Stone Soup internals ctxmodels relies on (ctxmodels._upstream): {len(internals)} "
+          f"checks, {len(internals) - len(broken)} passed")
+    for check in broken:
+        print(f"INTERNAL {check['outcome'].upper()} {check['nodeid']}")
     if uncovered:
         print("no passing upstream test constructed: " + ", ".join(uncovered))
+        return status or 1
+    if broken or not internals:
+        print("the Stone Soup internals ctxmodels relies on are not as it relies on them"
+              if internals else "no check of the Stone Soup internals ran")
         return status or 1
     return status
 

@@ -20,6 +20,9 @@ from .sensor import SensorModel
 
 __version__ = "0.1.0"
 
+# SensorModel.from_stonesoup is the Stone Soup adapters' conversion (see ctxmodels.sensor)
+from . import stonesoup  # noqa: E402, F401
+
 __all__ = [
     "AngularSector",
     "ClutterDensityModel",

@@ -22,6 +22,8 @@ from typing import Any
 import numpy as np
 from stonesoup.base import Base, Property
 
+from ._upstream import property_slot
+
 _CACHE_PREFIX = "_cached_"
 
 
@@ -67,7 +69,7 @@ class LearnedComponent(Base):
 
     def _start(self) -> None:
         """Builds the core from the state Properties as given (at the end of ``__init__``)."""
-        self.__dict__["_core"] = self._build(*(getattr(self, f"_property_{name}")
+        self.__dict__["_core"] = self._build(*(getattr(self, property_slot(name))
                                                for name, _ in self.STATE))
 
     def __setattr__(self, name, value):
@@ -83,16 +85,16 @@ class LearnedComponent(Base):
     def __getstate__(self):
         state = {k: v for k, v in self.__dict__.items()
                  if k != "_core" and not k.startswith(_CACHE_PREFIX)}
-        state.update({f"_property_{name}": getattr(self, name) for name, _ in self.STATE})
+        state.update({property_slot(name): getattr(self, name) for name, _ in self.STATE})
         return state
 
     def __setstate__(self, state):
         # a pickle from before a Property was added: that Property's default
         for name, prop in type(self).properties.items():
             if prop.default is not Property.empty:
-                state.setdefault(f"_property_{name}", prop.default)
+                state.setdefault(property_slot(name), prop.default)
         self.__dict__.update(state)
-        self.__dict__["_core"] = self._build(*(state[f"_property_{name}"]
+        self.__dict__["_core"] = self._build(*(state[property_slot(name)]
                                                for name, _ in self.STATE))
 
 

@@ -15,11 +15,12 @@ import numpy as np
 from stonesoup.base import Base, Property
 from stonesoup.types.numeric import Probability
 
+from ._upstream import property_slot
 from .pose import Pose
 # (the detections' positions and ranges lived here: still importable from here)
 from .positions import detection_positions, measured_ranges, ranges_for_bands  # noqa: F401
 from .scan_calls import ScanCalls
-from .sensor import SensorModel
+from .sensor import SensorModel, provide
 
 # The upstream interface (dstl/Stone-Soup#1291) where this Stone Soup has it: an abstract
 # class with ``prob_detection`` and ``clutter_spatial_density`` (not a Stone Soup ``Base``),
@@ -36,6 +37,9 @@ try:
     from stonesoup.types.detection import DetectionSet as _UpstreamSet  # type: ignore
 except ImportError:  # stonesoup 1.9.x
     _UpstreamSet = set
+
+_SENSOR_MODEL, _POSE, _TIMESTAMP = (property_slot(name)
+                                    for name in ("sensor_model", "pose", "timestamp"))
 
 
 class DetectionSet(_UpstreamSet):
@@ -142,8 +146,8 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
                 and isinstance(pose, Pose) \
                 and (timestamp is None or isinstance(timestamp, datetime.datetime)):
             context = object.__new__(cls)
-            context.__dict__.update(_property_sensor_model=sensor_model, _property_pose=pose,
-                                    _property_timestamp=timestamp)
+            context.__dict__.update({_SENSOR_MODEL: sensor_model, _POSE: pose,
+                                     _TIMESTAMP: timestamp})
             return context
         return cls(sensor_model=sensor_model, pose=pose, timestamp=timestamp)
 
@@ -326,6 +330,9 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         ``detection.metadata``)."""
         return float(self.clutter_spatial_density_detections([detection])[0])
 
+
+# SensorModel.context builds its contexts with this
+provide("context", DetectorContext._of)
 
 __all__ = ["DetectionSet", "DetectorContext", "detection_positions", "measured_ranges"]
 

@@ -16,6 +16,7 @@ import numpy as np
 from stonesoup.base import Property
 
 from . import _core
+from ._upstream import property_slot
 from ._component import ModelComponent, as_float, as_rows, as_sequence, frozen_copy
 
 
@@ -59,13 +60,15 @@ def pose_tuple(pose, name: str = "pose") -> tuple[float, float, float]:
     return as_pose(pose, name).as_tuple()
 
 
+_X, _Y, _HEADING = property_slot("x"), property_slot("y"), property_slot("heading")
+
+
 def _computed_pose(x: float, y: float, heading: float) -> Pose:
     """The :class:`Pose` ``Pose(x=x, y=y, heading=heading)`` builds, for floats computed from
     already validated ones (interpolated, mounted): without the per-Property checks, which
     cost more than the rest of a scan's context."""
     pose = object.__new__(Pose)
-    pose.__dict__.update(_initialised=True, _property_x=x, _property_y=y,
-                         _property_heading=heading)
+    pose.__dict__.update({"_initialised": True, _X: x, _Y: y, _HEADING: heading})
     return pose
 
 

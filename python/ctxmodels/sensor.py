@@ -2,16 +2,35 @@
 from __future__ import annotations
 
 import datetime
-import math
-import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from stonesoup.base import Property
 
-from ._component import ModelComponent, as_float, as_int, as_position_mapping
+from ._component import ModelComponent, as_int, as_position_mapping
 from .clutter import ClutterDensityModel
 from .detection import MAX_ORDER, PD_RULES, DetectionProbabilityModel
 from .pose import Mounting, Pose, as_pose
+
+#: What :meth:`SensorModel.context` and :meth:`SensorModel.from_stonesoup` call, registered
+#: (:func:`provide`) by the modules that hold them: ``"context"`` by :mod:`ctxmodels.context`
+#: (``DetectorContext._of``; that module imports this one for its Property types) and
+#: ``"from_stonesoup"`` by :mod:`ctxmodels.stonesoup.sensor_adapter` (the Stone Soup adapters
+#: build on the core). So this module imports neither (no import circle); ``import
+#: ctxmodels`` imports both.
+_PROVIDED: dict[str, Callable] = {}
+
+
+def provide(name: str, function: Callable) -> None:
+    """Registers ``function`` as what ``SensorModel.<name>`` calls (see :data:`_PROVIDED`)."""
+    _PROVIDED[name] = function
+
+
+def _provided(name: str) -> Callable:
+    try:
+        return _PROVIDED[name]
+    except KeyError:
+        raise RuntimeError(f"SensorModel.{name}: its module is not imported yet "
+                           "(import ctxmodels first)") from None
 
 
 class SensorModel(ModelComponent):
@@ -66,26 +85,11 @@ class SensorModel(ModelComponent):
         """The model of a Stone Soup radar's coverage (range limit, rotating field of view)
         with P_D ``prob_detection`` inside it and λ ``clutter_density``; its pose at a scan
         is :func:`ctxmodels.stonesoup.sensor_pose`. See
-        :mod:`ctxmodels.stonesoup.sensor_adapter`."""
-        from .stonesoup.sensor_coverage import coverage_factors, sensor_kind
-        sensor_kind(sensor)  # (the sensor is named first, as before any number)
-        p = as_float(prob_detection, "prob_detection", finite=False)
-        if not 0.0 <= p <= 1.0:
-            raise ValueError(f"prob_detection: must lie in [0, 1], got {prob_detection!r}")
-        density = as_float(clutter_density, "clutter_density", finite=False)
-        if not (math.isfinite(density) and density >= sys.float_info.min):
-            raise ValueError(f"clutter_density: must be a finite density > 0, at least "
-                             f"{sys.float_info.min} (per unit of the detections' measurement "
-                             f"space; trackers divide by it), got {clutter_density!r}")
-        if not isinstance(name, str):
-            raise TypeError(f"name: expected a string label, got {type(name).__name__} {name!r}")
-        factors, mapping = coverage_factors(sensor)
-        return cls(detection=DetectionProbabilityModel(factors=[p, *factors]),
-                   clutter=ClutterDensityModel(factors=[density]), position_mapping=mapping,
-                   name=name)
+        :mod:`ctxmodels.stonesoup.sensor_adapter`, which does the conversion."""
+        return _provided("from_stonesoup")(cls, sensor, prob_detection, clutter_density,
+                                           name=name)
 
     def context(self, pose: Pose | Sequence[float], timestamp: datetime.datetime | None = None):
         """The :class:`~ctxmodels.DetectorContext` of a scan taken with the *platform* at
         ``pose`` (a :class:`Pose` or an (x, y, heading) triple)."""
-        from .context import DetectorContext
-        return DetectorContext._of(self, self.sensor_pose(as_pose(pose)), timestamp)
+        return _provided("context")(self, self.sensor_pose(as_pose(pose)), timestamp)

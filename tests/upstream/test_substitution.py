@@ -16,6 +16,8 @@ from .upstream_substitute import PROFILES
 REPO = Path(__file__).resolve().parents[2]
 SCRIPT = REPO / "scripts" / "upstream_tests.py"
 
+from ctxmodels._upstream import INTERNALS  # noqa: E402
+
 # The profiles checked here: the component-path drop-ins, and the whole-scan array trackers.
 CHECKED_PROFILES = ["default", "array"]
 
@@ -51,6 +53,7 @@ def test_upstream_tests_pass_with_substitutes(tmp_path, profile):
     assert result.returncode == 0, output
     assert report["profile"] == profile and not report["control"]
     assert report["map"] == PROFILES[profile]
+    _assert_internals_checked(report, output)
     tests = report["tests"]
     assert len(tests) >= MIN_TOTAL, output
     not_passed = [(t["nodeid"], t["outcome"], t.get("skip_reason")) for t in tests
@@ -64,6 +67,17 @@ def test_upstream_tests_pass_with_substitutes(tmp_path, profile):
         assert built >= MIN_TESTS[name], f"{name}: {built} upstream tests built its substitute"
 
 
+def _assert_internals_checked(report: dict, output: str) -> None:
+    """The session ran ctxmodels' checks of the Stone Soup internals it relies on
+    (tests/upstream/test_internals.py, added by the plugin), and they passed."""
+    internals = report["internals"]
+    assert len(internals) >= len(INTERNALS) + 1, output
+    assert all(check["outcome"] == "passed" for check in internals), internals
+    assert all("test_internals.py::" in check["nodeid"] for check in internals)
+    checked = {check["nodeid"].rpartition("[")[2].rstrip("]") for check in internals}
+    assert set(INTERNALS) <= checked, set(INTERNALS) - checked
+
+
 def test_control_without_substitution_is_caught(tmp_path):
     """The same run substituting nothing: the plugin's checks must fail every upstream test
     (each reads a stock class where a substitute was due), and the construction check must
@@ -71,6 +85,7 @@ def test_control_without_substitution_is_caught(tmp_path):
     result, report = run_upstream(tmp_path, "--control")
     assert result.returncode != 0
     assert report["control"]
+    _assert_internals_checked(report, result.stdout)  # (they do not depend on substitution)
     tests = report["tests"]
     assert len(tests) >= MIN_TOTAL
     assert all(t["outcome"] in ("failed", "error") and t["leaks"] for t in tests)

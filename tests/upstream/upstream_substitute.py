@@ -33,6 +33,13 @@ And how it is proved, per test:
 * ``--ctx-control`` runs the same with nothing substituted: the checks must then fail every
   upstream test (``tests/upstream/test_substitution.py`` asserts they do).
 
+The session also runs ``tests/upstream/test_internals.py`` (:data:`INTERNALS_CHECK`, added to
+the command line's paths): the checks that the Stone Soup internals ctxmodels relies on
+(``ctxmodels._upstream``) exist and behave as relied on, against the Stone Soup whose tests
+run. They are not upstream tests: no substitution check applies to them (they build stock
+classes on purpose), and the report lists them apart, under ``"internals"``; they pass or
+fail alike with and without ``--ctx-control``.
+
 The map, stock dotted name -> ctxmodels dotted name, is :data:`PROFILES`; nothing else
 needs to change to substitute another class.
 """
@@ -87,6 +94,10 @@ PROFILES = {
 # -----------------------------------------------------------------------------------------
 
 
+#: ctxmodels' checks of the Stone Soup internals it relies on, run in the same session.
+INTERNALS_CHECK = Path(__file__).resolve().parent / "test_internals.py"
+
+
 class SubstitutionLeak(AssertionError):
     """An upstream test reached a stock class that should have been substituted."""
 
@@ -134,6 +145,10 @@ class _Substitution:
         self.used = {}         # nodeid -> {stock dotted names whose substitute was built}
         self.outcomes = {}     # nodeid -> outcome
         self.skip_reasons = {}  # nodeid -> why skipped
+        # nodeid of each INTERNALS_CHECK item -> its name in the report (the file lies
+        # outside the session's root, so its nodeids carry no path)
+        self.internal_ids = {}
+        self.internals = {}    # nodeid -> outcome, for those
         self._saved_modules = None
 
     # -- 1. upstream test packages become sub-packages of the installed stonesoup ---------
@@ -293,16 +308,22 @@ def pytest_load_initial_conftests(early_config, parser, args):
     _STATE.instrument()
     if not _STATE.control:
         _STATE.activate()
+    if str(INTERNALS_CHECK) not in args:
+        args.append(str(INTERNALS_CHECK))
 
 
 @pytest.hookimpl(trylast=True)
 def pytest_collection_finish(session):
     _STATE.deactivate()
+    _STATE.internal_ids = {item.nodeid: f"{INTERNALS_CHECK.name}::{item.name}"
+                           for item in session.items
+                           if Path(item.path).resolve() == INTERNALS_CHECK}
 
 
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_protocol(item, nextitem):
-    _STATE.current = item.nodeid
+    # (the internals checks are not upstream tests: nothing is recorded against them)
+    _STATE.current = None if item.nodeid in _STATE.internal_ids else item.nodeid
     try:
         return (yield)
     finally:
@@ -311,6 +332,8 @@ def pytest_runtest_protocol(item, nextitem):
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item):
+    if item.nodeid in _STATE.internal_ids:
+        return
     found = _STATE.static_leaks(item)
     if found:
         _STATE.leaks.setdefault(item.nodeid, []).extend(found)
@@ -331,6 +354,12 @@ def pytest_runtest_makereport(item, call):
 
 
 def pytest_runtest_logreport(report):
+    if report.nodeid in _STATE.internal_ids:
+        if report.failed or (report.skipped and report.nodeid not in _STATE.internals):
+            _STATE.internals[report.nodeid] = "failed" if report.failed else "skipped"
+        elif report.when == "call" and report.passed:
+            _STATE.internals.setdefault(report.nodeid, "passed")
+        return
     outcome = _STATE.outcomes.get(report.nodeid)
     if report.failed:
         _STATE.outcomes[report.nodeid] = "error" if report.when != "call" else "failed"
@@ -357,5 +386,7 @@ def pytest_sessionfinish(session, exitstatus):
               "map": _STATE.mapping,
               "python": sys.version.split()[0],
               "pid": os.getpid(),
-              "tests": tests}
+              "tests": tests,
+              "internals": [{"nodeid": _STATE.internal_ids[nodeid], "outcome": outcome}
+                            for nodeid, outcome in _STATE.internals.items()]}
     Path(path).write_text(json.dumps(report, indent=1))

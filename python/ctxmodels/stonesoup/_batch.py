@@ -50,10 +50,11 @@ from stonesoup.predictor.kalman import ExtendedKalmanPredictor, KalmanPredictor
 from stonesoup.types.angle import Angle, Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.prediction import GaussianMeasurementPrediction, GaussianStatePrediction
-from stonesoup.types.state import CreatableFromState
 from stonesoup.types.track import Track
 from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
 
+from .._upstream import (TRACK_METADATAS, TRACK_STATES, check_measurement_model,
+                         from_state_classes, has_setter, property_slot)
 from .measurement import (
     AnalyticCartesianToBearingRange,
     bearing_range_jacobians,
@@ -121,9 +122,9 @@ class ObjectFactory:
         self._factories = []
         usable = True
         for name, prop in cls.properties.items():
-            if prop._setter is not None or prop.readonly:
+            if has_setter(prop) or prop.readonly:
                 usable = False
-            key = f"_property_{name}"
+            key = property_slot(name)
             self._slots[name] = key
             if prop.default_factory is not prop.empty:
                 self._factories.append((key, prop.default, prop.default_factory))
@@ -209,7 +210,7 @@ def plain_track_lists(track):
     if type(track) is not Track:
         return None
     fields = _object_attribute(track, "__dict__")
-    states, metadatas = fields.get("_property_states"), fields.get("metadatas")
+    states, metadatas = fields.get(TRACK_STATES), fields.get(TRACK_METADATAS)
     if type(states) is not list or type(metadatas) is not list:
         return None
     return states, metadatas
@@ -221,11 +222,12 @@ _TARGET_CACHE: dict = {}
 
 def from_state_target(base: type, state_type: type) -> type:
     """The class ``base.from_state(state)`` builds for a ``state`` of ``state_type`` (Stone
-    Soup's :class:`CreatableFromState` lookup along the MRO), cached per type pair."""
+    Soup's :class:`~stonesoup.types.state.CreatableFromState` lookup along the MRO), cached
+    per type pair."""
     key = (base, state_type)
     target = _TARGET_CACHE.get(key)
     if target is None:
-        mapping = CreatableFromState.class_mapping[base]
+        mapping = from_state_classes(base)
         try:
             target = mapping[next(t for t in state_type.mro() if t in mapping)]
         except StopIteration:
@@ -424,7 +426,7 @@ def measurement_batch(updater, model, means: np.ndarray, covars: np.ndarray,
     Kalman/extended Kalman updaters; any other updater or model calls the stock
     ``predict_measurement`` once per state.
     """
-    model = updater._check_measurement_model(model)
+    model = check_measurement_model(updater, model)
     kind = type(updater)
     if kind in KALMAN_UPDATERS and type(model) is LinearGaussian:
         pred, innov, cross, jac = _linear_batch(model, means, covars)

@@ -74,6 +74,7 @@ from stonesoup.types.prediction import (
 from stonesoup.types.state import GaussianState, State, StateMutableSequence
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
+from .._upstream import check_measurement_model
 from ._batch import (
     KALMAN_UPDATERS,
     ObjectFactory,
@@ -296,7 +297,7 @@ class FastGNNWith2DAssignment(GNNWith2DAssignment):
         group_info = []
         for g, ((ti, raw_model), members) in enumerate(groups.items()):
             group_of[members] = g
-            model = updater._check_measurement_model(raw_model)
+            model = check_measurement_model(updater, raw_model)
             batch = None
             if _batchable_model(updater, model):
                 batch = measurement_batch(updater, model, predictions[ti].means,

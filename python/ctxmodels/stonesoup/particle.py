@@ -36,6 +36,7 @@ from stonesoup.types.update import Update
 from stonesoup.updater.particle import BernoulliParticleUpdater as _StockBernoulliUpdater
 from stonesoup.updater.particle import SMCPHDUpdater as _StockSMCPHDUpdater
 
+from .._upstream import log_space_product, measurement_loglikelihoods
 from ..foreign import as_array_context
 
 
@@ -151,9 +152,9 @@ class BernoulliParticleUpdater(_ParticleContextMixin, _StockBernoulliUpdater):
             log_likelihoods = [(d.measurement_model or self.measurement_model).logpdf(d, state)
                                for d in detections]
             # Operations in the stock order, so a constant context gives the stock bits.
-            per_detection = [self._log_space_product(log_pd, ll - lc + log_weight)
+            per_detection = [log_space_product(self, log_pd, ll - lc + log_weight)
                              for ll, lc in zip(log_likelihoods, log_clutter)]
-            delta = np.exp(self._log_space_product(log_pd, log_weight)) \
+            delta = np.exp(log_space_product(self, log_pd, log_weight)) \
                 - np.exp(logsumexp(per_detection))
             if np.all(clutter == clutter[0]):
                 log_detected = log_pd + logsumexp(log_likelihoods, axis=0) - log_clutter[0]
@@ -162,7 +163,7 @@ class BernoulliParticleUpdater(_ParticleContextMixin, _StockBernoulliUpdater):
                     np.stack(log_likelihoods) - log_clutter[:, np.newaxis], axis=0)
             new_log_weight = np.logaddexp(log_detected, log_missed) + log_weight
         else:
-            delta = np.exp(self._log_space_product(log_pd, log_weight))
+            delta = np.exp(log_space_product(self, log_pd, log_weight))
             new_log_weight = log_missed + log_weight
         state.existence_probability = (1 - delta) / (1 - existence * delta) * existence
         state.log_weight = new_log_weight - logsumexp(new_log_weight)
@@ -218,7 +219,7 @@ class SMCPHDUpdater(_ParticleContextMixin, _StockSMCPHDUpdater):
         num_samples = prediction.state_vector.shape[1]
         log_pd, log_missed = self._particle_prob_detection(prediction, context, missed=True)
         log_weight = prediction.log_weight
-        log_likelihood = self._get_measurement_loglikelihoods(prediction, detections)
+        log_likelihood = measurement_loglikelihoods(self, prediction, detections)
 
         detected = log_pd[:, np.newaxis] + log_likelihood + log_weight[:, np.newaxis]
         weights = np.full((num_samples, len(detections) + 1), -np.inf)

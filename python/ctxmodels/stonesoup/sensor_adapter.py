@@ -39,6 +39,8 @@ measurement space.
 from __future__ import annotations
 
 import datetime
+import math
+import sys
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -49,11 +51,16 @@ from stonesoup.feeder.base import DetectionFeeder
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
 from stonesoup.types.array import StateVector
 
+from .._component import as_float
+from ..clutter import ClutterDensityModel
 from ..context import DetectionSet
+from ..detection import DetectionProbabilityModel
 from ..pose import Pose, PoseSource
-from ..sensor import SensorModel
+from ..sensor import SensorModel, provide
 from .radar_context import SensorContext
-from .sensor_coverage import ROTATING, SUPPORTED, planar_yaw, sensor_kind, sensor_number
+from .sensor_coverage import (ROTATING, SUPPORTED, coverage_factors, planar_yaw, sensor_kind,
+                              sensor_number)
+
 
 def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: float,
                                 *, name: str = "") -> SensorModel:
@@ -61,7 +68,31 @@ def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: 
     within its ``max_range`` (and rotating field of view), 0 outside; λ the constant
     ``clutter_density``. Use it with :func:`sensor_pose` at each scan. (The same as
     :meth:`ctxmodels.SensorModel.from_stonesoup`.)"""
-    return SensorModel.from_stonesoup(sensor, prob_detection, clutter_density, name=name)
+    return _model_of(SensorModel, sensor, prob_detection, clutter_density, name=name)
+
+
+def _model_of(cls: type, sensor, prob_detection, clutter_density, *, name: str = ""):
+    """:func:`sensor_model_from_stonesoup` as an instance of ``cls`` (a SensorModel class):
+    what ``cls.from_stonesoup`` returns."""
+    sensor_kind(sensor)  # (the sensor is named first, as before any number)
+    p = as_float(prob_detection, "prob_detection", finite=False)
+    if not 0.0 <= p <= 1.0:
+        raise ValueError(f"prob_detection: must lie in [0, 1], got {prob_detection!r}")
+    density = as_float(clutter_density, "clutter_density", finite=False)
+    if not (math.isfinite(density) and density >= sys.float_info.min):
+        raise ValueError(f"clutter_density: must be a finite density > 0, at least "
+                         f"{sys.float_info.min} (per unit of the detections' measurement "
+                         f"space; trackers divide by it), got {clutter_density!r}")
+    if not isinstance(name, str):
+        raise TypeError(f"name: expected a string label, got {type(name).__name__} {name!r}")
+    factors, mapping = coverage_factors(sensor)
+    return cls(detection=DetectionProbabilityModel(factors=[p, *factors]),
+               clutter=ClutterDensityModel(factors=[density]), position_mapping=mapping,
+               name=name)
+
+
+# SensorModel.from_stonesoup converts with this
+provide("from_stonesoup", _model_of)
 
 
 def sensor_pose(sensor) -> Pose:

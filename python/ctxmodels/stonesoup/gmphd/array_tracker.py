@@ -55,6 +55,7 @@ from stonesoup.types.state import TaggedWeightedGaussianState
 from stonesoup.types.track import Track
 
 from ... import _core
+from ..._upstream import check_measurement_model
 from ...context import DetectorContext, detection_positions
 from ...model_key import scan_model_groups
 from ...foreign import as_array_context
@@ -296,8 +297,8 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
         if any(d.timestamp != time for d in ordered):
             return "detections with timestamps other than the scan's"
         (key, (detections_model, _)), = groups.items()
-        model = plan.gate_updater._check_measurement_model(detections_model)
-        if plan.measurement_updater._check_measurement_model(model) is not model:
+        model = check_measurement_model(plan.gate_updater, detections_model)
+        if check_measurement_model(plan.measurement_updater, model) is not model:
             return "the hypothesiser's and the updater's measurement models differ"
         scan_model = plan.scan_model(model, ndim, key if model is detections_model else None)
         if scan_model is None:

@@ -14,7 +14,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from stonesoup.base import Base, Property
 
+from ..._upstream import property_slot
 from ...pose import PoseSource
+
+_CENTRE, _RADIUS = property_slot("centre"), property_slot("radius")
 
 
 class CircularRegion(Base):
@@ -72,7 +75,7 @@ class PoseCentredRegion(Base):
             # what CircularRegion(...) builds from values its checks pass: every scan builds
             # one, and the checks cost more than the rest of the region's work
             region = object.__new__(CircularRegion)
-            region.__dict__.update(_property_centre=(x, y), _property_radius=radius)
+            region.__dict__.update({_CENTRE: (x, y), _RADIUS: radius})
             return region
         return CircularRegion(centre=(x, y), radius=radius)
 

@@ -21,6 +21,7 @@ from stonesoup.tracker.pointprocess import \
 from stonesoup.types.state import TaggedWeightedGaussianState
 from stonesoup.types.track import Track
 
+from ..._upstream import take_attribute
 from ..ordering import in_stable_order
 from ..scan_context import context_kwargs, declares_context
 from ..scan_checks import checked_scan, naming_scan_errors
@@ -195,7 +196,7 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
             self.gaussian_mixture = self.updater.update(hypotheses, detector_context=context)
         else:
             self.gaussian_mixture = self.updater.update(hypotheses)
-        reported = vars(self.gaussian_mixture).pop("clutter_probabilities", None)
+        reported = take_attribute(self.gaussian_mixture, "clutter_probabilities")
         self._clutter_probabilities = None if reported is None else (
             time, detections, [reported.get(detection, 1.0) for detection in detections])
         if self._region is not None:

@@ -32,6 +32,8 @@ from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
 from ... import _core
+from ..._upstream import (TRACK_ID, TRACK_INIT_METADATA, TRACK_METADATAS, TRACK_STATES,
+                          update_track_metadata)
 from ...model_key import models_by_value, scan_model_groups
 from .._batch import ObjectFactory
 from ..measurement import core_measurement_model
@@ -57,9 +59,9 @@ class _TrackFactory:
 
     def _build(self, state):
         track = object.__new__(Track)
-        track.__dict__ = {"_property_states": [state], "_property_id": str(uuid.uuid4()),
-                          "_property_init_metadata": {}, "metadatas": []}
-        Track._update_metadata_from_state(track, state)
+        track.__dict__ = {TRACK_STATES: [state], TRACK_ID: str(uuid.uuid4()),
+                          TRACK_INIT_METADATA: {}, TRACK_METADATAS: []}
+        update_track_metadata(track, state)
         return track
 
     def __call__(self, state):
@@ -67,9 +69,9 @@ class _TrackFactory:
             real = Track([state])
             built = self._build(state)
             ours, theirs = dict(built.__dict__), dict(real.__dict__)
-            self.fast = (type(ours.pop("_property_id", None)) is str
-                         and type(theirs.pop("_property_id", None)) is str and ours == theirs
-                         and ours["_property_states"][0] is theirs["_property_states"][0])
+            self.fast = (type(ours.pop(TRACK_ID, None)) is str
+                         and type(theirs.pop(TRACK_ID, None)) is str and ours == theirs
+                         and ours[TRACK_STATES][0] is theirs[TRACK_STATES][0])
             return real
         return self._build(state) if self.fast else Track([state])
 

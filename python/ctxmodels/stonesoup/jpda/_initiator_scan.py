@@ -16,6 +16,7 @@ from stonesoup.models.control.linear import LinearControlModel
 from stonesoup.types.angle import Bearing
 
 from ... import _core
+from ..._upstream import check_measurement_model
 from ...model_key import measurement_model_key, scan_model_groups
 from ..measurement import core_measurement_model
 from ..transition import ControlTerms
@@ -105,7 +106,7 @@ class ScanCore:
             return models, index, np.empty((0, 0)), bearing
         # by model value: equal models in different objects are one group (its first)
         for key, (raw_model, members) in scan_model_groups(detections).items():
-            model = updater._check_measurement_model(raw_model)
+            model = check_measurement_model(updater, raw_model)
             core = self._core_model(updater, model, key if model is raw_model else None)
             if core is None:
                 return None

@@ -86,10 +86,11 @@ through several layers on the hot path.
 """
 from __future__ import annotations
 
+from operator import itemgetter
+
 import numpy as np
 from stonesoup.dataassociator.probability import JPDA, JPDAwithEHM, JPDAwithEHM2
 from stonesoup.hypothesiser.probability import PDAHypothesiser as _StockPDAHypothesiser
-from stonesoup.base import Property
 from stonesoup.types.array import CovarianceMatrix, Matrix, StateVector
 from stonesoup.types.detection import Detection, MissedDetection
 from stonesoup.types.hypothesis import SingleHypothesis, SingleProbabilityHypothesis
@@ -100,6 +101,7 @@ from stonesoup.types.state import GaussianState
 from stonesoup.types.update import GaussianStateUpdate
 
 from ... import _core
+from ..._upstream import live_tracks, plain_property, property_slot
 from ...context import DetectorContext
 from ...model_key import measurement_model_key, scan_model_groups
 from ._array_deletion import ArrayDeletion
@@ -127,6 +129,9 @@ _HYPOTHESISERS = (_StockPDAHypothesiser, PDAHypothesiser)
 
 
 # --- Stone Soup objects, built as their constructors build them ---------------------------
+_SINGLE_HYPOTHESES = property_slot("single_hypotheses")
+_NORMALISE = property_slot("normalise")
+_TOTAL_WEIGHT = property_slot("total_weight")
 _UPDATE = ObjectFactory(GaussianStateUpdate, dict(
     state_vector=StateVector([0.0]), covar=CovarianceMatrix([[1.0]]),
     hypothesis=SingleHypothesis(None, Detection(StateVector([0.0]))), timestamp=None))
@@ -148,15 +153,15 @@ class _ScanHypotheses(MultipleHypothesis):
 
     @property
     def single_hypotheses(self):
-        hypotheses = self.__dict__.get("_property_single_hypotheses")
+        hypotheses = self.__dict__.get(_SINGLE_HYPOTHESES)
         if hypotheses is None:
-            hypotheses = self.__dict__["_property_single_hypotheses"] = self._build()
+            hypotheses = self.__dict__[_SINGLE_HYPOTHESES] = self._build()
             del self.__dict__["_pending"]
         return hypotheses
 
     @single_hypotheses.setter
     def single_hypotheses(self, value):
-        self.__dict__["_property_single_hypotheses"] = value
+        self.__dict__[_SINGLE_HYPOTHESES] = value
         self.__dict__.pop("_pending", None)
 
     def __bool__(self):  # (pending: the missed detection and the gated ones, never empty)
@@ -194,7 +199,7 @@ class _ScanHypotheses(MultipleHypothesis):
 
     def __reduce__(self):
         state = {key: value for key, value in self.__dict__.items() if key != "_pending"}
-        state["_property_single_hypotheses"] = self.single_hypotheses
+        state[_SINGLE_HYPOTHESES] = self.single_hypotheses
         return (_plain_multiple_hypothesis, (state,))
 
 
@@ -214,8 +219,7 @@ class _Scan:
 
 def _lazy_hypothesis(scan: _Scan, t: int, prior) -> _ScanHypotheses:
     hypothesis = object.__new__(_ScanHypotheses)
-    hypothesis.__dict__.update(_property_normalise=True, _property_total_weight=1,
-                               _pending=(scan, t, prior))
+    hypothesis.__dict__.update({_NORMALISE: True, _TOTAL_WEIGHT: 1, "_pending": (scan, t, prior)})
     return hypothesis
 
 
@@ -228,6 +232,8 @@ def _updater_supported(updater) -> bool:
 # --- tracks -------------------------------------------------------------------------------
 _GAUSSIAN_PRIOR_TYPES: dict = {}
 _PRIOR_FIELDS = ("state_vector", "covar", "timestamp")
+#: A plain prior's fields, read from its instance dictionary (``KeyError`` when one is unset).
+_PRIOR_SLOTS = itemgetter(*(property_slot(name) for name in _PRIOR_FIELDS))
 
 
 def _gaussian_prior_type(kind: type):
@@ -244,10 +250,7 @@ def _gaussian_prior_type(kind: type):
             plain = kind.__getattribute__ is object.__getattribute__ \
                 and not hasattr(kind, "__getattr__")
             for name in _PRIOR_FIELDS:
-                found = next((c.__dict__[name] for c in kind.__mro__ if name in c.__dict__),
-                             None)
-                plain = plain and type(found) is Property and found._getter is None \
-                    and found._property_name == f"_property_{name}"
+                plain = plain and plain_property(kind, name)
             known = "plain" if plain else "attributes"
         _GAUSSIAN_PRIOR_TYPES[kind] = known
     return known
@@ -263,10 +266,8 @@ def _prior_fields(prior):
     if not kind:
         return None
     if kind == "plain":
-        fields = prior.__dict__
         try:
-            return (fields["_property_state_vector"], fields["_property_covar"],
-                    fields["_property_timestamp"])
+            return _PRIOR_SLOTS(prior.__dict__)
         except KeyError:
             pass
     return (getattr(prior, "state_vector", None), getattr(prior, "covar", None),
@@ -427,7 +428,8 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
                 track for track, lists in zip(tracks, track_lists) if lists is not None}
         # deletion, then the initiator on the detections no track took (as the stock loop),
         # each handed the scan's context as the component path hands it
-        self._tracks -= self._delete(self._tracks, detections, latest, counted_now)
+        live = live_tracks(self)
+        live -= self._delete(live, detections, latest, counted_now)
         free = None if taken_mask is None or not taken_mask.any() else ~taken_mask
         if isinstance(self.initiator, ArrayMultiMeasurementInitiator):
             # still in stable order: not sorted again; models grouped, vectors converted once
@@ -438,7 +440,7 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
         new = self.initiator.initiate(unassociated, time,
                                       **context_kwargs(detections, self.initiator.initiate))
         if new:
-            self._tracks |= new
+            live |= new
             self._order.update(dict.fromkeys(in_track_order(new)))
         return time, self.tracks
 

@@ -19,10 +19,7 @@ forwards; it takes precedence over the set's.
 """
 from __future__ import annotations
 
-import functools
-
 import numpy as np
-from scipy.stats import chi2
 from stonesoup.functions import batch_multivariate_normal_logpdf
 from stonesoup.hypothesiser.probability import PDAHypothesiser as _StockPDAHypothesiser
 from stonesoup.measures import SquaredMahalanobis
@@ -33,21 +30,10 @@ from stonesoup.types.numeric import Probability
 from stonesoup.types.state import State, StateMutableSequence
 from stonesoup.types.update import Update
 
+from ..._upstream import gate_threshold
 from ...foreign import PerCallContext, as_array_context
 from ..scan_context import scan_context
 from ._pd_record import PDRecord
-
-
-@functools.lru_cache(maxsize=256)
-def _chi2_quantile(prob_gate: float, ndim: int) -> float:
-    return float(chi2.ppf(prob_gate, ndim))
-
-
-def gate_threshold(prob_gate, ndim: int) -> float:
-    r"""The PDA gate on the squared Mahalanobis distance, :math:`\gamma = F^{-1}_{\chi^2_n}(P_G)`
-    for ``ndim`` measured values: the value Stone Soup's PDA hypothesiser compares with (a
-    test holds the two equal)."""
-    return _chi2_quantile(float(prob_gate), int(ndim))
 
 
 def is_detection_backed(state) -> bool:

@@ -35,6 +35,7 @@ from stonesoup.types.prediction import GaussianStatePrediction
 from stonesoup.types.track import Track
 from stonesoup.types.update import GaussianStateUpdate, Update
 
+from ..._upstream import live_tracks
 from ..ordering import in_stable_order, in_track_order
 from ..scan_context import context_kwargs, declares_context
 from ..scan_checks import checked_scan_rows, naming_scan_errors
@@ -53,7 +54,7 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
 
     @property
     def tracks_in_order(self) -> list[Track]:
-        live = self._tracks
+        live = live_tracks(self)
         order = self._order
         if len(order) == len(live) and live.issuperset(order):
             return list(order)  # (the usual scan: no track deleted or added from outside)
@@ -85,11 +86,11 @@ class MultiTargetMixtureTracker(_StockMixtureTracker):
             missed_weight = next(hyp.weight for hyp in multihypothesis if not hyp)
             taken.update(id(hyp.measurement) for hyp in multihypothesis
                          if hyp and hyp.weight > missed_weight)
-        self._tracks -= deleter.delete_tracks(
-            self._tracks, **context_kwargs(detections, deleter.delete_tracks))
+        live = live_tracks(self)
+        live -= deleter.delete_tracks(live, **context_kwargs(detections, deleter.delete_tracks))
         new = initiator.initiate({d for d in detections if id(d) not in taken}, time,
                                  **context_kwargs(detections, initiator.initiate))
-        self._tracks |= new
+        live |= new
         self._order.update(dict.fromkeys(in_track_order(new)))
         return time, self.tracks
 
