@@ -15,7 +15,7 @@
 //! the finite difference divides by steps of 10⁻⁸–10⁻⁶ (so ~10⁻⁵ relative in its bearing
 //! row), and platforms whose BLAS rounds the products another way.
 //!
-//! [`AnalyticCartesianToBearingRange.jacobian`]: ../../python/ctxmodels/stonesoup/measurement.py
+//! [`AnalyticCartesianToBearingRange.jacobian`]: ../../python/ctxmodels/stonesoup/models.py
 
 use crate::error::{ModelError, Result};
 use nalgebra::{DMatrix, DVector, Matrix3};

@@ -52,13 +52,12 @@ from .jpda import (ArrayJPDATracker, ArrayMultiMeasurementInitiator, CompositeDe
                    MultiMeasurementInitiator, MultiTargetMixtureTracker, PDAHypothesiser,
                    UpdateTimeStepsDeleter)
 from .learning import ClutterMapLearner, DetectionLearner, LearningTracker
-from .measurement import AnalyticCartesianToBearingRange
+from .models import AnalyticCartesianToBearingRange, CachedCombinedLinearGaussianTransitionModel
 from .ordering import in_stable_order, in_track_order
 from .particle import BernoulliParticleUpdater, SMCPHDUpdater
 from .paths import ComponentPathWarning
 from .sensor_adapter import (PlatformContextFeeder, SensorContext, SensorPose, sensor_context,
                              sensor_model_from_stonesoup, sensor_pose)
-from .transition import CachedCombinedLinearGaussianTransitionModel
 
 __all__ = [
     "ArrayPointProcessTracker",

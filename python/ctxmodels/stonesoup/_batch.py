@@ -24,7 +24,7 @@ finite-difference Jacobian, reproduced operation for operation (step
 :math:`[-\pi, \pi)`): that Jacobian carries round-off up to :math:`10^{-4}` relative, so matching
 the stock filter to better than that needs the same floating-point operations, not an
 analytic Jacobian. For
-:class:`~ctxmodels.stonesoup.measurement.AnalyticCartesianToBearingRange` it is that model's
+:class:`~ctxmodels.stonesoup.models.AnalyticCartesianToBearingRange` it is that model's
 closed-form Jacobian, computed for all components by the elementwise code the model runs for
 one (so bit for bit its ``jacobian``). Other models fall back to the stock updater's
 ``predict_measurement`` per component (still one call per component, not per pair).
@@ -55,7 +55,7 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
 
 from .._upstream import (TRACK_METADATAS, TRACK_STATES, check_measurement_model,
                          from_state_classes, has_setter, property_slot)
-from .measurement import (
+from .models import (
     AnalyticCartesianToBearingRange,
     bearing_range_jacobians,
     rotated_offsets,

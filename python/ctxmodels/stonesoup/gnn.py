@@ -48,7 +48,7 @@ Gaussian (one whose prediction is a
 :class:`~stonesoup.types.prediction.GaussianStatePrediction`) are hypothesised by the stock
 hypothesiser, the rest batched. Measurement models other than linear Gaussian and (extended
 Kalman) bearing–range (the stock model or
-:class:`~ctxmodels.stonesoup.measurement.AnalyticCartesianToBearingRange`) use the stock
+:class:`~ctxmodels.stonesoup.models.AnalyticCartesianToBearingRange`) use the stock
 ``predict_measurement`` on the batched predictions.
 """
 from __future__ import annotations
@@ -88,7 +88,7 @@ from ._batch import (
     vector_views,
     wrap_plan,
 )
-from .measurement import AnalyticCartesianToBearingRange
+from .models import AnalyticCartesianToBearingRange
 
 #: Screening margin, relative to :math:`\sum |\delta_k S^+_{kl} \delta_l|` (see module doc).
 SCREEN_MARGIN = 1e-6

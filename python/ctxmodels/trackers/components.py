@@ -25,7 +25,7 @@ from .specs import (BIRTH_WEIGHT, DUPLICATE_THRESHOLD, GATE_MAHALANOBIS, INIT_ST
 def motion_model():
     """Constant velocity per axis; F and Q cached per scan interval (same numbers as the
     stock combined model, without rebuilding them for every prediction)."""
-    from ..stonesoup.transition import CachedCombinedLinearGaussianTransitionModel
+    from ..stonesoup.models import CachedCombinedLinearGaussianTransitionModel
     q = SIGMA_ACC ** 2
     return CachedCombinedLinearGaussianTransitionModel([ConstantVelocity(q), ConstantVelocity(q)])
 

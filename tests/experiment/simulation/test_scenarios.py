@@ -603,7 +603,7 @@ def test_the_simulator_imports_nothing_it_is_used_to_judge():
 
     import ctxmodels.experiment.simulation as simulation
 
-    allowed = {"ctxmodels.stonesoup.measurement"}
+    allowed = {"ctxmodels.stonesoup.models"}
     package = pathlib.Path(simulation.__file__).parent
     modules = sorted(package.glob("*.py")) + [package.parent / "scenarios.py"]
     assert len(modules) > 5

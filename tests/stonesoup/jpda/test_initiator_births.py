@@ -17,7 +17,7 @@ from stonesoup.types.state import GaussianState
 from stonesoup.types.track import Track
 
 from ctxmodels.stonesoup.jpda import _initiator_births as initiator_births
-from ctxmodels.stonesoup.measurement import AnalyticCartesianToBearingRange
+from ctxmodels.stonesoup.models import AnalyticCartesianToBearingRange
 
 START = datetime.datetime(2024, 1, 1)
 

@@ -39,7 +39,7 @@ from stonesoup.types.array import CovarianceMatrix, StateVector
 from stonesoup.types.detection import Clutter, Detection
 
 # (a Stone Soup model with its exact Jacobian: no ctxmodels core, no context models)
-from ...stonesoup.measurement import AnalyticCartesianToBearingRange
+from ...stonesoup.models import AnalyticCartesianToBearingRange
 from .geometry import (
     TWO_PI,
     coastline_sampler,

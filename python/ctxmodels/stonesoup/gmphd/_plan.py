@@ -17,7 +17,7 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater, KalmanUpdater
 from stonesoup.updater.pointprocess import PHDUpdater as _StockPHDUpdater
 
 from .._batch import supports_predictor
-from ..measurement import core_measurement_model
+from ..models import core_measurement_model
 from .updater import PHDUpdater
 
 _KALMAN = (KalmanUpdater, ExtendedKalmanUpdater)

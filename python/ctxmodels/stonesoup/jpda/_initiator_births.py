@@ -36,7 +36,7 @@ from ..._upstream import (TRACK_ID, TRACK_INIT_METADATA, TRACK_METADATAS, TRACK_
                           update_track_metadata)
 from ...model_key import models_by_value, scan_model_groups
 from .._batch import ObjectFactory
-from ..measurement import core_measurement_model
+from ..models import core_measurement_model
 
 #: An update as ``Update.from_state`` builds it from a Gaussian prediction or prior state.
 UPDATE_STATE = ObjectFactory(GaussianStateUpdate, dict(

@@ -12,14 +12,12 @@ from collections.abc import Callable
 
 import numpy as np
 from stonesoup.measures import SquaredMahalanobis
-from stonesoup.models.control.linear import LinearControlModel
 from stonesoup.types.angle import Bearing
 
 from ... import _core
 from ..._upstream import check_measurement_model
 from ...model_key import measurement_model_key, scan_model_groups
-from ..measurement import core_measurement_model
-from ..transition import ControlTerms
+from ..models import ControlTerms, core_measurement_model
 
 
 class Rows(NamedTuple):
@@ -40,7 +38,6 @@ class ScanCore:
 
     def __init__(self):
         self._control_terms = ControlTerms()
-        self._control_seen: dict = {}  # (control model, its matrices, interval) -> adds anything
         self._core_models: dict = {}
 
     def __call__(self, initiator, rows, detections, timestamp):
@@ -63,8 +60,9 @@ class ScanCore:
         for k, last in enumerate(distinct):
             interval = timestamp - last
             distinct[last] = k
-            if self._control_input(predictor.control_model, rows, last_times.index(last),
-                                   interval):
+            row = last_times.index(last)
+            if self._control_terms.adds_input(predictor.control_model,
+                                              lambda row=row: rows.prior(row), interval):
                 return None  # (the core predicts without a control input)
             matrices.append(np.asarray(transition.matrix(time_interval=interval), dtype=np.float64))
             noises.append(np.asarray(transition.covar(time_interval=interval), dtype=np.float64))
@@ -149,24 +147,6 @@ class ScanCore:
                 self._core_models = {key: cached}
         return cached[1]
 
-    def _control_input(self, control, rows, row, interval) -> bool:
-        """Whether the control model adds anything to a prediction over ``interval`` (its
-        offset or noise non-zero), asked with row ``row``'s last state as the prior. The
-        stock :class:`LinearControlModel`'s terms do not depend on the prior (see
-        :class:`ControlTerms`): its answer is kept per model, matrices and interval."""
-        cacheable = type(control) is LinearControlModel
-        key = (control, id(control.control_matrix), id(control.control_noise), interval) \
-            if cacheable else None
-        known = self._control_seen.get(key) if cacheable else None
-        if known is not None:
-            return known
-        offset, noise = self._control_terms(control, rows.prior(row), interval)
-        nonzero = bool(np.any(offset) or np.any(noise))
-        if cacheable:
-            if len(self._control_seen) >= 256:
-                self._control_seen.clear()
-            self._control_seen[key] = nonzero
-        return nonzero
 
 
 def _typed_as(vector, bearing: bool) -> bool:

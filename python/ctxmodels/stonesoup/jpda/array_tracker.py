@@ -106,12 +106,11 @@ from ...context import DetectorContext
 from ...model_key import measurement_model_key, scan_model_groups
 from ._array_deletion import ArrayDeletion
 from .array_initiator import ArrayMultiMeasurementInitiator
-from ..transition import ControlTerms
 from ._initiator_history import PRIOR_PREDICTION as _PRIOR_PREDICTION
 from .._batch import KALMAN_UPDATERS, ObjectFactory, plain_track_lists, supports_predictor
 from ..gnn import _copied_properties
 from .hypothesiser import PDAHypothesiser, gate_threshold, is_detection_backed
-from ..measurement import core_measurement_model
+from ..models import ControlTerms, core_measurement_model
 from .tracker import MultiTargetMixtureTracker
 from ..paths import PathCounts
 from ..ordering import in_track_order, ordered_subset

@@ -1,4 +1,6 @@
-"""AnalyticCartesianToBearingRange: the stock bearing–range model with its exact Jacobian.
+"""ctxmodels.stonesoup.models. AnalyticCartesianToBearingRange: the stock bearing–range model
+with its exact Jacobian; the cached transition model: the stock model's numbers, a safe
+cache; the control terms.
 
 The closed form is held against references that do not share its code (a high-precision
 derivative in mpmath, a float64 central difference), the stock finite difference is shown
@@ -20,7 +22,8 @@ from stonesoup.models.transition.linear import (
     CombinedLinearGaussianTransitionModel,
     ConstantVelocity,
 )
-from stonesoup.predictor.kalman import ExtendedKalmanPredictor
+from stonesoup.models.control.linear import LinearControlModel
+from stonesoup.predictor.kalman import ExtendedKalmanPredictor, KalmanPredictor
 from stonesoup.serialise import YAML
 from stonesoup.types.angle import Bearing
 from stonesoup.types.array import CovarianceMatrix, StateVector
@@ -32,7 +35,8 @@ from stonesoup.types.track import Track
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 import ctxmodels.stonesoup as ctx_stonesoup
-from ctxmodels.stonesoup import AnalyticCartesianToBearingRange
+from ctxmodels.stonesoup import (AnalyticCartesianToBearingRange,
+                                 CachedCombinedLinearGaussianTransitionModel)
 from ctxmodels.stonesoup import gnn
 from ctxmodels.stonesoup._batch import measurement_batch
 from ctxmodels.stonesoup.gnn import FastGNNWith2DAssignment
@@ -251,7 +255,7 @@ def test_pickle_and_yaml_round_trips_keep_the_analytic_jacobian():
     expected = analytic.jacobian(state(vector))
     assert not np.array_equal(expected, stock.jacobian(state(vector)))  # not the FD one
     text = YAML().dumps(analytic)
-    assert "!ctxmodels.stonesoup.measurement.AnalyticCartesianToBearingRange" in text
+    assert "!ctxmodels.stonesoup.models.AnalyticCartesianToBearingRange" in text
     loaded_yaml = YAML().load(text)
     assert YAML().dumps(loaded_yaml) == text
     for copy_ in (pickle.loads(pickle.dumps(analytic)), loaded_yaml):
@@ -412,7 +416,7 @@ def test_the_cores_model_is_stone_soups_function_and_jacobian(kind, h_rtol):
     Jacobian are equal to the bit; NumPy's own arctan2 differs from the C library's in the
     last bit now and then, which the finite difference divides by its step)."""
     from ctxmodels import _core
-    from ctxmodels.stonesoup.measurement import core_measurement_model
+    from ctxmodels.stonesoup.models import core_measurement_model
     rng = np.random.default_rng(4)
     worst_z = worst_h = 0.0
     for _ in range(100):
@@ -433,3 +437,64 @@ def test_the_cores_model_is_stone_soups_function_and_jacobian(kind, h_rtol):
                                          / np.max(np.abs(h))))
     assert worst_z <= 4e-15
     assert worst_h <= h_rtol
+
+
+# --- the cached transition model --------------------------------------------------------
+def transition_models():
+    parts = [ConstantVelocity(0.64), ConstantVelocity(0.3)]
+    return CombinedLinearGaussianTransitionModel(parts), \
+        CachedCombinedLinearGaussianTransitionModel(parts)
+
+
+@pytest.mark.parametrize("seconds", [0.1, 1.25, 0.043, 7.0, 0.0])
+def test_matrices_equal_stock(seconds):
+    stock, cached = transition_models()
+    dt = datetime.timedelta(seconds=seconds)
+    for _ in range(2):  # second call comes from the cache
+        assert np.array_equal(cached.matrix(time_interval=dt), stock.matrix(time_interval=dt))
+        assert np.array_equal(cached.covar(time_interval=dt), stock.covar(time_interval=dt))
+
+
+def test_predictions_equal_stock_and_cache_is_read_only():
+    stock, cached = transition_models()
+    t0 = datetime.datetime(2024, 1, 1)
+    prior = GaussianState(np.array([[1.0], [2.0], [3.0], [-1.0]]), np.diag([4.0, 1, 9, 2]),
+                          timestamp=t0)
+    for seconds in (0.1, 1.25, 0.1):
+        t = t0 + datetime.timedelta(seconds=seconds)
+        a = KalmanPredictor(stock).predict(prior, timestamp=t)
+        b = KalmanPredictor(cached).predict(prior, timestamp=t)
+        assert np.array_equal(a.state_vector, b.state_vector)
+        assert np.array_equal(a.covar, b.covar)
+    matrix = cached.matrix(time_interval=datetime.timedelta(seconds=0.1))
+    with pytest.raises(ValueError):
+        matrix[0, 0] = 5.0
+
+
+def test_pickles_without_cache():
+    _, cached = transition_models()
+    cached.matrix(time_interval=datetime.timedelta(seconds=1))
+    clone = pickle.loads(pickle.dumps(cached))
+    assert "_cached_arrays" not in clone.__dict__
+    assert np.array_equal(clone.matrix(time_interval=datetime.timedelta(seconds=1)),
+                          cached.matrix(time_interval=datetime.timedelta(seconds=1)))
+
+
+def test_control_terms_are_the_models_and_kept_per_interval():
+    """ControlTerms: the stock control model's offset and noise, its "adds anything" answer
+    kept per model and interval, and a prior given as a function read only when needed."""
+    from ctxmodels.stonesoup.models import ControlTerms
+    control = LinearControlModel(control_matrix=np.eye(4, 2), control_noise=np.diag([0.5, 0.25]))
+    prior = GaussianState(np.zeros((4, 1)), np.eye(4))
+    terms = ControlTerms()
+    dt = datetime.timedelta(seconds=2)
+    offset, noise = terms(control, prior, dt)
+    assert np.array_equal(offset, control.function(None, prior=prior, time_interval=dt))
+    assert np.array_equal(noise, np.eye(4, 2) @ np.diag([0.5, 0.25]) @ np.eye(2, 4))
+    reads = []
+    assert terms.adds_input(control, lambda: reads.append(1) or prior, dt) is True
+    assert terms.adds_input(control, lambda: reads.append(1) or prior, dt) is True
+    assert reads == [1]  # the second answer was kept: the prior never read
+    quiet = LinearControlModel(control_matrix=np.zeros((4, 2)), control_noise=np.zeros((2, 2)))
+    assert terms.adds_input(quiet, prior, dt) is False
+

@@ -1,28 +1,43 @@
-r"""A bearing–range measurement model with its exact Jacobian.
+r"""Stone Soup's measurement and transition models as ctxmodels uses them: a bearing–range
+measurement model with its exact Jacobian, the scan cores' form of a measurement model, a
+transition model that computes F(Δt) and Q(Δt) once per interval, and a prediction's
+control terms kept per interval.
 
-Stone Soup's :class:`~stonesoup.models.measurement.nonlinear.CartesianToBearingRange` has no
-Jacobian of its own: an extended Kalman filter gets one from a forward finite difference of
-the model function, with a step of :math:`\max(10^8\,\mathrm{spacing}(x_i), 10^{-8})` per
-state element. Such a derivative is only good to about :math:`10^{-8}` relative, and that
-error is not smooth in the state: moving the state by one unit in the last place moves the
-difference quotient by about :math:`10^{-8}` (far more on small entries). An EKF built on it
-therefore returns posteriors that depend on the last bit of its inputs, so two correct
-implementations of the same filter (NumPy with BLAS, or a compiled core) that round one
-operation differently drift apart at the :math:`10^{-8}` level and cannot be compared to a
-tight tolerance. The bearing–range Jacobian has a short closed form;
-:class:`AnalyticCartesianToBearingRange` uses it, and is otherwise the stock model.
+**The exact Jacobian.** Stone Soup's
+:class:`~stonesoup.models.measurement.nonlinear.CartesianToBearingRange` has no Jacobian of
+its own: an extended Kalman filter gets one from a forward finite difference of the model
+function, with a step of :math:`\max(10^8\,\mathrm{spacing}(x_i), 10^{-8})` per state
+element. Such a derivative is only good to about :math:`10^{-8}` relative, and that error is
+not smooth in the state: moving the state by one unit in the last place moves the difference
+quotient by about :math:`10^{-8}` (far more on small entries). An EKF built on it therefore
+returns posteriors that depend on the last bit of its inputs, so two correct implementations
+of the same filter (NumPy with BLAS, or a compiled core) that round one operation differently
+drift apart at the :math:`10^{-8}` level and cannot be compared to a tight tolerance. The
+bearing–range Jacobian has a short closed form; :class:`AnalyticCartesianToBearingRange`
+uses it, and is otherwise the stock model. :func:`core_measurement_model` gives the Rust
+scan cores' form of a measurement model.
+
+**The cached transition.** Stone Soup rebuilds the transition matrix and noise covariance of
+a combined model (a ``scipy.linalg.block_diag`` per call) for every prediction of every track
+and component. Asynchronous sensors produce only a handful of distinct scan intervals, so
+caching per Δt removes that cost without changing a single number: the cached arrays are the
+ones the stock model returns for that interval
+(:class:`CachedCombinedLinearGaussianTransitionModel`). :class:`ControlTerms` does the same
+for a Kalman prediction's control terms (the array JPDA and initiator ask it whether there
+are any).
 """
 from __future__ import annotations
 
 import operator
 
 import numpy as np
+from stonesoup.models.control.linear import LinearControlModel
 from stonesoup.models.measurement.linear import LinearGaussian
 from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
+from stonesoup.models.transition.linear import CombinedLinearGaussianTransitionModel
 from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from .. import _core
-
 from ..model_key import compared_by_value
 
 
@@ -199,3 +214,87 @@ def core_measurement_model(model, updater_kind=ExtendedKalmanUpdater):
         rotation, np.ascontiguousarray(model.covar(), dtype=np.float64), jacobian,
         inverse_rotation_matrix=inverse)
     return core, 0
+
+
+class CachedCombinedLinearGaussianTransitionModel(CombinedLinearGaussianTransitionModel):
+    """:class:`~stonesoup.models.transition.linear.CombinedLinearGaussianTransitionModel`
+    with F and Q memoised per ``time_interval`` (returned read-only, so a caller that tried
+    to modify a shared array would fail loudly instead of corrupting later predictions)."""
+
+    #: Distinct intervals kept; asynchronous scans make a few, a long run a few hundred.
+    max_cached = 4096
+
+    def _memo(self, kind, compute, kwargs):
+        # A linear Gaussian model's F and Q depend on Δt only; predictors also pass the
+        # `prior`, which they do not use. Anything else: no caching.
+        for name in kwargs:
+            if name != "time_interval" and name != "prior":
+                return compute(**kwargs)
+        cache = self.__dict__.setdefault("_cached_arrays", {})
+        key = (kind, kwargs.get("time_interval"))
+        value = cache.get(key)
+        if value is None:
+            value = compute(**kwargs)
+            value.flags.writeable = False
+            if len(cache) >= self.max_cached:
+                cache.clear()
+            cache[key] = value
+        return value
+
+    def matrix(self, **kwargs):
+        return self._memo("F", super().matrix, kwargs)
+
+    def covar(self, **kwargs):
+        return self._memo("Q", super().covar, kwargs)
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_cached_arrays", None)
+        return state
+
+
+class ControlTerms:
+    """The control model's contribution to a Kalman prediction (the offset
+    ``control.function(None, …)`` and the noise ``B Q_u Bᵀ``), as the predictor computes
+    them, memoised per time interval for the stock :class:`LinearControlModel` (whose
+    matrix and noise do not depend on the prior; the models are immutable, as the cached
+    transition model assumes); any other control model is called every time."""
+
+    def __init__(self):
+        self._cache: dict = {}
+        self._answers: dict = {}  # the same keys -> (control, adds_input's answer)
+
+    def adds_input(self, control, prior, interval) -> bool:
+        """Whether the terms over ``interval`` are not all zero (as float64 arrays), the
+        answer kept with the terms (the stock model's). ``prior``: the prior state, or a
+        function returning it, called only when the answer is not kept."""
+        key = None
+        if type(control) is LinearControlModel:
+            key = (id(control), id(control.control_matrix), id(control.control_noise), interval)
+            found = self._answers.get(key)
+            if found is not None and found[0] is control:
+                return found[1]
+        offset, noise = self(control, prior() if callable(prior) else prior, interval)
+        answer = bool(np.asarray(offset, dtype=np.float64).any()
+                      or np.asarray(noise, dtype=np.float64).any())
+        if key is not None:
+            if len(self._answers) >= 256:
+                self._answers.clear()
+            self._answers[key] = (control, answer)
+        return answer
+
+    def __call__(self, control, prior, interval):
+        cacheable = type(control) is LinearControlModel
+        if cacheable:
+            key = (id(control), id(control.control_matrix), id(control.control_noise), interval)
+            found = self._cache.get(key)
+            if found is not None and found[0] is control:
+                return found[1], found[2]
+        offset = control.function(None, prior=prior, time_interval=interval)
+        ctrl = control.matrix(control_input=None, prior=prior, time_interval=interval)
+        noise = ctrl @ control.control_noise @ ctrl.T
+        if cacheable:
+            if len(self._cache) >= 256:
+                self._cache.clear()
+            self._cache[key] = (control, offset, noise)
+        return offset, noise
