@@ -209,3 +209,17 @@ def test_track_factory_falls_back_when_the_constructor_differs(monkeypatch):
     first = factory(state)
     assert factory.fast is False and first.extra == 1
     assert factory(state).extra == 1
+
+
+def test_a_rotation_out_of_the_plane_raises_the_stock_error():
+    """A bearing–range model rolled or pitched has no inverse function in Stone Soup: the
+    births run the stock code, which raises its RuntimeError."""
+    model = _radar(CartesianToBearingRange)
+    model.rotation_offset = StateVector([0.1, 0.0, 0.7])
+    det = Detection(StateVector([Bearing(0.3), 40.0]), timestamp=START, measurement_model=model)
+    prior = GaussianState(StateVector([0.0] * 4), CovarianceMatrix(np.eye(4)))
+    inner = SimpleMeasurementInitiator(prior_state=prior, measurement_model=None)
+    for initiate in (initiator_births.Births(), lambda i, d, t: i.initiate(set(d), t)):
+        with pytest.raises(RuntimeError, match="2D"):
+            initiate(inner, [det], START)
+

@@ -150,6 +150,8 @@ class Births:
         if key not in self._core_models:
             core, bearing_row = (None, None) if key is None else \
                 core_measurement_model(model)
+            if bearing_row is not None and not _rotates_in_plane(model):
+                core = None  # (the stock inverse refuses a roll or pitch: its error, raised)
             if len(self._core_models) >= 64:
                 self._core_models.clear()
             self._core_models[key] = None if core is None else (core, bearing_row is not None)
@@ -166,6 +168,13 @@ class Births:
         return self._track(Update.from_state(
             prior, state_vector=mean, covar=covar,
             hypothesis=SingleHypothesis(None, detection), timestamp=detection.timestamp))
+
+
+def _rotates_in_plane(model) -> bool:
+    """Whether a bearing–range model's rotation is about the vertical only, as its inverse
+    function requires."""
+    offset = model.rotation_offset
+    return offset[0] == 0 and offset[1] == 0
 
 
 def _float_prior(prior) -> bool:
