@@ -6,6 +6,10 @@
 //!
 //! The case count per property is proptest's: 256 by default (keeps `cargo test` fast);
 //! set `PROPTEST_CASES=20000 cargo test --release fuzz` for a long run.
+//!
+//! One file, though long: the properties share the input strategies below (which
+//! `detection/column_tests.rs` uses too), and what the whole public surface promises is
+//! read in one place.
 
 use crate::batch::PositionMapping;
 use crate::clutter::{ClutterFactor, ClutterModel, MetadataThreshold};

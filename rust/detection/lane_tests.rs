@@ -1,5 +1,8 @@
 //! The lane kernels against the scalar reference [`ScanDetection::at_point`], bit for bit,
 //! on every backend this CPU can run (AVX2 and portable on x86-64 with AVX2).
+//!
+//! One file, though long: every kernel is held to the same reference on the same backends
+//! and models, set up once below.
 
 use super::lanes::{expected_reference, AtStates, Expected, Gaussians};
 use super::*;

@@ -17,6 +17,10 @@
 //! The order of every loop is the stock pipeline's (under ctxmodels' stable detection
 //! order), so components, tags and weights come out in the stock order; the arithmetic is
 //! the same formulae, so values agree with the stock pipeline to rounding.
+//!
+//! This file holds the mixture's storage and the operations on it as a whole (adding,
+//! keeping, moving and predicting components); the update and the reduction, each an
+//! algorithm of its own, are the submodules `update` and `reduce`.
 
 mod reduce;
 mod update;

@@ -1,6 +1,10 @@
 //! Mixture reduction as Stone Soup's `GaussianMixtureReducer` does it: prune, greedy merge
 //! (Vo & Ma), unique tags, truncate — in its order, with the shared-tag pass in
 //! first-appearance order (stock iterates a set of random tag strings there).
+//!
+//! One file, though long: the four passes run in order on one mixture, and most of the
+//! length is the greedy merge with its search for candidates (per-axis bounds and an index
+//! on the first coordinate), which serves the merge alone.
 
 use super::Mixture;
 use crate::error::{ModelError, Result};

@@ -1,5 +1,9 @@
 //! Exact joint association marginals (EHM2, as Stone Soup's `JPDAwithEHM2`), and a brute
 //! force enumeration of the joint events to check them.
+//!
+//! One file, though long: the cluster split, the EHM2 tree (its detection sets, levels,
+//! backward and forward passes) and the budget that bounds it are one algorithm over shared
+//! types, and the enumeration that checks it stays beside it.
 
 use super::{too_large, try_filled};
 use crate::error::{ModelError, Result};

@@ -28,6 +28,11 @@
 //!    detection's, and such a detection counts as *taken* (not handed to the initiator).
 //!
 //! All loops run in index order on one thread: the same inputs give the same bits.
+//!
+//! Beside the scan's steps 1, 2 and 4 and its input and output types, this file holds what
+//! its submodules share (the prediction, the input checks, fallible allocation), hence its
+//! length; the parts with an algorithm of their own (marginals, assignment, the initiator's
+//! scan and its births) are the submodules.
 
 mod assignment;
 mod births;

@@ -1,5 +1,9 @@
 //! Unit tests of the JPDA core: marginals against enumeration, tree budgets, the scan, the
 //! measurement model.
+//!
+//! One file, as each module's unit tests are; long because beside the scan and the
+//! prediction it tests the marginals with their tree budgets and the births, which have no
+//! test file of their own.
 
 use super::marginals::{joint_marginals_within, TreeLimits};
 use super::*;

@@ -5,10 +5,8 @@
 //! vector) and return None for anything else, which the Python layer then converts and
 //! checks, raising its errors that name the argument.
 
-use super::{
-    borrow, detached, guarded, mapping_of, output, pose_of, rule_of, slice, value_error, PyClutterModel,
-    PyDetectionModel,
-};
+use super::models::{PyClutterModel, PyDetectionModel};
+use super::{borrow, detached, guarded, mapping_of, output, pose_of, rule_of, slice, value_error};
 use crate::batch::PositionMapping;
 use crate::cubature::Rule;
 use crate::detection::ScanDetection;
