@@ -41,6 +41,11 @@ the last bit of the state (~1e-8 relative), to about that.
 
 Track ids are the stock ones in kind (a fresh ``uuid4`` string per new tag); tags inside the
 core are integers, named only when a track or the mixture needs them.
+
+One module, though long: the tracker's state between scans (the mixture as arrays, its tag
+names and times, the births waiting to enter) and the scan that reads and writes it are one
+object's; what a scan may run on the core is in ``_plan``, births in ``birth``, regions in
+``region``.
 """
 from __future__ import annotations
 
