@@ -10,14 +10,9 @@ import pytest
 
 from ctxmodels import (ClutterDensityModel, DetectionProbabilityModel, NavigationTrack, Pose,
                        RangeBands, SensorModel)
+from ..hostile import names_argument
 
 POSE = Pose(x=0.0, y=0.0, heading=0.0)
-
-
-def names_argument(call, exception, argument):
-    with pytest.raises(exception) as info:
-        call()
-    assert str(info.value).startswith(f"{argument}:"), str(info.value)
 
 
 def test_clutter_density_product_that_underflows_is_not_silently_zero():

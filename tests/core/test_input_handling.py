@@ -13,6 +13,7 @@ import pytest
 
 from ctxmodels import (ClutterDensityModel, DetectionProbabilityModel, LandMask, LineOfSight,
                        MetadataThreshold, NavigationTrack, Pose, RangeBands, SensorModel, _core)
+from ..hostile import names
 
 POSE = Pose(x=3.0, y=-4.0, heading=0.6)
 SQUARE = [[100.0, -50.0], [300.0, -50.0], [300.0, 150.0], [100.0, 150.0]]
@@ -33,18 +34,6 @@ def states(n=N):
     rng = np.random.default_rng(n)
     return np.column_stack([rng.uniform(-1500, 1500, n), rng.normal(0, 5, n),
                             rng.uniform(-1500, 1500, n), rng.normal(0, 5, n)])
-
-
-def names(call, exception, argument):
-    """`call()` raises exactly `exception` (not a PanicException, which is a BaseException)
-    and the message starts by naming `argument`."""
-    try:
-        call()
-    except BaseException as err:  # noqa: B036 — a panic must fail here, not escape
-        assert type(err) is exception, f"{type(err).__name__}: {err}"
-        assert str(err).startswith(f"{argument}:"), str(err)
-        return str(err)
-    raise AssertionError(f"no {exception.__name__} naming {argument}")
 
 
 # --- 1. out= buffers that overlap an input, or are shared by threads ----------------------------

@@ -13,16 +13,10 @@ import pytest
 
 from ctxmodels import LandMask, LineOfSight
 from ctxmodels.geo import MAX_DISTANCE, lonlat_to_local, pyproj_available
+from ..hostile import names_argument
 
 NAN, INF = float("nan"), float("inf")
 BACKENDS = ["numpy"] + (["pyproj"] if pyproj_available() else [])
-
-
-def names_argument(call, exception, argument):
-    with pytest.raises(exception) as info:
-        call()
-    assert str(info.value).startswith(f"{argument}:"), str(info.value)
-    return str(info.value)
 
 
 SQUARE = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 0.0]]

@@ -12,27 +12,7 @@ from stonesoup.types.detection import Detection
 from ctxmodels import (ClutterDensityModel, ConstantPose, DetectionProbabilityModel, NavigationTrack,
                        Pose, SensorModel)
 from ctxmodels.stonesoup import ContextFeeder, MultiSensorFeeder
-
-T0 = datetime.datetime(2026, 1, 1)
-
-
-def names_argument(call, exception, argument):
-    with pytest.raises(exception) as info:
-        call()
-    assert str(info.value).startswith(f"{argument}:"), str(info.value)
-    return str(info.value)
-
-
-def _navigation():
-    stamps = [T0 + datetime.timedelta(seconds=s) for s in range(3)]
-    return NavigationTrack(timestamps=stamps, positions=[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]],
-                           headings=[0.0, 0.0, 0.0])
-
-
-def _paper_models():
-    from ctxmodels.experiment.sensors import paper_sensor_models
-    paper = paper_sensor_models()
-    return {"radar": paper["radar"], "lidar": paper["lidar"]}
+from ..hostile import _navigation, _paper_models, names, names_argument, T0
 
 
 @pytest.mark.parametrize("feeders", ["one", None, 5, "abc", {"a": 1}], ids=repr)
@@ -76,16 +56,6 @@ def test_context_feeder_names_scan_times_it_cannot_use(times):
 
 
 # --- naive and timezone-aware scan times -------------------------------------------------------
-def names(call, exception, argument):
-    """`call()` raises exactly `exception` (not a PanicException, which is a BaseException)
-    and the message starts by naming `argument`."""
-    try:
-        call()
-    except BaseException as err:  # noqa: B036 — a panic must fail here, not escape
-        assert type(err) is exception, f"{type(err).__name__}: {err}"
-        assert str(err).startswith(f"{argument}:"), str(err)
-        return str(err)
-    raise AssertionError(f"no {exception.__name__} naming {argument}")
 
 
 NAIVE = datetime.datetime(2024, 1, 1, 12, 0, 0)

@@ -11,16 +11,10 @@ import math
 
 import numpy as np
 import pytest
+from ..hostile import names_argument
 
 T0 = datetime.datetime(2026, 1, 1)
 NAN, INF = float("nan"), float("inf")
-
-
-def names_argument(call, exception, argument):
-    with pytest.raises(exception) as info:
-        call()
-    assert str(info.value).startswith(f"{argument}:"), str(info.value)
-    return str(info.value)
 
 
 # --- Stone Soup sensor adapter ----------------------------------------------------------------

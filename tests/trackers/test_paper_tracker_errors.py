@@ -9,29 +9,9 @@ import datetime
 import numpy as np
 import pytest
 
-from ctxmodels import NavigationTrack
+from ..hostile import _navigation, _paper_models, names_argument, T0
 
-T0 = datetime.datetime(2026, 1, 1)
 NAN, INF = float("nan"), float("inf")
-
-
-def names_argument(call, exception, argument):
-    with pytest.raises(exception) as info:
-        call()
-    assert str(info.value).startswith(f"{argument}:"), str(info.value)
-    return str(info.value)
-
-
-def _navigation():
-    stamps = [T0 + datetime.timedelta(seconds=s) for s in range(3)]
-    return NavigationTrack(timestamps=stamps, positions=[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]],
-                           headings=[0.0, 0.0, 0.0])
-
-
-def _paper_models():
-    from ctxmodels.experiment.sensors import paper_sensor_models
-    paper = paper_sensor_models()
-    return {"radar": paper["radar"], "lidar": paper["lidar"]}
 
 
 def _lidar_detection(time, area=12.0):

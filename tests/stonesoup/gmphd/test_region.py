@@ -8,24 +8,10 @@ import datetime
 import numpy as np
 import pytest
 
-from ctxmodels import NavigationTrack
 from ctxmodels.stonesoup.gmphd.region import CircularRegion, PoseCentredRegion
+from ...hostile import _navigation, names_argument, T0
 
-T0 = datetime.datetime(2026, 1, 1)
 NAN, INF = float("nan"), float("inf")
-
-
-def names_argument(call, exception, argument):
-    with pytest.raises(exception) as info:
-        call()
-    assert str(info.value).startswith(f"{argument}:"), str(info.value)
-    return str(info.value)
-
-
-def _navigation():
-    stamps = [T0 + datetime.timedelta(seconds=s) for s in range(3)]
-    return NavigationTrack(timestamps=stamps, positions=[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]],
-                           headings=[0.0, 0.0, 0.0])
 
 
 BAD_RADII = [True, False, np.bool_(True), "1", "", None, NAN, INF, -INF, 0, 0.0, -1, -1e-300,
