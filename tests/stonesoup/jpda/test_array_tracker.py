@@ -249,43 +249,6 @@ def test_unsupported_composite_members_call_the_deleter():
     assert ours._plan is None
 
 
-def test_covariance_verdict_is_the_deleters_at_the_boundary():
-    """The direct check is Stone Soup's: strictly greater than the threshold deletes; a
-    mapping the deleter would index otherwise (a tuple, NumPy integers) asks the deleter."""
-    from stonesoup.types.state import GaussianState as State
-    from stonesoup.types.track import Track
-    from ctxmodels.stonesoup.jpda._array_deletion import _covariance_check
-    threshold = 2.0 * 200.0 ** 2
-    for pxx in (40000.0, np.nextafter(40000.0, 0.0), np.nextafter(40000.0, np.inf), 7e4, 1e3):
-        track = Track([State(np.zeros((4, 1)), np.diag([pxx, 1.0, 40000.0, 1.0]))])
-        for mapping in ([0, 2], [2, 0], [0], [-4, -2], [np.int64(0), 2], None, []):
-            deleter = CovarianceBasedDeleter(covar_trace_thresh=threshold, mapping=mapping)
-            assert _covariance_check(deleter)(track) == deleter.check_for_deletion(track)
-    track = Track([State(np.zeros((4, 1)), np.eye(4))])
-    with pytest.raises(IndexError):  # as the deleter: a tuple indexes the diagonal as 2-D
-        _covariance_check(CovarianceBasedDeleter(covar_trace_thresh=1.0, mapping=(0, 2)))(track)
-
-
-def test_covariance_verdicts_from_the_scans_covariances_are_the_deleters():
-    """Given the scan's stacked posterior covariances (each plain track's last state
-    holding its row), the sums are taken for all tracks at once: the deleter's verdicts at
-    the boundary, for every mapping form."""
-    from stonesoup.types.array import CovarianceMatrix
-    from stonesoup.types.state import GaussianState as State
-    from stonesoup.types.track import Track
-    from ctxmodels.stonesoup.jpda._array_deletion import _covariance_check
-    threshold = 2.0 * 200.0 ** 2
-    diagonals = [40000.0, np.nextafter(40000.0, 0.0), np.nextafter(40000.0, np.inf), 7e4, 1e3]
-    covars = np.stack([np.diag([pxx, 1.0, 40000.0, 1.0]) for pxx in diagonals])
-    tracks = [Track([State(np.zeros((4, 1)), covar.view(CovarianceMatrix))]) for covar in covars]
-    latest = (tracks, np.zeros((len(tracks), 4)), covars, None)
-    for mapping in ([0, 2], [2, 0], [0], [-4, -2], [np.int64(0), 2], None, []):
-        deleter = CovarianceBasedDeleter(covar_trace_thresh=threshold, mapping=mapping)
-        check = _covariance_check(deleter, latest)
-        assert [check(track) for track in tracks] == \
-            [deleter.check_for_deletion(track) for track in tracks]
-
-
 def test_jpda_context_position_bound_is_the_gmphds():
     """The experiment's context-aware JPDA deletes exactly the tracks whose x/y position
     uncertainty the GM-PHD's bound would drop (RMS σ > MAX_POSITION_STD), and keeps the

@@ -5,17 +5,19 @@ r"""The JPDA (and PDA) with per-scan context, and its M-of-N track initiation.
   :class:`~ctxmodels.DetectorContext`.
 * :mod:`~ctxmodels.stonesoup.jpda.deleter`: :class:`ExpectedMissesDeleter` (deletion on the
   expected, not the counted, number of misses), :class:`UpdateTimeStepsDeleter`,
-  :class:`DuplicateTrackDeleter`; :mod:`~ctxmodels.stonesoup.jpda.composite_deleter`:
-  :class:`CompositeDeleter`, which also holds deleters comparing tracks with each other.
+  :class:`DuplicateTrackDeleter`, and each deletion rule's verdict from what it reads
+  (Stone Soup's time and covariance deleters' too), which the component and array paths
+  both call; :mod:`~ctxmodels.stonesoup.jpda.composite_deleter`: :class:`CompositeDeleter`,
+  which also holds deleters comparing tracks with each other, and the composite rule.
 * :mod:`~ctxmodels.stonesoup.jpda.tracker`: :class:`MultiTargetMixtureTracker` and
   :class:`MultiMeasurementInitiator`, the stock JPDA tracker and M-of-N initiator in a
   reproducible order — the reference path, component by component.
 * :mod:`~ctxmodels.stonesoup.jpda.array_tracker`: :class:`ArrayJPDATracker`, the same
-  Properties and tracks with each scan computed in the Rust core (its deletion bookkeeping:
-  ``_array_deletion``); :mod:`~ctxmodels.stonesoup.jpda.array_initiator`:
+  Properties and tracks with each scan computed in the Rust core (what its deleter reads,
+  kept per track: ``_array_deletion``); :mod:`~ctxmodels.stonesoup.jpda.array_initiator`:
   :class:`ArrayMultiMeasurementInitiator`, the M-of-N initiator with its holding tracks'
-  scan in the core (the core call, the births, the holding tracks' history and deletion:
-  ``_initiator_scan``, ``_initiator_births``, ``_initiator_history``,
+  scan in the core (the core call, the births, the holding tracks' history and what their
+  deleter reads: ``_initiator_scan``, ``_initiator_births``, ``_initiator_history``,
   ``_initiator_deletion``).
 
 The public names are those of :mod:`ctxmodels.stonesoup`.

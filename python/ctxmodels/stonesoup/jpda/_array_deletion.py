@@ -1,36 +1,44 @@
-r"""Deletion on :class:`~ctxmodels.stonesoup.ArrayJPDATracker`'s array path: the deleter's
-verdicts reached without walking every track at every scan.
+r"""Deletion on :class:`~ctxmodels.stonesoup.ArrayJPDATracker`'s array path: what the deleter
+reads, kept per track as states are appended, so that the verdicts never walk every track at
+every scan.
 
-Each supported (member) deleter is evaluated from what the array path already holds:
+The verdicts are the deleters' own (:mod:`~ctxmodels.stonesoup.jpda.deleter`,
+:mod:`~ctxmodels.stonesoup.jpda.composite_deleter`); this module keeps what they read:
 
 * miss counters, kept per track as states are appended (read from the track once, or
   again after a change from outside): the distinct timestamps since the last
-  detection-backed state (``UpdateTimeStepsDeleter``), the P_D of each state since then
-  (:class:`~ctxmodels.stonesoup.ExpectedMissesDeleter`), the time of the latest
-  detection-backed state (Stone Soup's :class:`~stonesoup.deleter.time.UpdateTimeDeleter`);
-* the last state's covariance (:class:`~stonesoup.deleter.error.CovarianceBasedDeleter`);
-* the scan's posterior means and covariances, stacked
+  detection-backed state (``UpdateTimeStepsDeleter``,
+  :func:`~ctxmodels.stonesoup.jpda.deleter.time_steps_verdict`), the P_D of each state since
+  then (:meth:`ExpectedMissesDeleter.deletes_after
+  <ctxmodels.stonesoup.ExpectedMissesDeleter.deletes_after>`), the time of the latest
+  detection-backed state (Stone Soup's :class:`~stonesoup.deleter.time.UpdateTimeDeleter`,
+  :func:`~ctxmodels.stonesoup.jpda.deleter.update_time_verdict`);
+* the scan's posterior covariances, stacked (Stone Soup's
+  :class:`~stonesoup.deleter.error.CovarianceBasedDeleter`,
+  :func:`~ctxmodels.stonesoup.jpda.deleter.covariance_verdict`) and means
   (:class:`~ctxmodels.stonesoup.DuplicateTrackDeleter`, which compares tracks in pairs).
 
 A :class:`~stonesoup.deleter.multi.CompositeDeleter` (Stone Soup's, or ctxmodels'
 :class:`~ctxmodels.stonesoup.CompositeDeleter`, the one that takes a pairwise member) of
-such members is evaluated with its own rule, member by member in its order.
+such members is evaluated by
+:func:`~ctxmodels.stonesoup.jpda.composite_deleter.composite_verdicts`, member by member in
+its order.
 """
 from __future__ import annotations
 
 import datetime
 
-import numpy as np
 from stonesoup.deleter.error import CovarianceBasedDeleter
 from stonesoup.deleter.multi import CompositeDeleter
 from stonesoup.deleter.time import UpdateTimeDeleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
-from stonesoup.types.array import CovarianceMatrix
 
 from .composite_deleter import CompositeDeleter as _PairwiseCompositeDeleter
-from .deleter import DuplicateTrackDeleter, ExpectedMissesDeleter, UpdateTimeStepsDeleter
+from .composite_deleter import composite_verdicts
+from .deleter import (DuplicateTrackDeleter, ExpectedMissesDeleter, UpdateTimeStepsDeleter,
+                      covariance_verdict, latest_detection_time, time_steps_verdict,
+                      times_since_detection, update_time_verdict)
 from .._batch import plain_track_lists
-from .hypothesiser import is_detection_backed
 from ..scan_context import context_kwargs
 
 _COMPOSITES = (CompositeDeleter, _PairwiseCompositeDeleter)
@@ -41,31 +49,10 @@ def _track_length(track) -> int:
     return len(track) if lists is None else len(lists[0])
 
 
-def _last_timestamp(track):
-    """``track.timestamp`` (its last state's), read without Stone Soup's attribute proxy."""
+def _last_state(track):
+    """``track.state`` (its last), read without Stone Soup's attribute proxy."""
     lists = plain_track_lists(track)
-    return track.timestamp if lists is None else lists[0][-1].timestamp
-
-
-def latest_backed_time(states):
-    """The latest timestamp of a detection-backed state of ``states`` (all of them are read:
-    a track's states need not be in time order), or None if there is none."""
-    latest = None
-    for state in states:
-        if is_detection_backed(state):
-            stamp = state.timestamp
-            if latest is None or stamp > latest:
-                latest = stamp
-    return latest
-
-
-def update_time_verdict(latest_backed, last, time_since_update) -> bool:
-    """``UpdateTimeDeleter.check_for_deletion`` from a track's latest detection-backed time
-    and last timestamp. The deleter looks for a detection-backed state in
-    ``track[last - time_since_update:]``, and Stone Soup's time slice keeps the states with
-    ``timestamp >= start`` (it skips ``timestamp < start``): the window includes its start,
-    so a track last updated exactly ``time_since_update`` ago is kept."""
-    return latest_backed is None or latest_backed < last - time_since_update
+    return (track.states if lists is None else lists[0])[-1]
 
 
 class _MissCounter:
@@ -87,7 +74,7 @@ class _MissCounter:
 class ArrayDeletion:
     """The array path's deletion, a mixin of :class:`~ctxmodels.stonesoup.ArrayJPDATracker`
     (call :meth:`_init_deletion` from ``__init__``): the deletion plan of the tracker's
-    ``deleter``, each track's counters, and the verdicts."""
+    ``deleter``, each track's counters, and the deleter's verdicts from them."""
 
     def _init_deletion(self) -> None:
         self._counters: dict = {}  # track -> _MissCounter
@@ -170,29 +157,17 @@ class ArrayDeletion:
 
     def _read_counter(self, track, plan):
         """The counter of ``track`` read from its states (once per track, or after a change
-        from outside)."""
+        from outside), by the deleters' own readers."""
         states = track.states
         values = []
         for kind, member in plan.counted:
             if kind == "steps":
-                stamps = set()
-                for state in reversed(states):
-                    stamps.add(state.timestamp)
-                    if is_detection_backed(state):
-                        break
-                values.append(stamps)
+                values.append(times_since_detection(states))
             elif kind == "time":
-                values.append(latest_backed_time(states))
+                values.append(latest_detection_time(states))
             else:
-                misses = []
-                for index in range(len(states) - 1, 0, -1):
-                    if is_detection_backed(states[index]):
-                        break
-                    pd = member._prob_detect(track, index)
-                    if pd != 0.0:
-                        misses.append(pd)
-                misses.reverse()
-                values.append(misses)
+                values.append([pd for pd in member.prob_detect_since_detection(track)
+                               if pd != 0.0])
         counter = _MissCounter(len(track), values)
         self._counters[track] = counter
         return counter
@@ -200,69 +175,57 @@ class ArrayDeletion:
     def _delete(self, tracks, detections, latest=None, counted_now=frozenset()):
         """The tracks of ``tracks`` to delete. ``latest``: (the scan's tracks in order,
         their posterior means (N, D), covariances (N, D, D), the scan time), which a
-        pairwise member reads when they are all of ``tracks``. ``counted_now``: plain tracks
-        whose one state of this scan was just appended to their lists and counted
-        (:meth:`_count`): a counter they still have describes them."""
+        pairwise or covariance member reads. ``counted_now``: plain tracks whose one state
+        of this scan was just appended to their lists and counted (:meth:`_count`): a
+        counter they still have describes them, and their last state holds their row of
+        ``latest``."""
         plan = self._deletion_plan()
         if plan is None:
             deleter = self.deleter
             return deleter.delete_tracks(tracks,
                                          **context_kwargs(detections, deleter.delete_tracks))
-        # each member's check, its parameters read once a scan, in the composite's order
-        checks = []
-        for kind, member, k in plan.members:
-            if kind == "steps":
-                checks.append((kind, k, member.time_steps_since_update))
-            elif kind == "expected":
-                checks.append((kind, k, float(member.expected_misses)))
-            elif kind == "time":
-                window = member.time_since_update
-                if type(window) is datetime.timedelta:
-                    checks.append((kind, k, window))
-                else:  # (times that are not datetimes: the deleter's own arithmetic)
-                    checks.append(("call", k, member.check_for_deletion))
-            elif kind == "pairwise":
-                checks.append((kind, k, _pairwise_verdicts(member, tracks, latest)))
-            else:
-                checks.append((kind, k, _covariance_check(member, latest)))
-        deleted = set()
-        counters = self._counters
-        intersect = plan.intersect
-        counted = bool(plan.counted)
-        for track in tracks:
-            if counted:
-                counter = counters.get(track)
+        tracks = list(tracks)
+        counters = None
+        if plan.counted:
+            known = self._counters
+            counters = []
+            for track in tracks:
+                counter = known.get(track)
                 if counter is None or (track not in counted_now
                                        and counter.length != _track_length(track)):
                     counter = self._read_counter(track, plan)
-            # the composite's rule, member by member in its order: all (intersect) or any
-            verdict = intersect
-            for kind, k, parameter in checks:
-                if kind == "steps":
-                    says = len(counter.values[k]) > parameter
-                elif kind == "time":
-                    says = update_time_verdict(counter.values[k], _last_timestamp(track),
-                                               parameter)
-                elif kind == "pairwise":
-                    says = track in parameter
-                elif kind == "expected":
-                    total = 0.0
-                    says = False
-                    for pd in reversed(counter.values[k]):  # newest first, as the deleter sums
-                        total += pd
-                        if total >= parameter:
-                            says = True
-                            break
-                else:
-                    says = bool(parameter(track))
-                if says != intersect:
-                    verdict = says
-                    break
-            if verdict:
-                deleted.add(track)
+                counters.append(counter)
+        members = [_asking(kind, member, k, tracks, counters, latest, counted_now)
+                   for kind, member, k in plan.members]
+        verdicts = composite_verdicts(plan.intersect, members, len(tracks))
+        deleted = {track for track, says in zip(tracks, verdicts) if says}
         for track in deleted:
-            counters.pop(track, None)
+            self._counters.pop(track, None)
         return deleted
+
+
+def _asking(kind, member, k, tracks, counters, latest, counted_now):
+    """A member of the plan as :func:`composite_verdicts` asks it: a function from the
+    numbers of ``tracks`` to their verdicts, from the counters (slot ``k``), the scan's
+    posteriors, or (a time window that is not a ``timedelta``) the deleter itself."""
+    if kind == "steps":
+        return lambda rows: [time_steps_verdict(member, len(counters[r].values[k]))
+                             for r in rows]
+    if kind == "expected":
+        deletes_after = member.deletes_after
+        return lambda rows: [deletes_after(reversed(counters[r].values[k])) for r in rows]
+    if kind == "time":
+        if type(member.time_since_update) is not datetime.timedelta:
+            # (times that are not datetimes: the deleter's own arithmetic)
+            return lambda rows: [member.check_for_deletion(tracks[r]) for r in rows]
+        return lambda rows: [
+            update_time_verdict(member, counters[r].values[k], _last_state(tracks[r]).timestamp)
+            for r in rows]
+    if kind == "pairwise":
+        says = _pairwise_verdicts(member, tracks, latest)
+        return lambda rows: [tracks[r] in says for r in rows]
+    return lambda rows: _covariance_verdicts(member, [tracks[r] for r in rows], latest,
+                                             counted_now)
 
 
 def _member_kind(deleter):
@@ -293,6 +256,18 @@ def _pairwise_verdicts(member, tracks, latest) -> set:
     return member.tracks_to_delete(tracks)
 
 
+def _covariance_verdicts(member, tracks, latest, counted_now) -> list:
+    """:func:`~ctxmodels.stonesoup.jpda.deleter.covariance_verdict` of ``tracks``' last
+    covariances: for the scan's tracks in ``counted_now``, whose last state holds their row
+    of the scan's posterior covariances (``latest``: the same numbers), on all those rows at
+    once; for any other track, on its last state's covariance."""
+    if latest is None or not counted_now:
+        return [covariance_verdict(member, _last_state(track).covar) for track in tracks]
+    scan = dict(zip(latest[0], covariance_verdict(member, latest[2]).tolist()))
+    return [scan[track] if track in counted_now
+            else covariance_verdict(member, _last_state(track).covar) for track in tracks]
+
+
 class _DeletionPlan:
     """A supported deleter as the array path evaluates it: ``members`` are (kind, deleter,
     counter slot) in the composite's order (one member for a plain deleter; a plain deleter
@@ -313,53 +288,11 @@ class _DeletionPlan:
     @staticmethod
     def _signature(deleter):
         if type(deleter) in _COMPOSITES:
-            return (bool(deleter.intersect), tuple(id(m) for m in deleter.deleters))
+            return (bool(deleter.intersect), tuple(map(id, deleter.deleters)))
         return None
 
     def still_describes(self, deleter) -> bool:
         return self._signature(deleter) == self._seen
-
-
-def _covariance_check(deleter, latest=None):
-    """``CovarianceBasedDeleter.check_for_deletion`` as a function of the track: Stone Soup
-    1.9.1 deletes when the sum of the last state's covariance diagonal over ``mapping`` (all
-    of it when ``mapping`` is None or empty) is strictly greater than ``covar_trace_thresh``.
-    With a list of one or two plain int indices and a float threshold the sum is read
-    directly (NumPy's sum of two float64 is their one IEEE addition, so the verdict is the
-    same); any other mapping or threshold, or a covariance that is not a 2-D float64 array,
-    asks the deleter. ``latest`` (see :meth:`ArrayDeletion._delete`): the scan's posterior
-    covariances, whose sums are taken for all its plain tracks at once (each such track's
-    last state holds its row: the same numbers, the same additions)."""
-    mapping = deleter.mapping
-    threshold = deleter.covar_trace_thresh
-    if not (type(mapping) is list and 0 < len(mapping) <= 2
-            and all(type(i) is int for i in mapping) and type(threshold) is float):
-        return lambda track: bool(deleter.check_for_deletion(track))
-    i, j = mapping if len(mapping) == 2 else (mapping[0], None)
-    scan: dict = {}
-    if latest is not None:
-        covars = latest[2]
-        size = covars.shape[1]
-        if covars.dtype == np.float64 and -size <= min(i, j or 0) and max(i, j or 0) < size:
-            traces = covars[:, i, i] if j is None else covars[:, i, i] + covars[:, j, j]
-            scan = {track: says for track, says in zip(latest[0], (traces > threshold).tolist())
-                    if plain_track_lists(track) is not None}  # (appended to its list)
-
-    def check(track) -> bool:
-        says = scan.get(track)
-        if says is not None:
-            return says
-        lists = plain_track_lists(track)
-        covar = (track.states if lists is None else lists[0])[-1].covar
-        if not (type(covar) in _COVARIANCE_TYPES and covar.dtype == np.float64
-                and covar.ndim == 2):
-            return bool(deleter.check_for_deletion(track))
-        trace = covar.item(i, i) if j is None else covar.item(i, i) + covar.item(j, j)
-        return trace > threshold
-    return check
-
-
-_COVARIANCE_TYPES = (CovarianceMatrix, np.ndarray)
 
 
 __all__ = ["ArrayDeletion"]

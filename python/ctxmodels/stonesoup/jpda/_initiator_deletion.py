@@ -1,17 +1,17 @@
 """The holding tracks' deletion in :class:`~ctxmodels.stonesoup.ArrayMultiMeasurementInitiator`:
 per holding row, what its deleter reads, kept as the rows advance instead of walking the
-tracks (whose coasting predictions are not even appended yet).
+tracks (whose coasting predictions are not even appended yet). The verdicts are the
+deleter's own (:mod:`~ctxmodels.stonesoup.jpda.deleter`), from these counts:
 
 * ``UpdateTimeStepsDeleter`` (stock or ctxmodels): the number of distinct timestamps since
-  the row's last detection-backed state; delete when it exceeds ``time_steps_since_update``.
-* Stone Soup's ``UpdateTimeDeleter``: the latest timestamp of a detection-backed state;
-  delete when there is none at or after ``last - time_since_update`` (``last``: the row's
-  last state's time), as :func:`~ctxmodels.stonesoup.jpda._array_deletion.update_time_verdict`
-  decides.
+  the row's last detection-backed state (advanced by the core's scan),
+  :func:`~ctxmodels.stonesoup.jpda.deleter.time_steps_verdict`;
+* Stone Soup's ``UpdateTimeDeleter``: the latest timestamp of a detection-backed state,
+  :func:`~ctxmodels.stonesoup.jpda.deleter.update_time_verdict` with the row's last time;
 * :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` without a hypothesiser (an initiator's:
   each miss weighed by the P_D of the row's prediction in the scan's context): the P_D of
-  each miss since the row's last detection; delete when their sum, newest first as the
-  deleter sums, reaches ``expected_misses``.
+  each miss since the row's last detection,
+  :meth:`~ctxmodels.stonesoup.ExpectedMissesDeleter.deletes_after`.
 """
 from __future__ import annotations
 
@@ -22,9 +22,8 @@ import numpy as np
 from stonesoup.deleter.time import UpdateTimeDeleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
 
-from ._array_deletion import latest_backed_time, update_time_verdict
-from .deleter import ExpectedMissesDeleter, UpdateTimeStepsDeleter
-from .hypothesiser import is_detection_backed
+from .deleter import (ExpectedMissesDeleter, UpdateTimeStepsDeleter, latest_detection_time,
+                      time_steps_verdict, times_since_detection, update_time_verdict)
 
 
 def supported(deleter) -> bool:
@@ -42,15 +41,7 @@ def supported(deleter) -> bool:
 def read(states) -> tuple:
     """(distinct times since the last detection-backed state, latest detection-backed
     time or None) of a track's ``states``."""
-    if len(states) == 1:  # a new track: one state, one time
-        state = states[0]
-        return 1, (state.timestamp if is_detection_backed(state) else None)
-    since = set()
-    for state in reversed(states):
-        since.add(state.timestamp)
-        if is_detection_backed(state):
-            break
-    return len(since), latest_backed_time(states)
+    return len(times_since_detection(states)), latest_detection_time(states)
 
 
 class HoldingCounts:
@@ -98,29 +89,16 @@ class HoldingCounts:
             for k, pd in zip(missed.tolist(), prob_detect.tolist()):
                 self.misses[k].append(pd)
 
-    def expired(self, deleter, rows, last_times) -> list:
-        """Of the rows ``rows`` (indices), those ``deleter`` deletes; ``last_times``: each
+    def expired(self, deleter, last_times) -> np.ndarray:
+        """Per row, whether ``deleter`` deletes it (a boolean array); ``last_times``: each
         row's last state's time."""
         if type(deleter) is UpdateTimeDeleter:
-            window = deleter.time_since_update
-            return [k for k in rows
-                    if update_time_verdict(self.backed[k], last_times[k], window)]
+            return np.array([update_time_verdict(deleter, backed, last)
+                             for backed, last in zip(self.backed, last_times)], dtype=bool)
         if type(deleter) is ExpectedMissesDeleter:
-            return [k for k in rows
-                    if _reaches(self.misses[k], float(deleter.expected_misses))]
-        limit = deleter.time_steps_since_update
-        return [k for k in rows if self.since[k] > limit]
+            return np.array([deleter.deletes_after(reversed(misses)) for misses in self.misses],
+                            dtype=bool)
+        return np.asarray(time_steps_verdict(deleter, self.since), dtype=bool)
 
 
 __all__ = ["HoldingCounts", "read", "supported"]
-
-
-def _reaches(misses: list, threshold: float) -> bool:
-    """Whether the P_D of ``misses``, summed newest first as the deleter sums them, reach
-    ``threshold``."""
-    total = 0.0
-    for pd in reversed(misses):
-        total += pd
-        if total >= threshold:
-            return True
-    return False

@@ -74,7 +74,6 @@ class ScanCore:
         else:
             index = np.array([distinct[t] for t in last_times], dtype=np.int64)
             new_time = np.array([t != timestamp for t in last_times])
-        steps = getattr(initiator.deleter, "time_steps_since_update", None)  # (steps deleter)
         try:
             out = _core.initiator_scan(
                 models, rows.means, rows.covars, index,
@@ -85,8 +84,7 @@ class ScanCore:
                 squared=type(hypothesiser.measure) is SquaredMahalanobis,
                 include_all=bool(hypothesiser.include_all),
                 force_symmetric=bool(initiator.updater.force_symmetric_covariance),
-                updates_only=bool(initiator.updates_only), min_points=int(initiator.min_points),
-                max_since=None if steps is None else int(steps))
+                updates_only=bool(initiator.updates_only), min_points=int(initiator.min_points))
         except _core.InfeasibleAssignmentError:
             raise RuntimeError("Assignment was not feasible") from None  # (the stock error)
         except ValueError:

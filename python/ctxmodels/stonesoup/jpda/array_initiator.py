@@ -369,18 +369,14 @@ class ArrayMultiMeasurementInitiator(MultiMeasurementInitiator):
             prob_detect = self._missed_prob_detect(out, missed)
         self._deletion.advance(out["since"], rows, timestamp, missed, prob_detect)
         self._last_times = [timestamp] * len(records)
-        released, expired = out["released"], out["expired"]
+        released = out["released"]
         for k in released.nonzero()[0].tolist():
             record = records[k]
             self._materialise(record)
             sure_tracks.add(record.track)
             self._holding.discard(record.track)
-        keep = ~(released | expired)
-        if getattr(self.deleter, "time_steps_since_update", None) is None:
-            # (an UpdateTimeDeleter: its verdicts from the rows' detection times)
-            for k in self._deletion.expired(self.deleter, keep.nonzero()[0].tolist(),
-                                            self._last_times):
-                keep[k] = False
+        # the deleter's verdicts from the rows' counts (a released row is not held either way)
+        keep = ~(released | self._deletion.expired(self.deleter, self._last_times))
         self._means, self._covars = out["means"], out["covars"]
         if not keep.all():
             for k in (~keep & ~released).nonzero()[0].tolist():

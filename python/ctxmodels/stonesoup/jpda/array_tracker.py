@@ -65,16 +65,17 @@ Deletion (:mod:`~ctxmodels.stonesoup.jpda._array_deletion`): with a ctxmodels or
 :class:`~ctxmodels.stonesoup.ExpectedMissesDeleter` or a stock
 :class:`~stonesoup.deleter.time.UpdateTimeDeleter` (``delete_last_pred`` off), each track's
 misses since its last detection-backed state (or that state's time) are counted as states
-are appended instead of walking the track; the verdicts are the deleter's own (the expected
-misses are summed newest first, as the deleter sums them; the time window includes its
-start, as Stone Soup's time slice does). A
+are appended instead of walking the track, and the verdicts are the deleter's own functions
+of those counts (:mod:`~ctxmodels.stonesoup.jpda.deleter`). A
 :class:`~stonesoup.deleter.error.CovarianceBasedDeleter` reads only the last state's
-covariance, which is checked directly; a :class:`~ctxmodels.stonesoup.DuplicateTrackDeleter`
-reads the scan's stacked posterior means and covariances. A
-:class:`~stonesoup.deleter.multi.CompositeDeleter` or ctxmodels'
+covariance: its verdicts (:func:`~ctxmodels.stonesoup.jpda.deleter.covariance_verdict`) are
+taken on the scan's stacked posterior covariances; a
+:class:`~ctxmodels.stonesoup.DuplicateTrackDeleter` reads the scan's stacked posterior means
+and covariances. A :class:`~stonesoup.deleter.multi.CompositeDeleter` or ctxmodels'
 :class:`~ctxmodels.stonesoup.CompositeDeleter` (``delete_last_pred`` off) whose members (a
-list or tuple) are any of these is evaluated member by member with its own rule: delete when
-all say so (``intersect``) or when any does. Any other deleter is called.
+list or tuple) are any of these is evaluated by the composite's rule
+(:func:`~ctxmodels.stonesoup.jpda.composite_deleter.composite_verdicts`): delete when all
+say so (``intersect``) or when any does. Any other deleter is called.
 
 Determinism: detections in :func:`~ctxmodels.stonesoup.in_stable_order`, tracks in creation
 order; the core runs on one thread in index order.

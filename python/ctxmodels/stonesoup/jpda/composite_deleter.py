@@ -34,6 +34,37 @@ def drop_last_predictions(tracks) -> None:
             del track.metadatas[-1]
 
 
+def composite_verdicts(intersect: bool, members, count: int) -> list[bool]:
+    r"""The verdicts of a composite of ``members`` on ``count`` tracks (numbered 0 to
+    ``count`` − 1), by Stone Soup's :class:`~stonesoup.deleter.multi.CompositeDeleter` rule:
+
+    .. math::
+        \text{delete} \iff \bigwedge_j d_j \ \ (\text{intersect}), \qquad
+        \text{delete} \iff \bigvee_j d_j \ \ (\text{union}),
+
+    :math:`d_j` member :math:`j`'s verdict, the members asked in order until one decides: a
+    member saying "keep" in an intersection, or "delete" in a union, decides, and the later
+    members are not asked about that track. Each member is a function from a list of track
+    numbers, those no earlier member decided, to their verdicts (aligned, truthy: delete);
+    it is not called once every track is decided. The component path's composite and the
+    array path's evaluation of one both come here; only the order of the calls differs
+    from Stone Soup's (member by member, not track by track), not which are made."""
+    verdicts = [intersect] * count
+    undecided = list(range(count))
+    for member in members:
+        if not undecided:
+            break
+        says = member(undecided)
+        decided = [k for k, s in zip(undecided, says) if not s] if intersect else \
+            [k for k, s in zip(undecided, says) if s]
+        if decided:
+            for k in decided:
+                verdicts[k] = not intersect
+            undecided = [k for k, s in zip(undecided, says) if s] if intersect else \
+                [k for k, s in zip(undecided, says) if not s]
+    return verdicts
+
+
 def compares_tracks(deleter) -> bool:
     """Whether ``deleter`` must be asked about a whole set of tracks at once."""
     return isinstance(deleter, (PairwiseDeleter, CompositeDeleter)) and deleter.compares_tracks
@@ -65,10 +96,11 @@ class CompositeDeleter(_StockCompositeDeleter):
     """:class:`stonesoup.deleter.multi.CompositeDeleter` that also takes members which
     compare tracks with each other (:class:`PairwiseDeleter`, or a composite holding one).
     Such a member is asked once about the whole set handed to :meth:`delete_tracks` and
-    says "delete" for the tracks it returns; the others are asked track by track, as Stone
-    Soup asks them. Per track, the rule is Stone Soup's: delete when all members say so
-    (``intersect``) or when any does, the members asked in order until one decides. With
-    only per-track members the verdicts are Stone Soup's composite's.
+    says "delete" for the tracks it returns; the others are asked about single tracks, as
+    Stone Soup asks them. Per track, the rule is Stone Soup's (:func:`composite_verdicts`):
+    delete when all members say so (``intersect``) or when any does, the members asked in
+    order until one decides. With only per-track members the verdicts are Stone Soup's
+    composite's.
 
     A pairwise member thus judges all the tracks, including those another member deletes
     in the same call (a union does not first remove them)."""
@@ -80,27 +112,22 @@ class CompositeDeleter(_StockCompositeDeleter):
     def check_for_deletion(self, track, **kwargs) -> bool:
         if self.compares_tracks:
             raise _refusal(self)
-        return super().check_for_deletion(track, **kwargs)
+        members = [_asking(member, [track], kwargs) for member in self.deleters]
+        return composite_verdicts(bool(self.intersect), members, 1)[0]
 
     def tracks_to_delete(self, tracks, **kwargs) -> set:
-        """The tracks of ``tracks`` to delete by the composite's rule; nothing is changed."""
+        """The tracks of ``tracks`` to delete by the composite's rule
+        (:func:`composite_verdicts`); nothing is changed."""
         tracks = list(tracks)
-        members = list(self.deleters)
-        verdicts = [m.tracks_to_delete(tracks, **kwargs) if compares_tracks(m) else None
-                    for m in members]
-        intersect = bool(self.intersect)
-        deleted = set()
-        for track in tracks:
-            verdict = intersect
-            for member, members_set in zip(members, verdicts):
-                says = (track in members_set) if members_set is not None \
-                    else bool(member.check_for_deletion(track, **kwargs))
-                if says != intersect:
-                    verdict = says
-                    break
-            if verdict:
-                deleted.add(track)
-        return deleted
+        members = []
+        for member in self.deleters:
+            if compares_tracks(member):  # asked about the whole set first, once
+                says = member.tracks_to_delete(tracks, **kwargs)
+                members.append(lambda rows, says=says: [tracks[k] in says for k in rows])
+            else:
+                members.append(_asking(member, tracks, kwargs))
+        verdicts = composite_verdicts(bool(self.intersect), members, len(tracks))
+        return {track for track, says in zip(tracks, verdicts) if says}
 
     def delete_tracks(self, tracks, **kwargs) -> set:
         deleted = self.tracks_to_delete(tracks, **kwargs)
@@ -109,4 +136,10 @@ class CompositeDeleter(_StockCompositeDeleter):
         return deleted
 
 
-__all__ = ["CompositeDeleter", "PairwiseDeleter", "compares_tracks", "drop_last_predictions"]
+def _asking(member, tracks, kwargs):
+    """A per-track ``member`` as :func:`composite_verdicts` asks it about ``tracks``."""
+    return lambda rows: [member.check_for_deletion(tracks[k], **kwargs) for k in rows]
+
+
+__all__ = ["CompositeDeleter", "PairwiseDeleter", "compares_tracks", "composite_verdicts",
+           "drop_last_predictions"]

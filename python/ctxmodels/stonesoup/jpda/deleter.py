@@ -12,6 +12,20 @@ costs it nothing.
 Two tracks may also follow one target (two holding tracks confirmed on the same detections,
 or a track split by clutter): :class:`DuplicateTrackDeleter` deletes one of each such pair
 by the standard track-to-track association test.
+
+Each deletion rule, ctxmodels' and the Stone Soup deleters' the array paths evaluate, is
+written here once as a verdict from what the rule reads — the distinct times or the
+:math:`P_D` of the states since a track's last detection-backed one, its latest
+detection-backed time, its last covariance: :func:`time_steps_verdict`,
+:func:`update_time_verdict`, :func:`covariance_verdict` and
+:meth:`ExpectedMissesDeleter.deletes_after`, with the readers of those quantities off a
+track (:func:`times_since_detection`, :func:`latest_detection_time`,
+:meth:`ExpectedMissesDeleter.prob_detect_since_detection`). ctxmodels' deleters reach their
+``check_for_deletion`` through them, and the array paths (the JPDA tracker's and the M-of-N
+initiator's), which keep those quantities per track as scans go by, call the same functions;
+the stock deleters' own ``check_for_deletion`` is their reference, held against them in the
+tests. Why one long module: each verdict sits beside the deleter whose rule it is, and
+both paths import it from there.
 """
 from __future__ import annotations
 
@@ -24,7 +38,6 @@ import numpy as np
 from stonesoup.base import Property
 from stonesoup.deleter.base import Deleter
 from stonesoup.deleter.time import UpdateTimeStepsDeleter as _StockUpdateTimeStepsDeleter
-from stonesoup.types.update import Update
 
 from ...foreign import as_array_context
 from .composite_deleter import PairwiseDeleter
@@ -32,6 +45,103 @@ from .._batch import plain_track_lists
 from ._pd_record import PDRecord
 from .hypothesiser import PDAHypothesiser, is_detection_backed, prob_detect_at
 from ..ordering import track_key
+
+
+def times_since_detection(states) -> set:
+    """The distinct timestamps of ``states`` (a track's, oldest first) from the last
+    detection-backed one (an :class:`~stonesoup.types.update.Update` with a non-empty
+    hypothesis), that state's included, to the last; of all of them if none is
+    detection-backed. What :func:`time_steps_verdict` counts."""
+    stamps = set()
+    for state in reversed(states):
+        stamps.add(state.timestamp)
+        if is_detection_backed(state):
+            break
+    return stamps
+
+
+def latest_detection_time(states):
+    """The latest timestamp of a detection-backed state of ``states``, or None if there is
+    none. Every state is read: a track's states need not be in time order."""
+    latest = None
+    for state in states:
+        if is_detection_backed(state):
+            stamp = state.timestamp
+            if latest is None or stamp > latest:
+                latest = stamp
+    return latest
+
+
+def time_steps_verdict(deleter, distinct_times):
+    r"""The verdict of an ``UpdateTimeStepsDeleter`` (Stone Soup's
+    :class:`~stonesoup.deleter.time.UpdateTimeStepsDeleter` or ctxmodels'
+    :class:`UpdateTimeStepsDeleter`) on a track whose states since its last
+    detection-backed one (that state included, see :func:`times_since_detection`) carry
+    ``distinct_times`` distinct timestamps:
+
+    .. math::
+        \text{delete} \iff \bigl|\{t_k : k_0 \le k \le K\}\bigr| \ >\ N,
+
+    :math:`N` the deleter's ``time_steps_since_update``, :math:`k_0` the last
+    detection-backed state (the first state if none is). Given an array of counts, the
+    verdicts elementwise."""
+    return distinct_times > deleter.time_steps_since_update
+
+
+def update_time_verdict(deleter, latest_detection, last) -> bool:
+    r"""The verdict of Stone Soup's :class:`~stonesoup.deleter.time.UpdateTimeDeleter` on a
+    track whose latest detection-backed state is at :math:`t_d` = ``latest_detection``
+    (None: it has none, see :func:`latest_detection_time`), asked at :math:`t_K` = ``last``
+    (its last state's time, the deleter's default). The deleter deletes when no
+    detection-backed state lies in ``track[last - Δ:]``, and Stone Soup's time slice keeps
+    the states with ``timestamp >= last - Δ``; so, with :math:`\Delta` its
+    ``time_since_update``,
+
+    .. math::
+        \text{delete} \iff t_d \text{ is None} \ \lor\ t_d < t_K - \Delta :
+
+    the window includes its start, and a track last updated exactly :math:`\Delta` ago is
+    kept."""
+    return latest_detection is None or latest_detection < last - deleter.time_since_update
+
+
+def covariance_verdict(deleter, covars):
+    r"""The verdict of Stone Soup's :class:`~stonesoup.deleter.error.CovarianceBasedDeleter`
+    on a track whose last state has the covariance ``covars`` (D, D); given a stack
+    (N, D, D), the N verdicts as a boolean array. With :math:`\tau` the deleter's
+    ``covar_trace_thresh`` and :math:`m` its ``mapping``,
+
+    .. math::
+        \text{delete} \iff \sum_{i \in m} P_{ii} \ >\ \tau,
+
+    strictly; :math:`m` is every index when ``mapping`` is None or empty, and is otherwise
+    the positions Stone Soup's indexing of the covariance's diagonal by ``mapping`` selects
+    (the same selection, and the same errors for a mapping the deleter cannot index with,
+    such as a tuple of two). Each sum is NumPy's sum of the selected entries in a contiguous
+    row: the pairwise order of ``np.sum`` over the same entries as a 1-D array, so each
+    number, and each verdict, is the deleter's (tested against it on random covariances of
+    1 to 12 dimensions and at the threshold)."""
+    covars = np.asarray(covars)
+    diagonals = covars.diagonal(0, -2, -1)
+    mapping = deleter.mapping
+    if mapping:  # the positions Stone Soup's indexing selects (a list of ints: itself)
+        if type(mapping) is not list or any(type(i) is not int for i in mapping):
+            mapping = np.arange(diagonals.shape[-1])[mapping].ravel()
+        diagonals = diagonals.take(mapping, axis=-1)  # (into a new, contiguous array)
+    sums = np.add.reduce(np.ascontiguousarray(diagonals), axis=-1)
+    says = sums > deleter.covar_trace_thresh
+    return bool(says) if covars.ndim == 2 else says
+
+
+def _sum_until(values, stop_at: float) -> float:
+    """The sum of ``values`` in their order, from 0.0, stopping once it reaches
+    ``stop_at``."""
+    total = 0.0
+    for value in values:
+        total += value
+        if total >= stop_at:
+            break
+    return total
 
 
 class MissesNotWeighedWarning(UserWarning):
@@ -173,13 +283,17 @@ class ExpectedMissesDeleter(Deleter):
     def prob_detect_since_detection(self, track) -> list[float]:
         """The P_D of each state after the track's last detection-backed one, oldest first
         (what :meth:`expected_misses_since_detection` sums, newest first)."""
-        values = []
-        for index in range(len(track) - 1, 0, -1):  # the first state is the anchor
-            if is_detection_backed(track[index]):
-                break
-            values.append(self._prob_detect(track, index))
+        values = list(self._newest_first(track))
         values.reverse()
         return values
+
+    def _newest_first(self, track):
+        """The P_D of each state after the track's last detection-backed one, newest first,
+        each looked up only when read."""
+        for index in range(len(track) - 1, 0, -1):  # the first state is the anchor
+            if is_detection_backed(track[index]):
+                return
+            yield self._prob_detect(track, index)
 
     def _from_context(self, track, index: int):
         log = self.__dict__.get("_context_log")
@@ -189,40 +303,43 @@ class ExpectedMissesDeleter(Deleter):
     def expected_misses_since_detection(self, track, stop_at: float = math.inf) -> float:
         """:math:`\\sum P_D` over the states after the track's last detection-backed one
         (summing stops early once it reaches ``stop_at``)."""
-        total = 0.0
-        for index in range(len(track) - 1, 0, -1):  # the first state is the anchor
-            if is_detection_backed(track[index]):
-                break
-            total += self._prob_detect(track, index)
-            if total >= stop_at:
-                break
-        return total
+        return _sum_until(self._newest_first(track), stop_at)
+
+    def deletes_after(self, prob_detect) -> bool:
+        r"""Whether a track is deleted whose states since its last detection-backed one had
+        the detection probabilities ``prob_detect``, newest first (any iterable; read only
+        as far as the verdict needs):
+
+        .. math::
+            \text{delete} \iff \sum_{k} P_{D,k} \ \ge\ N_E,
+
+        summed from 0.0 newest first and stopping as soon as the sum reaches :math:`N_E`
+        (:attr:`expected_misses`). :meth:`check_for_deletion` hands it the track's P_D;
+        the array paths, the P_D they keep per track."""
+        threshold = float(self.expected_misses)
+        return _sum_until(prob_detect, threshold) >= threshold
 
     def check_for_deletion(self, track, **kwargs) -> bool:
         """Whether the track's expected misses since its last detection reached
-        :attr:`expected_misses`."""
-        threshold = float(self.expected_misses)
-        return self.expected_misses_since_detection(track, stop_at=threshold) >= threshold
+        :attr:`expected_misses` (:meth:`deletes_after` of its P_D)."""
+        return self.deletes_after(self._newest_first(track))
 
 
 class UpdateTimeStepsDeleter(_StockUpdateTimeStepsDeleter):
     """:class:`stonesoup.deleter.time.UpdateTimeStepsDeleter` that reads only a track's
     trailing states. The stock check walks ``track[::-1]``, a reversed copy of the whole
     track, at every scan, so its cost grows with the square of a track's length (a sixth of
-    a JPDA run's time); this walks back from the last state and stops where the stock loop
-    does, with the same answer: delete once more than ``time_steps_since_update`` distinct
-    timestamps pass without an :class:`~stonesoup.types.update.Update` backed by a
+    a JPDA run's time); this reads the states back to the last detection-backed one
+    (:func:`times_since_detection`) and gives :func:`time_steps_verdict` of their distinct
+    timestamps: the stock verdict, deleting once more than ``time_steps_since_update``
+    distinct timestamps pass without an :class:`~stonesoup.types.update.Update` backed by a
     detection."""
 
     def check_for_deletion(self, track, **kwargs) -> bool:
-        timestamps = set()
-        for state in reversed(track.states):
-            timestamps.add(state.timestamp)
-            if len(timestamps) > self.time_steps_since_update:
-                return True
-            if isinstance(state, Update) and state.hypothesis:
-                return False
-        return False
+        states = track.states
+        if not states:
+            return False  # (no state, no timestamp to count: kept, as stock keeps it)
+        return bool(time_steps_verdict(self, len(times_since_detection(states))))
 
 
 class DuplicateTrackDeleter(PairwiseDeleter):
@@ -386,4 +503,5 @@ def _squared_distances(delta, covars):
 
 
 __all__ = ["DuplicateTrackDeleter", "ExpectedMissesDeleter", "MissesNotWeighedWarning",
-           "UpdateTimeStepsDeleter"]
+           "UpdateTimeStepsDeleter", "covariance_verdict", "latest_detection_time",
+           "time_steps_verdict", "times_since_detection", "update_time_verdict"]
