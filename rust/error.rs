@@ -29,6 +29,31 @@ pub enum ModelError {
     /// `ctxmodels.InfeasibleAssignmentError`.
     #[error("{argument}: {message}")]
     Infeasible { argument: &'static str, message: String },
+    /// A land mask's polygon is not valid land. With `ring` (0 the shell, `k + 1` hole `k`)
+    /// the fault is that ring's and `message` says what it is; without, it is the polygon's
+    /// and `message` names the rings ("polygon 2 hole 0 lies outside its shell").
+    #[error("{argument}: {}", land_text(*.polygon, *.ring, .message))]
+    InvalidLand {
+        argument: &'static str,
+        polygon: usize,
+        ring: Option<usize>,
+        message: String,
+    },
+}
+
+/// "shell" or "hole k" for a polygon's ring `ring` (0 the shell, `k + 1` hole `k`).
+pub fn ring_name(ring: usize) -> String {
+    match ring {
+        0 => "shell".to_string(),
+        k => format!("hole {}", k - 1),
+    }
+}
+
+fn land_text(polygon: usize, ring: Option<usize>, message: &str) -> String {
+    match ring {
+        Some(r) => format!("polygon {polygon} {}: {message}", ring_name(r)),
+        None => message.to_string(),
+    }
 }
 
 impl ModelError {
@@ -72,6 +97,22 @@ impl ModelError {
         }
     }
 
+    /// A fault of polygon `polygon`'s ring `ring` (0 the shell, `k + 1` hole `k`), or of the
+    /// whole polygon (`ring` None, `message` naming the rings).
+    pub fn invalid_land(
+        argument: &'static str,
+        polygon: usize,
+        ring: Option<usize>,
+        message: impl Into<String>,
+    ) -> Self {
+        ModelError::InvalidLand {
+            argument,
+            polygon,
+            ring,
+            message: message.into(),
+        }
+    }
+
     /// The argument the error is about.
     pub fn argument(&self) -> &'static str {
         match self {
@@ -80,7 +121,8 @@ impl ModelError {
             | ModelError::Shape { argument, .. }
             | ModelError::Memory { argument, .. }
             | ModelError::NotPositiveDefinite { argument, .. }
-            | ModelError::Infeasible { argument, .. } => argument,
+            | ModelError::Infeasible { argument, .. }
+            | ModelError::InvalidLand { argument, .. } => argument,
         }
     }
 }

@@ -168,10 +168,10 @@ impl LandMask {
                                                                   // (polygon index, ring index within polygon, first edge, edge count) per ring.
         let mut rings = memory::with_room("polygons", polygons.iter().map(|p| 1 + p.holes.len()).sum())?;
         for (pi, polygon) in polygons.iter().enumerate() {
-            let shell = clean_ring(&polygon.shell, pi, None)?;
+            let shell = clean_ring(&polygon.shell, pi, 0)?;
             let mut holes = memory::with_room("polygons", polygon.holes.len())?;
             for (hi, hole) in polygon.holes.iter().enumerate() {
-                holes.push(clean_ring(hole, pi, Some(hi))?);
+                holes.push(clean_ring(hole, pi, hi + 1)?);
             }
             for (ri, ring) in std::iter::once(&shell).chain(holes.iter()).enumerate() {
                 let first = edges.len();

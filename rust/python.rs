@@ -5,7 +5,7 @@
 //! `unwrap`: an `out=` that overlaps an input, or that another thread's call is writing, is
 //! a ValueError, not a panic.
 //!
-//! This file holds what the binding's files share (the exception classes, the conversions
+//! This file holds what the binding's files share (the errors' conversion, the conversions
 //! and checks below) and the `_core` module: its three functions and the registration of
 //! every class. The classes are in its submodules (`models`: the detection and clutter
 //! models and their factors; the rest a file per core module bound).
@@ -18,7 +18,7 @@ use numpy::ndarray::Dimension;
 use numpy::{
     BorrowError, PyArray, PyArray1, PyArrayMethods, PyReadonlyArray, PyReadwriteArray1, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -32,31 +32,44 @@ mod kalman;
 mod models;
 mod particles;
 
-pyo3::create_exception!(
-    ctxmodels._core,
-    NotPositiveDefiniteError,
-    PyValueError,
-    "A covariance the computation needs positive definite is not (a ValueError naming the argument)."
-);
-
-pyo3::create_exception!(
-    ctxmodels._core,
-    InfeasibleAssignmentError,
-    PyValueError,
-    "An assignment problem has no complete assignment of finite cost (a ValueError naming the argument)."
-);
+// The exception classes are Python's (`ctxmodels.errors`, documented there): each kind of
+// core error maps to one, built from the error's fields, so callers read attributes, never
+// message text.
+pyo3::import_exception!(ctxmodels.errors, ArgumentError);
+pyo3::import_exception!(ctxmodels.errors, ShapeError);
+pyo3::import_exception!(ctxmodels.errors, NonFiniteError);
+pyo3::import_exception!(ctxmodels.errors, InvalidLandError);
+pyo3::import_exception!(ctxmodels.errors, NotPositiveDefiniteError);
+pyo3::import_exception!(ctxmodels.errors, InfeasibleAssignmentError);
 
 fn to_py(err: ModelError) -> PyErr {
+    let text = err.to_string();
+    // What follows "argument: " in the message.
+    let detail = text[err.argument().len() + 2..].to_string();
     match err {
-        ModelError::Memory { .. } => PyMemoryError::new_err(err.to_string()),
-        ModelError::NotPositiveDefinite { .. } => NotPositiveDefiniteError::new_err(err.to_string()),
-        ModelError::Infeasible { .. } => InfeasibleAssignmentError::new_err(err.to_string()),
-        _ => PyValueError::new_err(err.to_string()),
+        ModelError::Memory { .. } => PyMemoryError::new_err(text),
+        ModelError::InvalidArgument { argument, .. } => ArgumentError::new_err((argument, detail)),
+        ModelError::Shape { argument, .. } => ShapeError::new_err((argument, detail)),
+        ModelError::NonFinite { argument, row, .. } => NonFiniteError::new_err((argument, detail, row)),
+        ModelError::NotPositiveDefinite { argument, .. } => NotPositiveDefiniteError::new_err((argument, detail)),
+        ModelError::Infeasible { argument, .. } => InfeasibleAssignmentError::new_err((argument, detail)),
+        ModelError::InvalidLand {
+            argument,
+            polygon,
+            ring,
+            message,
+        } => InvalidLandError::new_err((argument, detail, polygon, ring, message)),
     }
 }
 
+/// A [`ShapeError`] about `argument` raised by the binding's own checks of array shapes.
+fn shape_error(argument: &str, message: impl std::fmt::Display) -> PyErr {
+    ShapeError::new_err((argument.to_string(), message.to_string()))
+}
+
+/// An [`ArgumentError`] about `argument` raised by the binding's own checks.
 fn value_error(argument: &str, message: impl std::fmt::Display) -> PyErr {
-    PyValueError::new_err(format!("{argument}: {message}"))
+    ArgumentError::new_err((argument.to_string(), message.to_string()))
 }
 
 /// Runs `f` with the GIL released; a panic becomes a RuntimeError instead of unwinding
@@ -168,7 +181,7 @@ fn output<'py>(
         None => PyArray1::from_vec(py, crate::memory::filled("out", n, 0.0).map_err(to_py)?),
         Some(out) => {
             if out.len() != n {
-                return Err(value_error(
+                return Err(shape_error(
                     "out",
                     format_args!("must have {n} entries, got {}", out.len()),
                 ));
@@ -210,7 +223,7 @@ fn output<'py>(
 /// (M, 2) rows of `points` as a slice.
 fn points_slice<'a>(points: &'a PyReadonlyArray<'_, f64, numpy::Ix2>, argument: &'static str) -> PyResult<&'a [f64]> {
     if points.shape()[1] != 2 {
-        return Err(value_error(
+        return Err(shape_error(
             argument,
             format_args!("must have shape (M, 2), got {:?}", points.shape()),
         ));
@@ -251,9 +264,10 @@ fn rule_of(rule: &str, order: i64) -> PyResult<Rule> {
         "cubature" => Ok(Rule::cubature()),
         "unscented" => Ok(Rule::unscented()),
         "gauss-hermite" => Rule::gauss_hermite(order).map_err(to_py),
-        other => Err(PyValueError::new_err(format!(
-            "rule: must be one of 'mean', 'cubature', 'unscented', 'gauss-hermite', got {other:?}"
-        ))),
+        other => Err(value_error(
+            "rule",
+            format_args!("must be one of 'mean', 'cubature', 'unscented', 'gauss-hermite', got {other:?}"),
+        )),
     }
 }
 
@@ -302,14 +316,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mount, m)?)?;
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;
     m.add_function(wrap_pyfunction!(simd_backend, m)?)?;
-    m.add(
-        "NotPositiveDefiniteError",
-        m.py().get_type::<NotPositiveDefiniteError>(),
-    )?;
-    m.add(
-        "InfeasibleAssignmentError",
-        m.py().get_type::<InfeasibleAssignmentError>(),
-    )?;
     kalman::register(m)?;
     gmphd::register(m)?;
     jpda::register(m)?;

@@ -17,12 +17,14 @@ def names_argument(call, exception, argument):
 
 
 def names(call, exception, argument):
-    """`call()` raises exactly `exception` (not a PanicException, which is a BaseException)
-    and the message starts by naming `argument`."""
+    """`call()` raises `exception` (or one of ctxmodels' subclasses of it, never a
+    PanicException, which is a BaseException) and the message starts by naming `argument`."""
     try:
         call()
     except BaseException as err:  # noqa: B036 — a panic must fail here, not escape
-        assert type(err) is exception, f"{type(err).__name__}: {err}"
+        assert isinstance(err, exception), f"{type(err).__name__}: {err}"
+        assert type(err) is exception or type(err).__module__ == "ctxmodels.errors", \
+            f"{type(err).__name__}: {err}"
         assert str(err).startswith(f"{argument}:"), str(err)
         return str(err)
     raise AssertionError(f"no {exception.__name__} naming {argument}")

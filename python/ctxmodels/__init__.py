@@ -5,13 +5,15 @@ depend on the predicted state, the measurement and the sensor's state at each sc
 range bands, blind sectors, land, line of sight), evaluated over whole arrays in a Rust core
 and handed to Stone Soup trackers as per-scan :class:`DetectorContext` objects.
 """
-from ._core import InfeasibleAssignmentError, NotPositiveDefiniteError, rule_points
+from ._core import rule_points
 from .clutter import ClutterDensityModel, MetadataThreshold
 from .clutter_map import ClutterMap
 from .coast import CoastalClutter
 from .context import DetectionSet, DetectorContext, detection_positions, measured_ranges
 from .detection import DetectionProbabilityModel
 from .detection_estimate import DetectionEstimate
+from .errors import (ArgumentError, ArgumentTypeError, InfeasibleAssignmentError, InvalidLandError,
+                     NonFiniteError, NotPositiveDefiniteError, ShapeError)
 from .land import LandMask, LineOfSight
 from .pose import ConstantPose, Mounting, NavigationTrack, Pose, PoseSource
 from .range_bands import RangeBands
@@ -25,6 +27,8 @@ from . import stonesoup  # noqa: E402, F401
 
 __all__ = [
     "AngularSector",
+    "ArgumentError",
+    "ArgumentTypeError",
     "ClutterDensityModel",
     "ClutterMap",
     "CoastalClutter",
@@ -39,11 +43,14 @@ __all__ = [
     "Mounting",
     "NavigationTrack",
     "InfeasibleAssignmentError",
+    "InvalidLandError",
+    "NonFiniteError",
     "NotPositiveDefiniteError",
     "Pose",
     "PoseSource",
     "RangeBands",
     "SensorModel",
+    "ShapeError",
     "detection_positions",
     "measured_ranges",
     "rule_points",

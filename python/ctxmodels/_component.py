@@ -23,6 +23,7 @@ import numpy as np
 from stonesoup.base import Base, Property
 
 from ._upstream import property_slot
+from .errors import ArgumentError, ArgumentTypeError, ShapeError
 
 _CACHE_PREFIX = "_cached_"
 
@@ -169,34 +170,34 @@ _NOT_NUMBERS = (bool, np.bool_, np.timedelta64, np.datetime64)
 def as_float(value: Any, name: str, *, finite: bool = True) -> float:
     """`value` as a float, with a clear error naming the argument."""
     if isinstance(value, _NOT_NUMBERS) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name}: expected a number, got {type(value).__name__}")
+        raise ArgumentTypeError(name, f"expected a number, got {type(value).__name__}")
     value = float(value)
     if finite and not math.isfinite(value):
-        raise ValueError(f"{name}: must be finite, got {value}")
+        raise ArgumentError(name, f"must be finite, got {value}")
     return value
 
 
 def as_float_tuple(values: Any, name: str) -> tuple[float, ...]:
     if isinstance(values, (str, bytes)) or not isinstance(values, (Sequence, np.ndarray)):
-        raise TypeError(f"{name}: expected a sequence of numbers, got {type(values).__name__}")
+        raise ArgumentTypeError(name, f"expected a sequence of numbers, got {type(values).__name__}")
     return tuple(as_float(v, f"{name}[{i}]") for i, v in enumerate(values))
 
 
 def as_sequence(values: Any, name: str, what: str = "items") -> tuple:
     """`values` (a list, tuple or 1-D array) as a tuple, or a TypeError naming it."""
     if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, (Sequence, np.ndarray)):
-        raise TypeError(f"{name}: expected a sequence of {what}, got {type(values).__name__}")
+        raise ArgumentTypeError(name, f"expected a sequence of {what}, got {type(values).__name__}")
     return tuple(values)
 
 
 def as_int(value: Any, name: str, *, low: int = 0, high: int | None = None) -> int:
     """An integer of any type (Python or NumPy, not bool) in [low, high], naming `name`."""
     if isinstance(value, _NOT_NUMBERS) or not isinstance(value, (numbers.Integral, np.integer)):
-        raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {value!r}")
+        raise ArgumentTypeError(name, f"expected an integer, got {type(value).__name__} {value!r}")
     value = int(value)
     if value < low or (high is not None and value > high):
         bounds = f">= {low}" if high is None else f"in {low}..{high}"
-        raise ValueError(f"{name}: must be an integer {bounds}, got {value}")
+        raise ArgumentError(name, f"must be an integer {bounds}, got {value}")
     return value
 
 
@@ -211,13 +212,13 @@ def as_position_mapping(mapping: Any, name: str = "position_mapping") -> tuple[i
             and 0 <= mapping[1] <= _MAX_INDEX and mapping[0] != mapping[1]:
         return mapping  # already canonical (a SensorModel's own): nothing to convert
     if isinstance(mapping, (str, bytes, Mapping)) or not isinstance(mapping, (Sequence, np.ndarray)):
-        raise TypeError(f"{name}: expected two integer indices, got {mapping!r}")
+        raise ArgumentTypeError(name, f"expected two integer indices, got {mapping!r}")
     indices = tuple(mapping)
     if len(indices) != 2:
-        raise ValueError(f"{name}: must be two indices (x, y), got {len(indices)}: {indices!r}")
+        raise ArgumentError(name, f"must be two indices (x, y), got {len(indices)}: {indices!r}")
     x, y = (as_int(i, name, high=_MAX_INDEX) for i in indices)
     if x == y:
-        raise ValueError(f"{name}: x and y must be different indices, got ({x}, {y})")
+        raise ArgumentError(name, f"x and y must be different indices, got ({x}, {y})")
     return x, y
 
 
@@ -235,11 +236,11 @@ def as_array(array: Any, name: str, ndim: int, shape_text: str | None = None) ->
     try:
         values = np.asarray(array)
     except Exception as err:  # ragged lists and the like
-        raise TypeError(f"{name}: cannot be read as a numeric array ({err})") from None
+        raise ArgumentTypeError(name, f"cannot be read as a numeric array ({err})") from None
     if values.dtype.kind not in _REAL_KINDS:  # (timedelta64 counts as an integer to NumPy)
-        raise TypeError(f"{name}: must be a real numeric array, got dtype {values.dtype}")
+        raise ArgumentTypeError(name, f"must be a real numeric array, got dtype {values.dtype}")
     if values.ndim != ndim:
-        raise ValueError(f"{name}: must be {shape_text or f'a {ndim}-D array'}, got shape {values.shape}")
+        raise ShapeError(name, f"must be {shape_text or f'a {ndim}-D array'}, got shape {values.shape}")
     return np.require(values, dtype=np.float64, requirements=["C", "A"])
 
 
@@ -250,7 +251,7 @@ def as_rows(array: Any, name: str, *, ncols: int | None = None) -> np.ndarray:
         return np.empty((0, ncols))
     rows = as_array(array, name, 2, "a 2-D array of rows")
     if ncols is not None and rows.shape[1] != ncols:
-        raise ValueError(f"{name}: must have {ncols} columns, got shape {rows.shape}")
+        raise ShapeError(name, f"must have {ncols} columns, got shape {rows.shape}")
     return rows
 
 
@@ -278,19 +279,19 @@ def check_out(out: Any, n: int, **inputs: np.ndarray) -> np.ndarray | None:
     if out is None:
         return None
     if not isinstance(out, np.ndarray):
-        raise TypeError(f"out: must be a numpy.ndarray, got {type(out).__name__}")
+        raise ArgumentTypeError("out", f"must be a numpy.ndarray, got {type(out).__name__}")
     if out.dtype != np.float64:
-        raise TypeError(f"out: must have dtype float64, got {out.dtype}")
+        raise ArgumentTypeError("out", f"must have dtype float64, got {out.dtype}")
     if out.shape != (n,):
-        raise ValueError(f"out: must have shape ({n},), got {out.shape}")
+        raise ShapeError("out", f"must have shape ({n},), got {out.shape}")
     if not out.flags.c_contiguous:
-        raise ValueError("out: must be C-contiguous")
+        raise ArgumentError("out", "must be C-contiguous")
     if not out.flags.aligned:
-        raise ValueError("out: must be aligned (allocate it with numpy.empty)")
+        raise ArgumentError("out", "must be aligned (allocate it with numpy.empty)")
     if not out.flags.writeable:
-        raise ValueError("out: must be writeable")
+        raise ArgumentError("out", "must be writeable")
     for name, array in inputs.items():
         # Inputs are contiguous here, so overlapping bounds mean shared memory.
         if np.may_share_memory(out, array):
-            raise ValueError(f"out: overlaps {name}, an input of the same call; pass a separate buffer")
+            raise ArgumentError("out", f"overlaps {name}, an input of the same call; pass a separate buffer")
     return out

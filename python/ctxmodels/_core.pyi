@@ -27,8 +27,6 @@ __all__ = [
     "LandMask",
     "LineOfSight",
     "MetadataThreshold",
-    "InfeasibleAssignmentError",
-    "NotPositiveDefiniteError",
     "RangeBands",
     "jpda_marginals",
     "jpda_predict",
@@ -48,14 +46,6 @@ _Mapping: TypeAlias = tuple[int, int]
 _Floats: TypeAlias = NDArray[np.float64]
 _Bools: TypeAlias = NDArray[np.bool_]
 _Rule: TypeAlias = Literal["mean", "cubature", "unscented", "gauss-hermite"]
-
-class InfeasibleAssignmentError(ValueError):
-    """An assignment problem has no complete assignment of finite cost (a ValueError naming
-    the argument)."""
-
-class NotPositiveDefiniteError(ValueError):
-    """A covariance the computation needs positive definite is not (a ValueError naming the
-    argument)."""
 
 @final
 class RangeBands:
@@ -500,7 +490,6 @@ def initiator_scan(
     force_symmetric: bool = False,
     updates_only: bool = False,
     min_points: int = 2,
-    max_since: int | None = None,
 ) -> dict[str, NDArray[Any]]:
     """One scan of the M-of-N initiator's holding rows: prediction of the last states
     `means` (H, D) / `covars` (H, D, D) (row h with transition `transition_index[h]`),
@@ -508,7 +497,8 @@ def initiator_scan(
     `models[model_index[j]]`), GNN 2-D assignment (missed cost `missed_distance`), Kalman
     update of the assigned rows and the M-of-N counts. Keys pred_means, pred_covars, means,
     covars, assigned (−1: missed), distances, meas_means, meas_covars, cross_covars (per
-    updated row, in row order), points, since, released, expired."""
+    updated row, in row order), points, since, released (whether an unreleased row
+    is deleted is the caller's deleter's verdict)."""
 
 def initiator_births(
     models: Sequence[MeasurementModel],

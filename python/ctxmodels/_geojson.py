@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import json
 import os
-import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+
+from .errors import InvalidLandError
 
 #: Deepest nesting of GeometryCollections (and Features) read: deeper is refused, not a
 #: RecursionError.
@@ -240,15 +241,11 @@ def land_from_document(cls, node, document: Document, origin) :
         polygons.append({"shell": rings[0], "holes": rings[1:]})
     try:
         return cls(polygons=polygons)
-    except ValueError as err:
-        # "polygons: polygon 2 hole 0: ..." -> "source: <where polygon 2 is>[1]: ..."
-        text = str(err)
-        named = re.match(r"polygons: polygon (\d+)(?: (shell|hole (\d+))(?=:))?", text)
-        if named is None or int(named.group(1)) >= len(found):
+    except InvalidLandError as err:
+        # polygon 2's hole 0 -> "source: <where polygon 2 is>[1]: hole 0: ..."
+        if err.polygon >= len(found):
             raise
-        where = found[int(named.group(1))][0]
-        if named.group(2) is None:  # about the whole polygon
-            raise document.error(where, text[len("polygons: "):]) from None
-        ring = 0 if named.group(3) is None else int(named.group(3)) + 1
-        raise document.error(f"{where}[{ring}]",
-                             f"{named.group(2)}{text[named.end():]}") from None
+        where = found[err.polygon][0]
+        if err.ring is None:  # about the whole polygon
+            raise document.error(where, err.detail) from None
+        raise document.error(f"{where}[{err.ring}]", f"{err.ring_name}: {err.problem}") from None

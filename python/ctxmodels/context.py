@@ -16,6 +16,7 @@ from stonesoup.base import Base, Property
 from stonesoup.types.numeric import Probability
 
 from ._upstream import property_slot
+from .errors import ArgumentError, ArgumentTypeError
 from .pose import Pose
 # (the detections' positions and ranges lived here: still importable from here)
 from .positions import detection_positions, measured_ranges, ranges_for_bands  # noqa: F401
@@ -87,11 +88,10 @@ def _particle_weights(weights, n: int) -> np.ndarray:
 
 
 def _renamed(err: Exception, inner: str, outer: str) -> Exception:
-    """``err`` with the argument name ``inner`` that starts its message (the model's) as the
+    """``err`` about the argument ``inner`` (as the model names it) as an error about the
     caller's ``outer``: the error names what the caller passed."""
-    message = str(err)
-    if message.startswith(f"{inner}:"):
-        return type(err)(f"{outer}:{message[len(inner) + 1:]}")
+    if isinstance(err, (ArgumentError, ArgumentTypeError)) and err.argument == inner:
+        return err.renamed(outer)
     return err
 
 

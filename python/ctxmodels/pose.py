@@ -18,6 +18,7 @@ from stonesoup.base import Property
 from . import _core
 from ._upstream import property_slot
 from ._component import ModelComponent, as_float, as_rows, as_sequence, frozen_copy
+from .errors import argument_error
 
 
 class Pose(ModelComponent):
@@ -51,7 +52,7 @@ def as_pose(pose, name: str = "pose") -> Pose:
     try:
         x, y, heading = (as_float(v, axis) for v, axis in zip(values, ("x", "y", "heading")))
     except (TypeError, ValueError) as err:
-        raise type(err)(f"{name}: {err}") from None
+        raise argument_error(name, str(err), err) from None
     return _computed_pose(x, y, heading)
 
 

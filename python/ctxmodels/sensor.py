@@ -7,6 +7,7 @@ from collections.abc import Callable, Sequence
 from stonesoup.base import Property
 
 from ._component import ModelComponent, as_int, as_position_mapping
+from .errors import ArgumentError, ArgumentTypeError
 from .clutter import ClutterDensityModel
 from .detection import MAX_ORDER, PD_RULES, DetectionProbabilityModel
 from .pose import Mounting, Pose, as_pose
@@ -70,8 +71,8 @@ class SensorModel(ModelComponent):
             raise ValueError(f"pd_evaluation: must be one of {PD_RULES}, got {self.pd_evaluation!r}")
         try:
             self._replace("pd_order", as_int(self.pd_order, "pd_order", low=1, high=MAX_ORDER))
-        except TypeError as err:  # a non-integer order has always been a ValueError here
-            raise ValueError(str(err)) from None
+        except ArgumentTypeError as err:  # a non-integer order is a ValueError here
+            raise ArgumentError(err.argument, err.detail) from None
         if self.mounting is not None and not isinstance(self.mounting, Mounting):
             raise TypeError(f"mounting: expected a Mounting, got {type(self.mounting).__name__}")
 

@@ -17,8 +17,8 @@
 //!    wrapped), `P = P̂ − (K S) Kᵀ` (then `(P + Pᵀ)/2` with `force_symmetric`).
 //! 5. **M-of-N counts**: `points` grows by one per update (per state, unless `updates_only`);
 //!    `since` (distinct times since the last detection) becomes 1 on an update and grows by
-//!    one at a new time otherwise; a row is *released* when `points ≥ min_points`, else
-//!    *expired* when `since > max_since` (if given).
+//!    one at a new time otherwise; a row is *released* when `points ≥ min_points` (whether
+//!    an unreleased row is deleted is its deleter's verdict, decided by the caller).
 //!
 //! All loops run in index order on one thread: the same inputs give the same bits.
 
@@ -60,7 +60,6 @@ pub struct InitiatorInput<'a> {
     pub new_time: &'a [bool],
     pub updates_only: bool,
     pub min_points: i64,
-    pub max_since: Option<i64>,
 }
 
 /// One scan's results, row-major; `U` rows were updated (in row order).
@@ -83,7 +82,6 @@ pub struct InitiatorOutput {
     pub points: Vec<i64>,
     pub since: Vec<i64>,
     pub released: Vec<bool>,
-    pub expired: Vec<bool>,
 }
 
 /// A row's measurement prediction under one model.
@@ -212,7 +210,6 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
         points: memory::with_room("points", rows)?,
         since: memory::with_room("since", rows)?,
         released: memory::with_room("points", rows)?,
-        expired: memory::with_room("since", rows)?,
         ..Default::default()
     };
     for row in 0..rows {
@@ -255,8 +252,6 @@ pub fn initiator_scan(models: &[MeasurementModel], input: &InitiatorInput) -> Re
         out.points.push(points);
         out.since.push(since);
         out.released.push(released);
-        out.expired
-            .push(!released && input.max_since.is_some_and(|limit| since > limit));
     }
     out.pred_means = pred_means;
     out.pred_covars = pred_covars;

@@ -4,27 +4,24 @@
 //! another's land.
 
 use super::{contains_exact, orientation, scale_for, scale_ring, segments_meet, signed_area, Edge, Point, Polygon};
-use crate::error::{ModelError, Result};
+use crate::error::{ring_name, ModelError, Result};
 use crate::memory;
 use parry2d_f64::bounding_volume::Aabb;
 use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
 
-fn ring_name(polygon: usize, hole: Option<usize>) -> String {
-    match hole {
-        None => format!("polygon {polygon} shell"),
-        Some(h) => format!("polygon {polygon} hole {h}"),
-    }
+/// "polygon 2 hole 0": where ring `ring` (0 the shell, `k + 1` hole `k`) of `polygon` is.
+fn ring_place(polygon: usize, ring: usize) -> String {
+    format!("polygon {polygon} {}", ring_name(ring))
 }
 
-pub(super) fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) -> Result<Vec<Point>> {
-    let name = ring_name(polygon, hole);
+/// `ring` without repeated vertices (nor the closing repeat), or the fault of ring `index`
+/// (0 the shell, `k + 1` hole `k`) of polygon `polygon`.
+pub(super) fn clean_ring(ring: &[Point], polygon: usize, index: usize) -> Result<Vec<Point>> {
+    let fault = |message: String| ModelError::invalid_land("polygons", polygon, Some(index), message);
     let mut out: Vec<Point> = memory::with_room("polygons", ring.len())?;
     for (k, p) in ring.iter().enumerate() {
         if !p[0].is_finite() || !p[1].is_finite() {
-            return Err(ModelError::invalid(
-                "polygons",
-                format!("{name}: vertex {k} is not finite ({}, {})", p[0], p[1]),
-            ));
+            return Err(fault(format!("vertex {k} is not finite ({}, {})", p[0], p[1])));
         }
         if out.last() != Some(p) {
             out.push(*p);
@@ -35,10 +32,7 @@ pub(super) fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) ->
         out.pop();
     }
     if out.len() < 3 {
-        return Err(ModelError::invalid(
-            "polygons",
-            format!("{name}: needs at least 3 distinct vertices, got {}", out.len()),
-        ));
+        return Err(fault(format!("needs at least 3 distinct vertices, got {}", out.len())));
     }
     let area = signed_area(&out);
     if area == 0.0 {
@@ -46,21 +40,14 @@ pub(super) fn clean_ring(ring: &[Point], polygon: usize, hole: Option<usize>) ->
         // its area underflows: tell which, from the area at the ring's own scale.
         let own = signed_area(&scale_ring(&out, scale_for(ring_size(&out)))?);
         if own == 0.0 {
-            return Err(ModelError::invalid(
-                "polygons",
-                format!("{name}: has zero area (all vertices on a line)"),
-            ));
+            return Err(fault("has zero area (all vertices on a line)".to_string()));
         }
-        return Err(ModelError::invalid(
-            "polygons",
-            format!("{name}: is too small next to the rest of the mask (its area underflows at the mask's scale)"),
+        return Err(fault(
+            "is too small next to the rest of the mask (its area underflows at the mask's scale)".to_string(),
         ));
     }
     if !area.is_finite() {
-        return Err(ModelError::invalid(
-            "polygons",
-            format!("{name}: its area overflows (coordinates too large)"),
-        ));
+        return Err(fault("its area overflows (coordinates too large)".to_string()));
     }
     Ok(out)
 }
@@ -106,12 +93,16 @@ pub(super) fn check_no_crossings(edges: &[Edge], rings: &[(usize, usize, usize, 
             if meets {
                 let (pi, ringi, _, _) = rings[ri];
                 let (pj, ringj, _, _) = rings[rj];
-                let name = |p: usize, r: usize| ring_name(p, r.checked_sub(1));
-                return Err(ModelError::invalid(
+                return Err(ModelError::invalid_land(
                     "polygons",
+                    pi,
+                    None,
                     format!(
                         "{} edge {} and {} edge {} cross or touch (self-intersecting or touching rings are not valid land)",
-                        name(pi, ringi), ki, name(pj, ringj), kj
+                        ring_place(pi, ringi),
+                        ki,
+                        ring_place(pj, ringj),
+                        kj
                     ),
                 ));
             }
@@ -148,15 +139,19 @@ pub(super) fn check_nesting(polygons: &[Polygon]) -> Result<()> {
         let shell_edges = ring_edges(&polygon.shell)?;
         for (hi, hole) in polygon.holes.iter().enumerate() {
             if !contains_exact(&shell_edges, hole[0]) {
-                return Err(ModelError::invalid(
+                return Err(ModelError::invalid_land(
                     "polygons",
+                    pi,
+                    None,
                     format!("polygon {pi} hole {hi} lies outside its shell"),
                 ));
             }
             for (hj, other) in polygon.holes.iter().enumerate() {
                 if hj != hi && contains_exact(&ring_edges(other)?, hole[0]) {
-                    return Err(ModelError::invalid(
+                    return Err(ModelError::invalid_land(
                         "polygons",
+                        pi,
+                        None,
                         format!("polygon {pi} hole {hi} lies inside hole {hj}"),
                     ));
                 }
@@ -166,8 +161,10 @@ pub(super) fn check_nesting(polygons: &[Polygon]) -> Result<()> {
         for (pj, b) in bounds.iter().enumerate() {
             let in_box = v[0] >= b[0] && v[0] <= b[2] && v[1] >= b[1] && v[1] <= b[3];
             if pj != pi && in_box && contains_exact(&land_edges[pj], v) {
-                return Err(ModelError::invalid(
+                return Err(ModelError::invalid_land(
                     "polygons",
+                    pi,
+                    None,
                     format!("polygon {pi} lies on the land of polygon {pj} (overlapping polygons: merge them)"),
                 ));
             }

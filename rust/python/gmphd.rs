@@ -3,7 +3,7 @@
 
 use super::at_pose::{PyDetectionAtPose, DETACH_ROWS};
 use super::kalman::PyMeasurementModel;
-use super::{borrow, detached, guarded, slice, value_error};
+use super::{borrow, detached, guarded, shape_error, slice, value_error};
 use crate::gmphd::{Mixture, ReduceParams, UpdateParams};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -13,8 +13,8 @@ use pyo3::types::PyTuple;
 #[pyclass(name = "GaussianMixtureArrays", module = "ctxmodels._core")]
 pub struct PyGaussianMixtureArrays(Mixture);
 
-fn shape_error(argument: &str, expected: String, got: &[usize]) -> PyErr {
-    value_error(argument, format_args!("must have shape {expected}, got {got:?}"))
+fn wrong_shape(argument: &str, expected: String, got: &[usize]) -> PyErr {
+    shape_error(argument, format_args!("must have shape {expected}, got {got:?}"))
 }
 
 #[pymethods]
@@ -58,10 +58,10 @@ impl PyGaussianMixtureArrays {
     ) -> PyResult<()> {
         let (n, d) = (weights.len(), self.0.ndim);
         if means.shape() != [n, d] {
-            return Err(shape_error("means", format!("({n}, {d})"), means.shape()));
+            return Err(wrong_shape("means", format!("({n}, {d})"), means.shape()));
         }
         if covars.shape() != [n, d, d] {
-            return Err(shape_error("covars", format!("({n}, {d}, {d})"), covars.shape()));
+            return Err(wrong_shape("covars", format!("({n}, {d}, {d})"), covars.shape()));
         }
         let (m, c, w) = (
             borrow(&means, "means")?,
@@ -95,10 +95,10 @@ impl PyGaussianMixtureArrays {
     ) -> PyResult<()> {
         let d = self.0.ndim;
         if means.shape()[1] != d {
-            return Err(shape_error("means", format!("(N, {d})"), means.shape()));
+            return Err(wrong_shape("means", format!("(N, {d})"), means.shape()));
         }
         if covar.shape() != [d, d] {
-            return Err(shape_error("covar", format!("({d}, {d})"), covar.shape()));
+            return Err(wrong_shape("covar", format!("({d}, {d})"), covar.shape()));
         }
         let (m, c) = (borrow(&means, "means")?, borrow(&covar, "covar")?);
         let circle = circle.map(|(p, c, r)| ([p.0, p.1], [c.0, c.1], r));
@@ -125,7 +125,7 @@ impl PyGaussianMixtureArrays {
         let d = self.0.ndim;
         let g = from_times.len();
         if transitions.shape() != [g, d, d] || noises.shape() != [g, d, d] {
-            return Err(shape_error(
+            return Err(wrong_shape(
                 "transitions",
                 format!("({g}, {d}, {d}) for both transitions and noises"),
                 transitions.shape(),
@@ -160,7 +160,7 @@ impl PyGaussianMixtureArrays {
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let m = model.0.ndim_meas();
         if detections.shape()[1] != m && detections.len() > 0 {
-            return Err(shape_error("detections", format!("(M, {m})"), detections.shape()));
+            return Err(wrong_shape("detections", format!("(M, {m})"), detections.shape()));
         }
         let (z, pd, lam) = (
             borrow(&detections, "detections")?,

@@ -5,7 +5,7 @@
 
 use super::jpda::{array2, array3, check_covars};
 use super::kalman::PyMeasurementModel;
-use super::{borrow, detached, slice, value_error};
+use super::{borrow, detached, shape_error, slice, value_error};
 use crate::jpda::{self, InitiatorInput};
 use numpy::{Element, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -17,7 +17,7 @@ fn entries<'a, T: Element>(array: &'a PyReadonlyArray1<'_, T>, argument: &str, l
         .as_slice()
         .map_err(|_| value_error(argument, "must be C-contiguous"))?;
     if values.len() != len {
-        return Err(value_error(
+        return Err(shape_error(
             argument,
             format_args!("must have {len} entries, got {}", values.len()),
         ));
@@ -42,7 +42,7 @@ fn indices(values: &[i64], argument: &str) -> PyResult<Vec<usize>> {
 /// `detections` (M, m), each measured by `models[model_index[j]]`, the counts `points`,
 /// `since` and `new_time` per row. A dict of arrays.
 #[pyfunction]
-#[pyo3(signature = (models, means, covars, transition_index, transition_matrices, transition_covars, detections, model_index, missed_distance, points, since, new_time, *, squared = false, include_all = false, force_symmetric = false, updates_only = false, min_points = 2, max_since = None))]
+#[pyo3(signature = (models, means, covars, transition_index, transition_matrices, transition_covars, detections, model_index, missed_distance, points, since, new_time, *, squared = false, include_all = false, force_symmetric = false, updates_only = false, min_points = 2))]
 #[allow(clippy::too_many_arguments)]
 fn initiator_scan<'py>(
     py: Python<'py>,
@@ -63,7 +63,6 @@ fn initiator_scan<'py>(
     force_symmetric: bool,
     updates_only: bool,
     min_points: i64,
-    max_since: Option<i64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (rows, dim) = check_covars(&means, &covars)?;
     for (name, array) in [
@@ -72,14 +71,14 @@ fn initiator_scan<'py>(
     ] {
         let shape = array.shape();
         if shape[1] != dim || shape[2] != dim {
-            return Err(value_error(
+            return Err(shape_error(
                 name,
                 format_args!("must have shape (K, {dim}, {dim}), got {shape:?}"),
             ));
         }
     }
     if transition_matrices.shape() != transition_covars.shape() {
-        return Err(value_error(
+        return Err(shape_error(
             "transition_covars",
             "must have the shape of transition_matrices",
         ));
@@ -89,7 +88,7 @@ fn initiator_scan<'py>(
         .first()
         .map_or(detections.shape()[1], |model| model.0.ndim_meas());
     if detections.shape()[1] != meas_dim && dets > 0 {
-        return Err(value_error(
+        return Err(shape_error(
             "detections",
             format_args!(
                 "must have {meas_dim} columns (the models' measurement size), got {}",
@@ -129,7 +128,6 @@ fn initiator_scan<'py>(
         new_time,
         updates_only,
         min_points,
-        max_since,
     };
     let out = detached(py, || jpda::initiator_scan(&core, &input))?;
     let updated = out.distances.len();
@@ -147,7 +145,6 @@ fn initiator_scan<'py>(
     result.set_item("points", PyArray1::from_vec(py, out.points))?;
     result.set_item("since", PyArray1::from_vec(py, out.since))?;
     result.set_item("released", PyArray1::from_vec(py, out.released))?;
-    result.set_item("expired", PyArray1::from_vec(py, out.expired))?;
     Ok(result)
 }
 
@@ -171,7 +168,7 @@ fn initiator_births<'py>(
     let model_index = indices(entries(&model_index, "model_index", dets)?, "model_index")?;
     let dim = prior_mean.len();
     if prior_covar.shape() != [dim, dim] {
-        return Err(value_error(
+        return Err(shape_error(
             "prior_covar",
             format_args!("must have shape ({dim}, {dim}), got {:?}", prior_covar.shape()),
         ));

@@ -5,7 +5,7 @@
 
 use super::at_pose::PyDetectionAtPose;
 use super::kalman::PyMeasurementModel;
-use super::{borrow, detached, slice, to_py, value_error};
+use super::{borrow, detached, shape_error, slice, to_py, value_error};
 use crate::jpda::{self, ScanInput};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -37,7 +37,7 @@ pub(super) fn check_covars(
     let (n, dim) = (means.shape()[0], means.shape()[1]);
     let shape = covars.shape();
     if shape != [n, dim, dim] {
-        return Err(value_error(
+        return Err(shape_error(
             "covars",
             format_args!("must have shape ({n}, {dim}, {dim}) to match means, got {shape:?}"),
         ));
@@ -55,7 +55,7 @@ fn transitions<'a>(
     noises: &'a PyReadonlyArray3<'_, f64>,
 ) -> PyResult<(Vec<usize>, &'a [f64], &'a [f64])> {
     if transition_index.len() != n {
-        return Err(value_error(
+        return Err(shape_error(
             "transition_index",
             format_args!("must have {n} entries (one per track), got {}", transition_index.len()),
         ));
@@ -63,7 +63,7 @@ fn transitions<'a>(
     for (name, array) in [("transition_matrices", matrices), ("transition_covars", noises)] {
         let shape = array.shape();
         if shape[1] != dim || shape[2] != dim {
-            return Err(value_error(
+            return Err(shape_error(
                 name,
                 format_args!("must have shape (K, {dim}, {dim}), got {shape:?}"),
             ));
@@ -140,7 +140,7 @@ fn jpda_scan<'py>(
     let meas_dim = model.0.ndim_meas();
     let (n_dets, det_cols) = (detections.shape()[0], detections.shape()[1]);
     if det_cols != meas_dim && n_dets > 0 {
-        return Err(value_error(
+        return Err(shape_error(
             "detections",
             format_args!("must have {meas_dim} columns (the model's measurement size), got {det_cols}"),
         ));
@@ -159,7 +159,7 @@ fn jpda_scan<'py>(
                 )
             })?;
             if array.len() != n {
-                return Err(value_error(
+                return Err(shape_error(
                     "prob_detect",
                     format_args!("must have {n} entries (one per track), got {}", array.len()),
                 ));
@@ -168,7 +168,7 @@ fn jpda_scan<'py>(
         }
     };
     if clutter_density.len() != n_dets {
-        return Err(value_error(
+        return Err(shape_error(
             "clutter_density",
             format_args!(
                 "must have {n_dets} entries (one per detection), got {}",
@@ -273,7 +273,7 @@ fn jpda_marginals<'py>(
     }
     let k = columns - 1;
     if gated.shape() != [t, k] {
-        return Err(value_error(
+        return Err(shape_error(
             "gated",
             format_args!("must have shape ({t}, {k}) to match weights, got {:?}", gated.shape()),
         ));

@@ -3,7 +3,7 @@
 //! Arguments are converted as in the parent module (C-contiguous float64, errors naming the
 //! argument).
 
-use super::{borrow, slice, to_py, value_error};
+use super::{borrow, shape_error, slice, to_py, value_error};
 use crate::kalman::{Jacobian, MeasurementModel};
 use numpy::{PyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -33,7 +33,7 @@ impl PyMeasurementModel {
         let (h, rows, cols) = matrix_of(&matrix, "matrix")?;
         let (r, r_rows, r_cols) = matrix_of(&noise_covar, "noise_covar")?;
         if (r_rows, r_cols) != (rows, rows) {
-            return Err(value_error(
+            return Err(shape_error(
                 "noise_covar",
                 format_args!("must have shape ({rows}, {rows}) to match matrix, got ({r_rows}, {r_cols})"),
             ));
@@ -74,14 +74,14 @@ impl PyMeasurementModel {
         };
         let (rotation, r_rows, r_cols) = matrix_of(&rotation_matrix, "rotation_matrix")?;
         if (r_rows, r_cols) != (3, 3) {
-            return Err(value_error(
+            return Err(shape_error(
                 "rotation_matrix",
                 format_args!("must have shape (3, 3), got ({r_rows}, {r_cols})"),
             ));
         }
         let (noise, n_rows, n_cols) = matrix_of(&noise_covar, "noise_covar")?;
         if (n_rows, n_cols) != (2, 2) {
-            return Err(value_error(
+            return Err(shape_error(
                 "noise_covar",
                 format_args!("must have shape (2, 2), got ({n_rows}, {n_cols})"),
             ));
@@ -110,7 +110,7 @@ fn with_inverse(
     };
     let (values, rows, cols) = matrix_of(&inverse, argument)?;
     if (rows, cols) != shape {
-        return Err(value_error(
+        return Err(shape_error(
             argument,
             format_args!("must have shape {shape:?}, got ({rows}, {cols})"),
         ));

@@ -6,7 +6,7 @@
 
 use super::{
     borrow, clutter_map, detached, detection_estimate, finite_points, guarded, mapping_of, output, particles,
-    points_slice, pose_of, rule_of, slice, to_py, value_error,
+    points_slice, pose_of, rule_of, shape_error, slice, to_py, value_error,
 };
 use crate::clutter::{ClutterFactor, ClutterModel, MetadataThreshold};
 use crate::coast::CoastalBand;
@@ -67,7 +67,7 @@ fn ring_of(ring: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 2]>> {
         .cast::<PyArray2<f64>>()
         .map_err(|_| PyTypeError::new_err("polygons: every ring must be a (K, 2) float64 array"))?;
     if array.shape()[1] != 2 {
-        return Err(value_error(
+        return Err(shape_error(
             "polygons",
             format_args!("every ring must have shape (K, 2), got {:?}", array.shape()),
         ));
@@ -253,7 +253,7 @@ impl PyDetectionModel {
         let (n, ncols) = (means.shape()[0], means.shape()[1]);
         let cshape = covars.shape();
         if cshape[0] != n || cshape[1] != ncols || cshape[2] != ncols {
-            return Err(value_error(
+            return Err(shape_error(
                 "covars",
                 format_args!("must have shape ({n}, {ncols}, {ncols}) to match means, got {cshape:?}"),
             ));

@@ -14,9 +14,10 @@ from ctxmodels import _core
 
 def test_it_is_a_value_error_of_the_package():
     assert issubclass(ctxmodels.NotPositiveDefiniteError, ValueError)
-    assert ctxmodels.NotPositiveDefiniteError is _core.NotPositiveDefiniteError
-    error = pickle.loads(pickle.dumps(ctxmodels.NotPositiveDefiniteError("covars: track 0")))
+    assert ctxmodels.NotPositiveDefiniteError is ctxmodels.errors.NotPositiveDefiniteError
+    error = pickle.loads(pickle.dumps(ctxmodels.NotPositiveDefiniteError("covars", "track 0")))
     assert type(error) is ctxmodels.NotPositiveDefiniteError and str(error) == "covars: track 0"
+    assert (error.argument, error.detail) == ("covars", "track 0")
 
 
 def _linear(noise):

@@ -23,6 +23,7 @@ from stonesoup.reader import Reader
 
 from ..clutter import MetadataThreshold
 from ..context import DetectionSet
+from ..errors import argument_error
 from ..pose import PoseSource, time_kind
 from ..sensor import SensorModel
 
@@ -179,8 +180,8 @@ class ContextFeeder(DetectionFeeder):
             except (TypeError, ValueError) as err:
                 # e.g. naive scan times against an aware navigation log, or a scan after the
                 # log ends: name the scan and the sensor
-                raise type(err)(f"pose_source: no pose for the scan at {time}{label}: "
-                                f"{err}") from err
+                raise argument_error("pose_source", f"no pose for the scan at {time}{label}: {err}",
+                                     err) from err
             context = self.sensor_model.context(pose, time)
             yield time, DetectionSet(detections, context)
 

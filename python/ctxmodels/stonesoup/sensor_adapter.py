@@ -53,6 +53,7 @@ from stonesoup.types.array import StateVector
 
 from .._component import as_float
 from ..clutter import ClutterDensityModel
+from ..errors import argument_error
 from ..context import DetectionSet
 from ..detection import DetectionProbabilityModel
 from ..pose import Pose, PoseSource
@@ -226,7 +227,7 @@ class PlatformContextFeeder(DetectionFeeder):
             try:
                 sensor_kind(sensor)
             except (TypeError, ValueError) as err:
-                raise type(err)(f"reader: {where}: {err}") from None
+                raise argument_error("reader", f"{where}: {err}", err) from None
         for i, (where, sensor, model) in enumerate(zip(self._places(), sensors, models)):
             try:
                 _check_mapping(sensor, model, f"sensor_models: item {i}")

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from .._component import as_float, as_position_mapping
+from ..errors import ArgumentError, ArgumentTypeError
 from ..range_bands import RangeBands
 from ..sector import AngularSector
 
@@ -62,9 +63,9 @@ def coverage_factors(sensor) -> tuple[list, tuple[int, int]]:
             factors.append(AngularSector.field_of_view(0.0, fov))
     try:
         mapping = as_position_mapping(tuple(sensor.position_mapping)[:2], "sensor")
-    except (TypeError, ValueError) as err:
-        raise type(err)(f"sensor: position_mapping {sensor.position_mapping!r} is not two "
-                        f"state indices of x and y ({str(err)[len('sensor: '):]})") from None
+    except (ArgumentError, ArgumentTypeError) as err:
+        raise type(err)("sensor", f"position_mapping {sensor.position_mapping!r} is not two "
+                                  f"state indices of x and y ({err.detail})") from None
     return factors, mapping
 
 

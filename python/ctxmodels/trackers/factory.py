@@ -15,6 +15,7 @@ from stonesoup.updater.kalman import ExtendedKalmanUpdater
 
 from .. import SensorModel
 from ..pose import NavigationTrack, PoseSource
+from ..errors import argument_error
 from ..stonesoup.gmphd.region import PoseCentredRegion
 from .components import gmphd_tracker, jpda_tracker, motion_model
 from .models import (sees_land, sensor_reach, with_coast, with_learned_clutter,
@@ -232,8 +233,8 @@ def _check_stream(sensor: str, stream, model: SensorModel | None, pose_source) -
             try:
                 track.pose_at(time)  # (a lookup: the log is in memory)
             except (TypeError, ValueError) as err:
-                raise type(err)(f"pose_source: no pose for the scan at {time}{label}: "
-                                f"{err}") from None
+                raise argument_error("pose_source", f"no pose for the scan at {time}{label}: {err}",
+                                     err) from None
 
 
 def _given_radius(value) -> float:

@@ -37,7 +37,6 @@ fn input<'a>(
         new_time,
         updates_only: false,
         min_points: 3,
-        max_since: Some(2),
     }
 }
 
@@ -59,25 +58,20 @@ fn the_nearer_row_takes_a_contested_detection_and_is_updated() {
     assert_eq!(out.points, vec![2, 3]);
     assert_eq!(out.since, vec![2, 1]);
     assert_eq!(out.released, vec![false, true]);
-    assert_eq!(out.expired, vec![false, false]);
 }
 
 #[test]
-fn counts_follow_updates_only_and_the_step_limit() {
+fn counts_follow_updates_only_and_new_times() {
     let means = [0.0; 4];
     let mut probe = input(&means, &IDENTITY4, &[], &[0], &[], &[2], &[true]);
     let out = initiator_scan(&[linear()], &probe).unwrap();
-    assert_eq!((out.points[0], out.since[0], out.expired[0]), (3, 3, false)); // released first
-    assert!(out.released[0]);
+    assert_eq!((out.points[0], out.since[0], out.released[0]), (3, 3, true));
     probe.updates_only = true;
     let out = initiator_scan(&[linear()], &probe).unwrap();
-    assert_eq!(
-        (out.points[0], out.since[0], out.released[0], out.expired[0]),
-        (2, 3, false, true)
-    );
+    assert_eq!((out.points[0], out.since[0], out.released[0]), (2, 3, false));
     probe.new_time = &[false]; // the same time again: no new step
     let out = initiator_scan(&[linear()], &probe).unwrap();
-    assert_eq!((out.since[0], out.expired[0]), (2, false));
+    assert_eq!(out.since[0], 2);
 }
 
 #[test]

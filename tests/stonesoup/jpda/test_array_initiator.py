@@ -188,15 +188,16 @@ def test_core_scan_assigns_updates_and_counts():
     args = _scan_args(rows=2, dets=2)
     args["means"][1, [0, 2]] = 10.0
     args["detections"][:] = [[10.5, 10.0], [50.0, 50.0]]
-    out = _core.initiator_scan(**args, min_points=2, max_since=1)
+    out = _core.initiator_scan(**args, min_points=2)
     assert out["assigned"].tolist() == [-1, 0]
     # S = H P Hᵀ + R = 2 I: d = √(0.5² / 2); K = ½ on the measured rows
     assert out["distances"].tolist() == [np.sqrt(0.125)]
     assert out["means"][1].tolist() == [10.25, 0.0, 10.0, 0.0]
     assert out["points"].tolist() == [2, 2] and out["since"].tolist() == [2, 1]
-    assert out["released"].tolist() == [True, True] and not out["expired"].any()
-    out = _core.initiator_scan(**args, updates_only=True, min_points=3, max_since=1)
-    assert out["points"].tolist() == [1, 2] and out["expired"].tolist() == [True, False]
+    assert out["released"].tolist() == [True, True]
+    out = _core.initiator_scan(**args, updates_only=True, min_points=2)
+    assert out["points"].tolist() == [1, 2] and out["released"].tolist() == [False, True]
+    assert "expired" not in out  # deletion is the deleter's verdict, not the core's
 
 
 def test_core_scan_errors_name_the_argument():
@@ -234,12 +235,13 @@ def test_infeasible_assignment_is_its_own_error_and_the_initiator_raises_the_sto
 
     import ctxmodels
     assert issubclass(ctxmodels.InfeasibleAssignmentError, ValueError)
-    assert ctxmodels.InfeasibleAssignmentError is _core.InfeasibleAssignmentError
-    error = pickle.loads(pickle.dumps(ctxmodels.InfeasibleAssignmentError("cost: row 1")))
+    assert ctxmodels.InfeasibleAssignmentError is ctxmodels.errors.InfeasibleAssignmentError
+    error = pickle.loads(pickle.dumps(ctxmodels.InfeasibleAssignmentError("cost", "row 1")))
     assert type(error) is ctxmodels.InfeasibleAssignmentError and str(error) == "cost: row 1"
+    assert (error.argument, error.detail) == ("cost", "row 1")
     args = {**_scan_args(rows=2, dets=1), "missed_distance": float("inf")}
     with pytest.raises(ctxmodels.InfeasibleAssignmentError, match="^missed_distance: .*not feasible"):
-        _core.initiator_scan(**args, min_points=2, max_since=1)
+        _core.initiator_scan(**args, min_points=2)
     from ctxmodels.stonesoup.jpda import _initiator_scan
     raised, core_scan = [], _core.initiator_scan
 

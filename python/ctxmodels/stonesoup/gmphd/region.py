@@ -15,6 +15,7 @@ import numpy as np
 from stonesoup.base import Base, Property
 
 from ..._upstream import property_slot
+from ...errors import argument_error
 from ...pose import PoseSource
 
 _CENTRE, _RADIUS = property_slot("centre"), property_slot("radius")
@@ -67,8 +68,8 @@ class PoseCentredRegion(Base):
         try:
             pose = self.pose_source.pose_at(timestamp)
         except (TypeError, ValueError) as err:  # e.g. a navigation log that ends too early
-            raise type(err)(f"pose_source: no platform pose for the scan at {timestamp} "
-                            f"(the surveillance region's centre): {err}") from err
+            raise argument_error("pose_source", f"no platform pose for the scan at {timestamp} "
+                                 f"(the surveillance region's centre): {err}", err) from err
         x, y, radius = pose.x, pose.y, self.radius
         if type(x) is float and type(y) is float and type(radius) is float \
                 and math.isfinite(x + y + radius) and radius > 0:

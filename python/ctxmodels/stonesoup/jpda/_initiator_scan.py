@@ -15,6 +15,7 @@ from stonesoup.measures import SquaredMahalanobis
 from stonesoup.types.angle import Bearing
 
 from ... import _core
+from ...errors import InfeasibleAssignmentError
 from ..._upstream import check_measurement_model
 from ...model_key import measurement_model_key, scan_model_groups
 from ..models import ControlTerms, core_measurement_model
@@ -85,7 +86,7 @@ class ScanCore:
                 include_all=bool(hypothesiser.include_all),
                 force_symmetric=bool(initiator.updater.force_symmetric_covariance),
                 updates_only=bool(initiator.updates_only), min_points=int(initiator.min_points))
-        except _core.InfeasibleAssignmentError:
+        except InfeasibleAssignmentError:
             raise RuntimeError("Assignment was not feasible") from None  # (the stock error)
         except ValueError:
             return None  # (a singular innovation covariance: the component path decides)

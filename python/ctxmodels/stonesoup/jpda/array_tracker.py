@@ -102,6 +102,7 @@ from stonesoup.types.state import GaussianState
 from stonesoup.types.update import GaussianStateUpdate
 
 from ... import _core
+from ...errors import NotPositiveDefiniteError
 from ..._upstream import live_tracks, plain_property, property_slot
 from ...context import DetectorContext
 from ...model_key import measurement_model_key, scan_model_groups
@@ -518,7 +519,7 @@ class ArrayJPDATracker(PathCounts, ArrayDeletion, MultiTargetMixtureTracker):
                                   float(hypothesiser.prob_gate), threshold,
                                   bool(hypothesiser.include_all), **predict,
                                   force_symmetric=bool(self.updater.force_symmetric_covariance))
-        except _core.NotPositiveDefiniteError:
+        except NotPositiveDefiniteError:
             # the stock code takes the nearest positive-definite matrix: the component path
             return ("an innovation covariance that is not positive definite (the stock "
                     "code takes the nearest positive-definite matrix)")
