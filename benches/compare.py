@@ -24,6 +24,11 @@ inputs:
   prepared land polygon (a segment touching land, or ending on it, is blocked in both).
 * **P_D with land and line of sight**: the radar with a ``LandMask`` and a ``LineOfSight``
   factor (10⁴-vertex coastline) against NumPy radar × Shapely land × Shapely sight.
+* **The radar equation** (``RadarEquation``): Swerling 1, one pulse, against NumPy's closed
+  form ``exp(ln P_FA / (1 + S(r)))`` on preallocated buffers; Swerling 0, ten pulses,
+  against SciPy's non-central χ² survival function (``scipy.stats.ncx2.sf``). **The radar
+  horizon** (``RadarHorizon``) against NumPy's ``r² ≤ d²``. States spread to 3× the
+  reference range, so that P_D takes every value from 1 to P_FA.
 
 Agreement is checked on every run: answers must be identical except for points within 1e-6 m
 of a decision boundary (a range edge, the sector's cone, a coastline; for sight, segments
@@ -54,6 +59,8 @@ import shapely
 import ctxmodels
 from ctxmodels import (
     AngularSector,
+    RadarEquation,
+    RadarHorizon,
     ClutterDensityModel,
     DetectionProbabilityModel,
     LandMask,
@@ -483,6 +490,62 @@ def bench_pd_land_sight(n_states, n_vertices, repeats, min_sample):
     return [r]
 
 
+def bench_radar(sizes, repeats, min_sample):
+    from scipy import stats
+    rows = []
+    pose = (0.0, 0.0, 0.0)
+    sw1 = RadarEquation(reference_snr=13.0, reference_range=1500.0, false_alarm_probability=1e-6,
+                        swerling=1)
+    sw0 = RadarEquation(reference_snr=5.0, reference_range=1500.0, false_alarm_probability=1e-6,
+                        swerling=0, pulses=10)
+    horizon = RadarHorizon(antenna_height=20.0, target_height=2.0)
+    for n in sizes:
+        states = cv_states(n, seed=n + 1, half_width=4500.0)
+        x, y = np.ascontiguousarray(states[:, 0]), np.ascontiguousarray(states[:, 2])
+        out, r2, tmp = np.empty(n), np.empty(n), np.empty(n)
+
+        def squared_range():
+            np.multiply(x, x, out=r2)
+            np.multiply(y, y, out=tmp)
+            np.add(r2, tmp, out=r2)
+            return r2
+
+        def numpy_sw1(ln_pfa=math.log(1e-6), s0=10 ** 1.3, r0_2=1500.0 ** 2):
+            np.divide(r0_2, squared_range(), out=tmp)
+            np.multiply(tmp, tmp, out=tmp)
+            np.multiply(tmp, s0, out=tmp)
+            np.add(tmp, 1.0, out=tmp)
+            np.divide(ln_pfa, tmp, out=tmp)
+            return np.exp(tmp, out=out)
+
+        threshold = sw0.threshold
+
+        def scipy_sw0():
+            snr = 10 ** 0.5 * (1500.0 ** 2 / squared_range()) ** 2
+            return stats.ncx2.sf(2 * threshold, 20, 20 * snr)
+
+        d2 = horizon.range ** 2
+
+        def numpy_horizon():
+            return np.less_equal(squared_range(), d2).astype(np.float64)
+
+        for name, factor, reference, label, atol in [
+                ("pd_radar_equation_swerling1", sw1, numpy_sw1, "numpy", 1e-13),
+                ("pd_radar_equation_swerling0_10", sw0, scipy_sw0, "scipy", 1e-9),
+                ("pd_radar_horizon", horizon, numpy_horizon, "numpy", 0.0)]:
+            context = SensorModel(detection=DetectionProbabilityModel(factors=[factor]),
+                                  clutter=ClutterDensityModel(factors=[1e-4]),
+                                  position_mapping=(0, 2)).context(pose)
+            ours = context.prob_detection_array(states, out=out).copy()
+            ref = np.array(reference(), copy=True)
+            near = np.abs(np.sqrt(squared_range()) - horizon.range) < TOL if atol == 0 else np.zeros(n, bool)
+            check = agreement(ours, ref, near, atol=atol)
+            t_ctx = median_time(lambda: context.prob_detection_array(states, out=out), repeats, min_sample)
+            t_ref = median_time(reference, repeats, min_sample)
+            rows.append(row(name, n, n, {"ctxmodels": t_ctx, label: t_ref}, check))
+    return rows
+
+
 def row(name, size, per, times, check):
     """`per`: how many states / points / targets one call handles (1 if already per item)."""
     ns = {k: v / per * 1e9 for k, v in times.items()}
@@ -522,6 +585,7 @@ def main(argv=None) -> int:
     quick = args.quick
     repeats = args.repeats or (3 if quick else 7)
     min_sample = 0.002 if quick else 0.02
+    radar_sizes = (10_000,) if quick else (10_000, 1_000_000)
     if quick:
         pd_sizes, vertex_counts = (1000, 10_000), (100, 1000)
         n_points, n_targets, shapely_budget = 10_000, 5_000, 5e6
@@ -549,6 +613,7 @@ def main(argv=None) -> int:
     out += bench_land(vertex_counts, n_points, repeats, min_sample)
     out += bench_sight(vertex_counts, n_targets, shapely_budget, repeats, min_sample)
     out += bench_pd_land_sight(*combo, repeats, min_sample)
+    out += bench_radar(radar_sizes, repeats, min_sample)
     print_table(results)
     bad = [r["benchmark"] for r in out if r["agreement"]["differ_far_from_boundary"]]
     results["agree"] = not bad

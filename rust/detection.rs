@@ -2,7 +2,8 @@
 //! over whole arrays of states.
 //!
 //! P_D(x; S) = Π_f f(x; S), each factor in [0, 1]: constants, range bands, body-frame
-//! angular sectors, a land mask (0 on land) and line of sight (0 when shadowed by land).
+//! angular sectors, the radar equation (P_D from the SNR at range), a land mask (0 on land)
+//! and line of sight (0 when shadowed by land).
 //! The expected P_D of a Gaussian position, E[P_D(p)] with p ~ N(m, P), is evaluated with a
 //! [`Rule`](crate::cubature::Rule).
 
@@ -14,6 +15,7 @@ use crate::detection_estimate::{read_estimate, SharedEstimate};
 use crate::error::{check_probability, ModelError, Result};
 use crate::land::LandMask;
 use crate::pose::{Pose, SensorFrame};
+use crate::radar::RadarEquation;
 use crate::range_bands::{RangeBands, SquaredBands};
 use crate::sector::{AngularSector, FramedSector};
 use crate::sight::LineOfSight;
@@ -27,6 +29,8 @@ pub enum DetectionFactor {
     Constant(f64),
     Range(RangeBands),
     Sector(AngularSector),
+    /// P_D of a Swerling target from the SNR at its range.
+    Radar(RadarEquation),
     /// Land (boundary included) gets `on_land`, water 1.
     Land(Arc<LandMask>),
     /// A target shadowed from the sensor by land gets 0.
@@ -51,7 +55,10 @@ impl DetectionModel {
                     sector = s.values();
                     &sector
                 }
-                DetectionFactor::Land(_) | DetectionFactor::Sight(_) | DetectionFactor::Estimate(_) => &[], // (probabilities by construction)
+                DetectionFactor::Radar(_)
+                | DetectionFactor::Land(_)
+                | DetectionFactor::Sight(_)
+                | DetectionFactor::Estimate(_) => &[], // (probabilities by construction)
             };
             for &v in values {
                 check_probability("factors", v).map_err(|_| {
@@ -92,6 +99,7 @@ impl DetectionModel {
                     })
                 }
                 DetectionFactor::Sector(s) => steps.push(Step::Sector(s.in_frame(&frame))),
+                DetectionFactor::Radar(radar) => steps.push(Step::Radar(radar.clone())),
                 DetectionFactor::Land(land) => indexed.push(Indexed::Land(Arc::clone(land))),
                 DetectionFactor::Sight(sight) => indexed.push(Indexed::Sight(Arc::clone(sight))),
             }
@@ -105,13 +113,14 @@ impl DetectionModel {
     }
 }
 
-/// A range or sector factor prepared for a pose, evaluated four states at a time
+/// A range, sector or radar-equation factor prepared for a pose, evaluated four states at a time
 /// (owned, so a scan's model can outlive the call that built it: the bindings keep one per
 /// detector context).
 enum Step {
     SquaredBands(SquaredBands),
     Bands(RangeBands),
     Sector(FramedSector),
+    Radar(RadarEquation),
 }
 
 /// A factor evaluated point by point (a spatial index lookup each).
@@ -143,6 +152,7 @@ impl ScanDetection {
                 Step::SquaredBands(bands) => bands.at_squared(r2),
                 Step::Bands(bands) => bands.at(r2.sqrt()),
                 Step::Sector(sector) => sector.at_squared(dx, dy, r2),
+                Step::Radar(radar) => radar.at_squared(r2),
             };
         }
         self.indexed_at(x, y, pd)

@@ -154,6 +154,12 @@ pub(crate) fn detection_factor() -> impl Strategy<Value = Option<DetectionFactor
             .prop_map(|(c, w, i, o)| AngularSector::new(c, w, i, o).ok().map(DetectionFactor::Sector)),
         1 => land().prop_map(|l| Some(DetectionFactor::Land(l))),
         1 => land().prop_map(|l| Some(DetectionFactor::Sight(Arc::new(LineOfSight::new(l).unwrap())))),
+        2 => (prop_oneof![3 => -20.0..40.0f64, 1 => wild()], prop_oneof![3 => 1.0..5e3f64, 1 => wild()],
+              prop_oneof![3 => 1e-12..0.5f64, 1 => wild()], 0u8..6, 0u64..40)
+            .prop_map(|(snr, range, pfa, case, pulses)| {
+                let swerling = crate::radar::Swerling::from_case(case).ok()?;
+                crate::radar::RadarEquation::new(snr, range, 1.0, pfa, swerling, pulses).ok().map(DetectionFactor::Radar)
+            }),
     ]
 }
 

@@ -22,6 +22,7 @@ pub mod kalman;
 pub mod land;
 mod memory;
 pub mod pose;
+pub mod radar;
 pub mod range_bands;
 pub mod sector;
 pub mod sight;

@@ -31,6 +31,7 @@ mod jpda;
 mod kalman;
 mod models;
 mod particles;
+mod radar;
 
 // The exception classes are Python's (`ctxmodels.errors`, documented there): each kind of
 // core error maps to one, built from the error's fields, so callers read attributes, never
@@ -317,6 +318,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;
     m.add_function(wrap_pyfunction!(simd_backend, m)?)?;
     kalman::register(m)?;
+    radar::register(m)?;
     gmphd::register(m)?;
     jpda::register(m)?;
     initiation::register(m)?;

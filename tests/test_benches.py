@@ -36,7 +36,8 @@ def test_quick_run_writes_agreeing_results(quick_results):
     assert names == {"pd_radar", "expected_pd_cubature", "clutter_metadata", "land_contains_smooth",
                      "land_contains_jagged", "line_of_sight_smooth", "line_of_sight_jagged",
                      "pd_radar_land_sight", "pd_call_array (per call)",
-                     "pd_call_scalar (per call)"}
+                     "pd_call_scalar (per call)", "pd_radar_equation_swerling1",
+                     "pd_radar_equation_swerling0_10", "pd_radar_horizon"}
     assert {r["size"] for r in quick_results["results"]
             if r["benchmark"] == "pd_call_array (per call)"} == {1, 10, 100}
     for r in quick_results["results"]:

@@ -14,8 +14,10 @@ from .detection import DetectionProbabilityModel
 from .detection_estimate import DetectionEstimate
 from .errors import (ArgumentError, ArgumentTypeError, InfeasibleAssignmentError, InvalidLandError,
                      NonFiniteError, NotPositiveDefiniteError, ShapeError)
+from .horizon import RadarHorizon
 from .land import LandMask, LineOfSight
 from .pose import ConstantPose, Mounting, NavigationTrack, Pose, PoseSource
+from .radar import RadarEquation
 from .range_bands import RangeBands
 from .sector import AngularSector
 from .sensor import SensorModel
@@ -48,6 +50,8 @@ __all__ = [
     "NotPositiveDefiniteError",
     "Pose",
     "PoseSource",
+    "RadarEquation",
+    "RadarHorizon",
     "RangeBands",
     "SensorModel",
     "ShapeError",

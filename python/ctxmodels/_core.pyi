@@ -27,6 +27,7 @@ __all__ = [
     "LandMask",
     "LineOfSight",
     "MetadataThreshold",
+    "RadarEquation",
     "RangeBands",
     "jpda_marginals",
     "jpda_predict",
@@ -56,6 +57,29 @@ class RangeBands:
     ) -> RangeBands: ...
     def at(self, ranges: _Floats) -> _Floats:
         """Values at each of `ranges` (±inf lie beyond / before every edge; NaN is an error)."""
+
+@final
+class RadarEquation:
+    """P_D of a Swerling case 0–4 target, `pulses` pulses summed, from the SNR
+    `reference_snr` (dB) at `reference_range` (m), SNR ∝ r⁻⁴, less `loss` (dB), against
+    the threshold of `false_alarm_probability`."""
+
+    def __new__(
+        cls,
+        reference_snr: float,
+        reference_range: float,
+        loss: float,
+        false_alarm_probability: float,
+        swerling: int,
+        pulses: int,
+    ) -> RadarEquation: ...
+    @property
+    def threshold(self) -> float:
+        """The detection threshold on the sum of the pulses' powers (noise power 1)."""
+    def at(self, ranges: _Floats) -> _Floats:
+        """P_D at each of `ranges` (metres; NaN gives NaN)."""
+    def snr(self, ranges: _Floats) -> _Floats:
+        """The per-pulse SNR (linear) at each of `ranges`."""
 
 @final
 class AngularSector:

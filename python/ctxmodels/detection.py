@@ -10,12 +10,15 @@ from . import _core
 from ._component import (ModelComponent, as_array, as_columns, as_float, as_int,
                          as_position_mapping, as_rows, as_sequence, check_out)
 from .detection_estimate import DetectionEstimate
+from .horizon import RadarHorizon
 from .land import LandMask, LineOfSight
 from .pose import Pose, pose_tuple
+from .radar import RadarEquation
 from .range_bands import RangeBands
 from .sector import AngularSector
 
-DetectionFactor = float | RangeBands | AngularSector | LandMask | LineOfSight | DetectionEstimate
+DetectionFactor = (float | RangeBands | AngularSector | RadarEquation | RadarHorizon | LandMask
+                   | LineOfSight | DetectionEstimate)
 
 #: Integration rules for the expected P_D of a Gaussian (see :class:`SensorModel`).
 PD_RULES = ("mean", "cubature", "unscented", "gauss-hermite")
@@ -52,7 +55,8 @@ class DetectionProbabilityModel(ModelComponent):
         def build():
             parts = []
             for i, factor in enumerate(self.factors):
-                if isinstance(factor, (RangeBands, AngularSector, LandMask, LineOfSight)):
+                if isinstance(factor, (RangeBands, AngularSector, RadarEquation, RadarHorizon, LandMask,
+                                       LineOfSight)):
                     parts.append(factor._compiled())
                 elif isinstance(factor, DetectionEstimate):
                     parts.append(factor._core)  # shared: its updates reach this model
@@ -60,7 +64,8 @@ class DetectionProbabilityModel(ModelComponent):
                     parts.append(as_float(factor, f"factors[{i}]"))
                 else:
                     raise TypeError(f"factors[{i}]: expected a float, RangeBands, AngularSector, "
-                                    "LandMask, LineOfSight or DetectionEstimate, got "
+                                    "RadarEquation, RadarHorizon, LandMask, LineOfSight or "
+                                    "DetectionEstimate, got "
                                     f"{type(factor).__name__}")
             return _core.DetectionModel(parts)
         return self._cached("core", build)

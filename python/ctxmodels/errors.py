@@ -16,17 +16,22 @@ one of them); the Python layer raises them for what it checks itself. They are
 :class:`ValueError` (or, for :class:`ArgumentTypeError`, :class:`TypeError`) subclasses, so
 ``except ValueError`` keeps working. All pickle with their attributes.
 
-=============================  ============================================================
-class                          raised when
-=============================  ============================================================
-:class:`ArgumentError`         a value is wrong (out of range, unsorted, unknown name, ...)
-:class:`ArgumentTypeError`     a value has the wrong type
-:class:`ShapeError`            arrays' shapes do not fit the call or each other
-:class:`NonFiniteError`        a row holds NaN or infinity where a number is needed
-:class:`InvalidLandError`      a land mask's polygon, or one of its rings, is not valid land
-:class:`NotPositiveDefiniteError`   a covariance the maths needs positive definite is not
-:class:`InfeasibleAssignmentError`  an assignment problem has no assignment of finite cost
-=============================  ============================================================
+======================================  ===================================================
+class                                   raised when
+======================================  ===================================================
+:class:`ArgumentError`                  a value is wrong (out of range, unsorted, unknown
+                                        name, ...)
+:class:`ArgumentTypeError`              a value has the wrong type
+:class:`ShapeError`                     arrays' shapes do not fit the call or each other
+:class:`NonFiniteError`                 a row holds NaN or infinity where a number is
+                                        needed
+:class:`InvalidLandError`               a land mask's polygon, or one of its rings, is not
+                                        valid land
+:class:`NotPositiveDefiniteError`       a covariance the maths needs positive definite is
+                                        not
+:class:`InfeasibleAssignmentError`      an assignment problem has no assignment of finite
+                                        cost
+======================================  ===================================================
 
 A buffer that cannot be allocated is Python's own :class:`MemoryError`, naming the argument
 whose size asked for it in its message.

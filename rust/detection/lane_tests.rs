@@ -22,6 +22,12 @@ fn backends() -> Vec<Backend> {
         .collect()
 }
 
+/// A radar whose SNR is 10 dB at 300 m (P_D falls over the test rows' ranges).
+fn radar(case: u8, pulses: u64) -> DetectionFactor {
+    let swerling = crate::radar::Swerling::from_case(case).unwrap();
+    DetectionFactor::Radar(crate::radar::RadarEquation::new(10.0, 300.0, 0.0, 1e-6, swerling, pulses).unwrap())
+}
+
 fn bands(edges: &[f64], values: &[f64], upper_owns: &[bool]) -> DetectionFactor {
     DetectionFactor::Range(RangeBands::new(edges.to_vec(), values.to_vec(), upper_owns.to_vec()).unwrap())
 }
@@ -60,7 +66,7 @@ fn models() -> Vec<DetectionModel> {
             DetectionFactor::Constant(0.9),
             DetectionFactor::Land(island.clone()),
             bands(&[700.0], &[0.93, 0.11], &[true]),
-            DetectionFactor::Sight(Arc::new(LineOfSight::new(island).unwrap())),
+            DetectionFactor::Sight(Arc::new(LineOfSight::new(island.clone()).unwrap())),
         ],
         vec![
             DetectionFactor::Constant(0.3),
@@ -72,6 +78,15 @@ fn models() -> Vec<DetectionModel> {
         // of bands.
         vec![DetectionFactor::Constant(0.6)],
         vec![sector(2.0, 1.0, 0.2, 0.8)],
+        // the radar equation between other factors, and alone
+        vec![
+            bands(&[50.0, 80.0], &[0.95, 0.2, 0.0], &[true, true]),
+            radar(0, 3),
+            sector(PI, 65f64.to_radians(), 0.0, 1.0),
+            DetectionFactor::Land(island.clone()),
+        ],
+        vec![radar(4, 5)],
+        vec![radar(1, 1), radar(3, 4), radar(2, 2)],
         // bands then a sector wider than a half-plane (the radar's is narrower)
         vec![
             bands(&[50.0, 1612.0], &[0.0, 0.4, 0.0], &[false, true]),

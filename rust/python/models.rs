@@ -157,7 +157,7 @@ pub struct PyDetectionModel(pub(super) DetectionModel);
 
 #[pymethods]
 impl PyDetectionModel {
-    /// `factors`: floats (constants), RangeBands, AngularSector, LandMask (0 on land),
+    /// `factors`: floats (constants), RangeBands, AngularSector, RadarEquation, LandMask (0 on land),
     /// LineOfSight (0 when shadowed), DetectionEstimate (shared, read as it stands). P_D is
     /// their product.
     #[new]
@@ -169,6 +169,8 @@ impl PyDetectionModel {
                 DetectionFactor::Range(b.get().0.clone())
             } else if let Ok(s) = f.cast::<PyAngularSector>() {
                 DetectionFactor::Sector(s.get().0.clone())
+            } else if let Ok(r) = f.cast::<super::radar::PyRadarEquation>() {
+                DetectionFactor::Radar(r.get().0.clone())
             } else if let Ok(l) = f.cast::<PyLandMask>() {
                 DetectionFactor::Land(l.get().0.clone())
             } else if let Ok(l) = f.cast::<PyLineOfSight>() {
@@ -179,7 +181,7 @@ impl PyDetectionModel {
                 DetectionFactor::Constant(v)
             } else {
                 return Err(PyTypeError::new_err(format!(
-                    "factors: factor {i} is a {}, expected a float, RangeBands, AngularSector, LandMask, LineOfSight or DetectionEstimate",
+                    "factors: factor {i} is a {}, expected a float, RangeBands, AngularSector, RadarEquation, LandMask, LineOfSight or DetectionEstimate",
                     f.get_type().name()?
                 )));
             });

@@ -27,7 +27,8 @@ import ctxmodels
 from ctxmodels import (AngularSector, ClutterDensityModel, CoastalClutter, ConstantPose,
                        DetectionProbabilityModel,
                        DetectionSet, DetectorContext, LandMask, LineOfSight, MetadataThreshold,
-                       Mounting, NavigationTrack, Pose, RangeBands, SensorModel, _core)
+                       Mounting, NavigationTrack, Pose, RadarEquation, RadarHorizon, RangeBands,
+                       SensorModel, _core)
 
 T0 = datetime.datetime(2024, 5, 1, 12, 0, 0)
 RNG = np.random.default_rng(99)
@@ -81,7 +82,14 @@ FACTORIES = {
     "LandMask-shapely-MultiPolygon": lambda: LandMask(polygons=MultiPolygon(
         [Polygon(ISLAND, [LAKE]), Polygon(ISLAND + [1000.0, 0.0])])),
     "LineOfSight": lambda: LineOfSight(land=land_mask()),
+    "RadarEquation": lambda: RadarEquation(reference_snr=13.0, reference_range=1500.0,
+                                           false_alarm_probability=1e-6, swerling=3, pulses=4,
+                                           loss=1.5),
+    "RadarHorizon": lambda: RadarHorizon(antenna_height=20.0, target_height=3.0),
     "DetectionProbabilityModel": radar_detection,
+    "DetectionProbabilityModel-radar-equation": lambda: DetectionProbabilityModel(factors=[
+        RadarEquation(reference_snr=10.0, reference_range=800.0, false_alarm_probability=1e-5),
+        RadarHorizon(antenna_height=5.0)]),
     "DetectionProbabilityModel-land": lambda: DetectionProbabilityModel(
         factors=[0.9, land_mask(), LineOfSight(land=land_mask())]),
     "MetadataThreshold": lambda: MetadataThreshold(key="area", threshold=10, below=1e-1, at_or_above=1e-3),
@@ -105,8 +113,10 @@ FACTORIES = {
 def behaviour(obj):
     """What the component computes, as arrays/tuples to compare bit for bit."""
     pose = Pose(x=15.0, y=-20.0, heading=2.2)
-    if isinstance(obj, RangeBands):
-        return obj(np.linspace(0, 2000, 4001))
+    if isinstance(obj, (RangeBands, RadarHorizon)):
+        return obj(np.linspace(0, 40_000, 4001))
+    if isinstance(obj, RadarEquation):
+        return obj(np.linspace(0, 4000, 4001)), obj.threshold
     if isinstance(obj, AngularSector):
         return DetectionProbabilityModel(factors=[obj]).evaluate(pose, STATES)
     if isinstance(obj, LandMask):
@@ -192,6 +202,10 @@ def test_equal_values_are_equal_and_hash_alike(factory):
     (FACTORIES["RangeBands"], lambda: RangeBands(edges=(50, 80), values=(0.95, 0.2, 0.0), upper_owns=False)),
     (FACTORIES["AngularSector"],
      lambda: AngularSector(centre=-math.pi, width=math.radians(65), inside=0.1, outside=0.9)),
+    (FACTORIES["RadarEquation"], lambda: RadarEquation(
+        reference_snr=13.0, reference_range=1500.0, false_alarm_probability=1e-6, swerling=4,
+        pulses=4, loss=1.5)),
+    (FACTORIES["RadarHorizon"], lambda: RadarHorizon(antenna_height=20.0, target_height=3.5)),
     (land_mask, lambda: LandMask(polygons=[ISLAND])),
     (FACTORIES["MetadataThreshold"], lambda: MetadataThreshold(key="area", threshold=10, below=1e-1,
                                                                at_or_above=1e-3, missing=1.0)),
