@@ -190,8 +190,17 @@ pub fn for_each_chunk<F>(out: &mut [f64], kernel: F) -> Option<usize>
 where
     F: Fn(usize, &mut [f64]) -> Option<usize> + Sync,
 {
+    for_each_chunk_from(out, PARALLEL_THRESHOLD, kernel)
+}
+
+/// [`for_each_chunk`], in parallel from `threshold` rows (kernels costlier per row than
+/// the range and sector factors pay for the threads sooner).
+pub fn for_each_chunk_from<F>(out: &mut [f64], threshold: usize, kernel: F) -> Option<usize>
+where
+    F: Fn(usize, &mut [f64]) -> Option<usize> + Sync,
+{
     let run = |(c, chunk): (usize, &mut [f64])| kernel(c * CHUNK, chunk).map(|bad| c * CHUNK + bad);
-    if out.len() >= PARALLEL_THRESHOLD && pool_usable() {
+    if out.len() >= threshold && pool_usable() {
         out.par_chunks_mut(CHUNK).enumerate().filter_map(run).min()
     } else {
         out.chunks_mut(CHUNK).enumerate().filter_map(run).min()

@@ -8,7 +8,8 @@
 //! [`Rule`](crate::cubature::Rule).
 
 use crate::batch::{
-    check_columns, check_rows, for_each_chunk, Columns, CvRows, Layout, MemoryOrder, PositionMapping, Rows,
+    check_columns, check_rows, for_each_chunk_from, Columns, CvRows, Layout, MemoryOrder, PositionMapping, Rows, CHUNK,
+    PARALLEL_THRESHOLD,
 };
 use crate::cubature::Rule;
 use crate::detection_estimate::{read_estimate, SharedEstimate};
@@ -104,11 +105,13 @@ impl DetectionModel {
                 DetectionFactor::Sight(sight) => indexed.push(Indexed::Sight(Arc::clone(sight))),
             }
         }
+        let heavy = steps.iter().any(|s| matches!(s, Step::Radar(_)));
         ScanDetection {
             frame,
             steps,
             indexed,
             constant,
+            parallel_from: if heavy { 2 * CHUNK } else { PARALLEL_THRESHOLD },
         }
     }
 }
@@ -137,6 +140,10 @@ pub struct ScanDetection {
     steps: Vec<Step>,
     indexed: Vec<Indexed>,
     constant: f64,
+    /// Rows from which an evaluation is split over threads: fewer with the radar equation,
+    /// whose P_D costs an e^x per state at least (a series with several pulses or a
+    /// steady target).
+    parallel_from: usize,
 }
 
 impl ScanDetection {
@@ -209,7 +216,7 @@ impl ScanDetection {
 
     /// P_D of every state of a checked array; the first state whose position is not finite.
     fn at_layout(&self, states: &[f64], layout: Layout, mapping: PositionMapping, out: &mut [f64]) -> Option<usize> {
-        for_each_chunk(out, |first, chunk| match layout {
+        for_each_chunk_from(out, self.parallel_from, |first, chunk| match layout {
             Layout::Rows { ncols: 4 } if mapping == PositionMapping::default() => dispatch(lanes::AtStates {
                 scan: self,
                 positions: CvRows(states),
@@ -273,7 +280,7 @@ impl ScanDetection {
         };
         // The first bad row of each chunk, with what is wrong with it.
         let problems = std::sync::Mutex::new(Vec::<(usize, lanes::BadGaussian)>::new());
-        let bad = for_each_chunk(out, |first, chunk| {
+        let bad = for_each_chunk_from(out, self.parallel_from, |first, chunk| {
             let (i, kind) = dispatch(lanes::Expected {
                 scan: self,
                 gaussians,

@@ -37,6 +37,7 @@ mod radar;
 // core error maps to one, built from the error's fields, so callers read attributes, never
 // message text.
 pyo3::import_exception!(ctxmodels.errors, ArgumentError);
+pyo3::import_exception!(ctxmodels.errors, ArgumentTypeError);
 pyo3::import_exception!(ctxmodels.errors, ShapeError);
 pyo3::import_exception!(ctxmodels.errors, NonFiniteError);
 pyo3::import_exception!(ctxmodels.errors, InvalidLandError);
@@ -66,6 +67,11 @@ fn to_py(err: ModelError) -> PyErr {
 /// A [`ShapeError`] about `argument` raised by the binding's own checks of array shapes.
 fn shape_error(argument: &str, message: impl std::fmt::Display) -> PyErr {
     ShapeError::new_err((argument.to_string(), message.to_string()))
+}
+
+/// An [`ArgumentTypeError`] (a TypeError) about `argument` raised by the binding's own checks.
+fn type_error(argument: &str, message: impl std::fmt::Display) -> PyErr {
+    ArgumentTypeError::new_err((argument.to_string(), message.to_string()))
 }
 
 /// An [`ArgumentError`] about `argument` raised by the binding's own checks.

@@ -34,6 +34,7 @@
 //! P_D keeps its relative accuracy near P_FA and its absolute accuracy near 1.
 
 use crate::error::{ModelError, Result};
+use crate::simd::{exp, Lanes, Portable};
 
 pub mod gamma;
 
@@ -65,6 +66,41 @@ impl Swerling {
                 ))
             }
         })
+    }
+}
+
+/// The one-pulse closed forms of the fluctuating cases (Swerling 1 and 2 coincide for one
+/// pulse, as 3 and 4 do), evaluated four ranges at a time with the lanes' e^x.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum OnePulse {
+    /// P_D = e^{−T/(1+S)} = P_FA^{1/(1+S)}.
+    Exponential,
+    /// P_D = e^{−T/δ}(1 + cT/δ), δ = 1 + S/2, c = 1 − 1/δ.
+    ChiSquare4,
+}
+
+impl OnePulse {
+    fn of(swerling: Swerling, pulses: u64) -> Option<Self> {
+        match (swerling, pulses) {
+            (Swerling::One | Swerling::Two, 1) => Some(OnePulse::Exponential),
+            (Swerling::Three | Swerling::Four, 1) => Some(OnePulse::ChiSquare4),
+            _ => None,
+        }
+    }
+
+    /// P_D at per-pulse SNRs `s` against the threshold `t` (S = ∞ gives 1, NaN NaN).
+    #[inline(always)]
+    fn at<L: Lanes>(self, s: L, t: f64) -> L {
+        let one = L::splat(1.0);
+        match self {
+            OnePulse::Exponential => exp(L::splat(-t).div(one + s)),
+            OnePulse::ChiSquare4 => {
+                let inverse = one.div(one + s * L::splat(0.5)); // 1/δ
+                let q = L::splat(t) * inverse;
+                let pd = exp(L::splat(0.0) - q) * (one + (one - inverse) * q);
+                L::select(L::gt(pd, one), one, pd)
+            }
+        }
     }
 }
 
@@ -144,8 +180,14 @@ impl RadarEquation {
         self.snr * (ratio * ratio)
     }
 
-    /// P_D at squared range `r2` (NaN stays NaN).
+    /// P_D at squared range `r2` (NaN stays NaN): the reference [`Self::lanes_at_squared`]
+    /// gives the bits of.
     pub fn at_squared(&self, r2: f64) -> f64 {
+        if let Some(form) = OnePulse::of(self.swerling, self.pulses) {
+            return form
+                .at(Portable::splat(self.snr_at_squared(r2)), self.threshold)
+                .to_array()[0];
+        }
         if r2.is_nan() {
             return f64::NAN;
         }
@@ -158,6 +200,22 @@ impl RadarEquation {
         )
     }
 
+    /// P_D at four squared ranges: the one-pulse closed forms in lanes, the sums one lane
+    /// after another (their length depends on the range).
+    #[inline(always)]
+    pub fn lanes_at_squared<L: Lanes>(&self, r2: L) -> L {
+        match OnePulse::of(self.swerling, self.pulses) {
+            Some(form) => {
+                let ratio = L::splat(self.reference_range2).div(r2);
+                form.at(L::splat(self.snr) * (ratio * ratio), self.threshold)
+            }
+            None => {
+                let r2 = r2.to_array();
+                L::from_array(std::array::from_fn(|k| self.at_squared(r2[k])))
+            }
+        }
+    }
+
     /// P_D at range `r`.
     pub fn at(&self, r: f64) -> f64 {
         self.at_squared(r * r)
@@ -167,6 +225,9 @@ impl RadarEquation {
 /// P_D for `pulses` pulses of per-pulse SNR `snr` (linear) against `threshold`, whose
 /// false-alarm probability is `false_alarm` (P_D at SNR 0).
 pub fn detection_probability(swerling: Swerling, pulses: u64, snr: f64, threshold: f64, false_alarm: f64) -> f64 {
+    if let Some(form) = OnePulse::of(swerling, pulses) {
+        return form.at(Portable::splat(snr), threshold).to_array()[0];
+    }
     if snr == 0.0 {
         return false_alarm;
     }
@@ -180,11 +241,7 @@ pub fn detection_probability(swerling: Swerling, pulses: u64, snr: f64, threshol
         Swerling::One => {
             let gamma = 1.0 + nf * snr;
             let c = nf * snr / gamma;
-            if n == 1 {
-                (-t / gamma).exp()
-            } else {
-                gamma::upper(n - 1, t) + (-t / gamma + gamma::ln_scaled_lower(n - 1, c, t)).exp()
-            }
+            gamma::upper(n - 1, t) + (-t / gamma + gamma::ln_scaled_lower(n - 1, c, t)).exp()
         }
         Swerling::Two => gamma::upper(n, t / (1.0 + snr)),
         Swerling::Three => {
@@ -193,7 +250,7 @@ pub fn detection_probability(swerling: Swerling, pulses: u64, snr: f64, threshol
             let c = half / delta;
             let tail = (-t / delta).exp();
             match n {
-                1 => tail * (1.0 + c * t / delta),
+                // (one pulse: OnePulse::ChiSquare4)
                 2 => tail * (1.0 + t / delta),
                 _ => {
                     // e^{−T/δ} X in logs: X overflows for many pulses, e^{−T/δ} underflows

@@ -4,7 +4,7 @@
 //! [`Lanes`], and [`dispatch`] runs the build for this CPU.
 //!
 //! Only exactly rounded operations are offered — add, subtract, multiply, square root,
-//! comparisons and bit selects — and no fused multiply-add, so every backend gives the same
+//! comparisons, bit selects and one exact bit shift — and no fused multiply-add, so every backend gives the same
 //! bits as the scalar formulas they replace.
 //!
 //! `CTXMODELS_SIMD=portable` in the environment (read once) forces the array backend, to
@@ -35,6 +35,9 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     fn abs(self) -> Self;
     /// The larger of two values that are not NaN (either zero when ±0 compare equal).
     fn max(self, other: Self) -> Self;
+    /// Each value's bits shifted left by 52 (the low bits of the significand become the
+    /// exponent field): 2^k from the bits of 2⁵² + 1023 + k, an exact bit operation.
+    fn shift_to_exponent(self) -> Self;
 
     fn gt(self, other: Self) -> Self::Mask;
     fn ge(self, other: Self) -> Self::Mask;
@@ -220,6 +223,10 @@ impl Lanes for Portable {
         ))
     }
     #[inline(always)]
+    fn shift_to_exponent(self) -> Self {
+        Portable(self.0.map(|v| f64::from_bits(v.to_bits() << 52)))
+    }
+    #[inline(always)]
     fn gt(self, o: Self) -> [bool; 4] {
         std::array::from_fn(|i| self.0[i] > o.0[i])
     }
@@ -268,6 +275,9 @@ impl Lanes for Portable {
         }))
     }
 }
+
+mod exp;
+pub use exp::exp;
 
 #[cfg(target_arch = "x86_64")]
 mod x86;

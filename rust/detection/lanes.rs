@@ -19,11 +19,7 @@ impl Step {
             // (bands.lanes_at(r2.sqrt()), without the square root: the same bits)
             Step::Bands(bands) => bands.lanes_at_root(r2),
             Step::Sector(sector) => sector.lanes_at_squared(dx, dy, r2),
-            // (a sum per state whose length depends on it: one lane after another)
-            Step::Radar(radar) => {
-                let r2 = r2.to_array();
-                L::from_array(std::array::from_fn(|k| radar.at_squared(r2[k])))
-            }
+            Step::Radar(radar) => radar.lanes_at_squared(r2),
         }
     }
 }

@@ -6,7 +6,7 @@
 
 use super::{
     borrow, clutter_map, detached, detection_estimate, finite_points, guarded, mapping_of, output, particles,
-    points_slice, pose_of, rule_of, shape_error, slice, to_py, value_error,
+    points_slice, pose_of, rule_of, shape_error, slice, to_py, type_error, value_error,
 };
 use crate::clutter::{ClutterFactor, ClutterModel, MetadataThreshold};
 use crate::coast::CoastalBand;
@@ -17,7 +17,6 @@ use crate::range_bands::RangeBands;
 use crate::sector::AngularSector;
 use crate::sight::LineOfSight;
 use numpy::{PyArray1, PyArray2, PyArray3, PyUntypedArrayMethods};
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use std::sync::Arc;
 
@@ -65,7 +64,7 @@ pub struct PyLandMask(Arc<LandMask>);
 fn ring_of(ring: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 2]>> {
     let array = ring
         .cast::<PyArray2<f64>>()
-        .map_err(|_| PyTypeError::new_err("polygons: every ring must be a (K, 2) float64 array"))?;
+        .map_err(|_| type_error("polygons", "every ring must be a (K, 2) float64 array"))?;
     if array.shape()[1] != 2 {
         return Err(shape_error(
             "polygons",
@@ -180,10 +179,13 @@ impl PyDetectionModel {
             } else if let Ok(v) = f.extract::<f64>() {
                 DetectionFactor::Constant(v)
             } else {
-                return Err(PyTypeError::new_err(format!(
-                    "factors: factor {i} is a {}, expected a float, RangeBands, AngularSector, RadarEquation, LandMask, LineOfSight or DetectionEstimate",
-                    f.get_type().name()?
-                )));
+                return Err(type_error(
+                    "factors",
+                    format_args!(
+                        "factor {i} is a {}, expected a float, RangeBands, AngularSector, RadarEquation, LandMask, LineOfSight or DetectionEstimate",
+                        f.get_type().name()?
+                    ),
+                ));
             });
         }
         Ok(PyDetectionModel(DetectionModel::new(converted).map_err(to_py)?))
@@ -353,10 +355,13 @@ impl PyClutterModel {
             } else if let Ok(v) = f.extract::<f64>() {
                 ClutterFactor::Constant(v)
             } else {
-                return Err(PyTypeError::new_err(format!(
-                    "factors: factor {i} is a {}, expected a float, RangeBands, MetadataThreshold, ClutterMap or CoastalBand",
-                    f.get_type().name()?
-                )));
+                return Err(type_error(
+                    "factors",
+                    format_args!(
+                        "factor {i} is a {}, expected a float, RangeBands, MetadataThreshold, ClutterMap or CoastalBand",
+                        f.get_type().name()?
+                    ),
+                ));
             });
         }
         Ok(PyClutterModel(ClutterModel::new(converted).map_err(to_py)?))

@@ -129,6 +129,10 @@ impl Lanes for Avx2 {
         Avx2(unsafe { _mm256_max_pd(self.0, o.0) })
     }
     #[inline(always)]
+    fn shift_to_exponent(self) -> Self {
+        Avx2(unsafe { _mm256_castsi256_pd(_mm256_slli_epi64::<52>(_mm256_castpd_si256(self.0))) })
+    }
+    #[inline(always)]
     fn gt(self, o: Self) -> Mask {
         self.cmp::<_CMP_GT_OQ>(o)
     }
