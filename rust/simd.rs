@@ -300,7 +300,18 @@ mod tests {
                 let (a, b) = (L::load(&v[i..]), L::load(&v[i + 4..]));
                 let mask_bits = |m: L::Mask| L::select(m, L::splat(1.0), L::splat(0.0)).to_array();
                 let (x, y) = L::pairs(&v[i..]);
-                for lanes in [a + b, a - b, a * b, a.div(b), a.sqrt(), a.abs(), L::max(a, b), x, y] {
+                for lanes in [
+                    a + b,
+                    a - b,
+                    a * b,
+                    a.div(b),
+                    a.sqrt(),
+                    a.abs(),
+                    L::max(a, b),
+                    a.shift_to_exponent(),
+                    x,
+                    y,
+                ] {
                     bits.extend(lanes.to_array().map(f64::to_bits));
                 }
                 for m in [
