@@ -13,6 +13,7 @@ use crate::error::{ModelError, Result};
 use crate::pose::Pose;
 use crate::range_bands::RangeBands;
 use crate::simd::dispatch;
+use crate::zone::Zone;
 use std::sync::{Arc, RwLock, RwLockReadGuard};
 
 mod lanes;
@@ -47,6 +48,21 @@ pub enum ClutterFactor {
     Map(SharedMap),
     /// A band along the coastline (seen from the sensor) with a higher λ.
     Coast(Arc<CoastalBand>),
+    /// One value inside a set of polygons, another outside.
+    Zone(Arc<Zone>),
+}
+
+impl ClutterFactor {
+    /// The value at (x, y) of a factor evaluated point by point (a coastal band, a zone);
+    /// NaN for the others, which the kernels evaluate in lanes.
+    #[inline]
+    pub(crate) fn point_value(&self, pose: &Pose, x: f64, y: f64) -> f64 {
+        match self {
+            ClutterFactor::Coast(band) => band.value_at([pose.x, pose.y], x, y),
+            ClutterFactor::Zone(zone) => zone.value_at(x, y),
+            _ => f64::NAN,
+        }
+    }
 }
 
 impl PartialEq for ClutterFactor {
@@ -57,6 +73,7 @@ impl PartialEq for ClutterFactor {
             (ClutterFactor::Metadata(a), ClutterFactor::Metadata(b)) => a == b,
             (ClutterFactor::Map(a), ClutterFactor::Map(b)) => Arc::ptr_eq(a, b),
             (ClutterFactor::Coast(a), ClutterFactor::Coast(b)) => Arc::ptr_eq(a, b),
+            (ClutterFactor::Zone(a), ClutterFactor::Zone(b)) => Arc::ptr_eq(a, b),
             _ => false,
         }
     }
@@ -95,6 +112,11 @@ impl ClutterModel {
                 ClutterFactor::Constant(v) => check_density(i, *v)?,
                 // its values are posterior means with a prior > 0: finite and > 0
                 ClutterFactor::Map(_) | ClutterFactor::Coast(_) => uses_position = true,
+                ClutterFactor::Zone(zone) => {
+                    uses_position = true;
+                    check_density(i, zone.inside())?;
+                    check_density(i, zone.outside())?;
+                }
                 ClutterFactor::Range(b) => {
                     uses_position = true;
                     for &v in b.values() {
@@ -220,7 +242,7 @@ impl ClutterModel {
                 ClutterFactor::Constant(v) => *v,
                 ClutterFactor::Range(bands) => bands.at(range),
                 ClutterFactor::Map(map) => read_map(map).value_at(pose, x, y, measured),
-                ClutterFactor::Coast(band) => band.value_at([pose.x, pose.y], x, y),
+                ClutterFactor::Coast(_) | ClutterFactor::Zone(_) => f.point_value(pose, x, y),
                 ClutterFactor::Metadata(rule) => {
                     let value = metadata[rule.column];
                     if value.is_nan() {

@@ -175,6 +175,8 @@ fn clutter_factor() -> impl Strategy<Value = Option<ClutterFactor>> {
         }),
         1 => (land(), 0.0..200.0f64, density(), any::<bool>())
             .prop_map(|(l, w, v, seen)| crate::coast::CoastalBand::new(l, w, v, seen).ok().map(|b| ClutterFactor::Coast(Arc::new(b)))),
+        1 => (land(), density(), density())
+            .prop_map(|(l, i, o)| crate::zone::Zone::new(l, i, o).ok().map(|z| ClutterFactor::Zone(Arc::new(z)))),
     ]
 }
 
@@ -366,6 +368,7 @@ proptest! {
                     map.intensities().unwrap().into_iter().chain([map.prior_intensity()]).collect()
                 }
                 ClutterFactor::Coast(band) => vec![band.inside(), 1.0],
+                ClutterFactor::Zone(zone) => vec![zone.inside(), zone.outside()],
             };
             lo *= values.iter().fold(f64::INFINITY, |a, v| a.min(v.abs()));
             hi *= values.iter().fold(0.0f64, |a, v| a.max(v.abs()));

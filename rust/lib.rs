@@ -27,6 +27,7 @@ pub mod range_bands;
 pub mod sector;
 pub mod sight;
 pub(crate) mod simd;
+pub mod zone;
 
 #[cfg(feature = "python")]
 mod python;

@@ -319,6 +319,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyClutterModel>()?;
     m.add_class::<clutter_map::PyClutterMap>()?;
     m.add_class::<models::PyCoastalBand>()?;
+    m.add_class::<models::PyZone>()?;
     m.add_class::<detection_estimate::PyDetectionEstimate>()?;
     m.add_function(wrap_pyfunction!(mount, m)?)?;
     m.add_function(wrap_pyfunction!(rule_points, m)?)?;

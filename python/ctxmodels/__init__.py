@@ -21,6 +21,7 @@ from .radar import RadarEquation
 from .range_bands import RangeBands
 from .sector import AngularSector
 from .sensor import SensorModel
+from .zone import Zone
 
 __version__ = "0.1.0"
 
@@ -55,6 +56,7 @@ __all__ = [
     "RangeBands",
     "SensorModel",
     "ShapeError",
+    "Zone",
     "detection_positions",
     "measured_ranges",
     "rule_points",

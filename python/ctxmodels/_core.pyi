@@ -29,6 +29,7 @@ __all__ = [
     "MetadataThreshold",
     "RadarEquation",
     "RangeBands",
+    "Zone",
     "jpda_marginals",
     "jpda_predict",
     "jpda_scan",
@@ -289,6 +290,13 @@ class ClutterMap:
         core)."""
 
 @final
+class Zone:
+    """A factor: `inside` within a set of polygons (boundary included), `outside` elsewhere."""
+
+    def __new__(cls, polygons: LandMask, inside: float, outside: float) -> Zone:
+        """`inside` within `polygons` (boundary included), `outside` elsewhere."""
+
+@final
 class CoastalBand:
     """A clutter factor, higher within a width of a coastline the sensor sees."""
 
@@ -385,11 +393,11 @@ class GaussianMixtureArrays:
         self,
         means: _Floats,
         covar: _Floats,
-        weight: float,
+        weights: _Floats,
         time: int,
         circle: tuple[tuple[int, int], tuple[float, float], float] | None = None,
     ) -> None:
-        """Births at the `means` rows (N, D), each with `covar` (D, D), `weight`, tag 0 and
+        """Births at the `means` rows (N, D), each with `covar` (D, D), its `weights` entry, tag 0 and
         `time`; with `circle` = `(position_mapping, centre, radius)` only those inside it."""
     def distinct_times(self) -> list[int]:
         """The distinct component times, ascending."""

@@ -10,6 +10,7 @@ from . import _core
 from ._component import ModelComponent, as_array, as_float, as_rows, as_sequence, check_out
 from .clutter_map import ClutterMap
 from .coast import CoastalClutter
+from .zone import Zone
 from .pose import Pose, pose_tuple
 from .range_bands import RangeBands
 
@@ -45,7 +46,7 @@ class MetadataThreshold(ModelComponent):
                                        as_float(self.at_or_above, "at_or_above"), missing)
 
 
-ClutterFactor = float | RangeBands | MetadataThreshold | ClutterMap | CoastalClutter
+ClutterFactor = float | RangeBands | MetadataThreshold | ClutterMap | CoastalClutter | Zone
 
 
 class ClutterDensityModel(ModelComponent):
@@ -58,8 +59,9 @@ class ClutterDensityModel(ModelComponent):
     ``clutter_spatial_density`` means: per m² for a Cartesian (x, y) sensor, per rad·m for
     a bearing–range radar. Factors: constants, :class:`RangeBands` over the detection's
     range from the sensor, :class:`MetadataThreshold` rules, learned
-    :class:`~ctxmodels.ClutterMap` s (read as they stand when λ is evaluated) and coastal
-    bands (:class:`~ctxmodels.CoastalClutter`). Every value
+    :class:`~ctxmodels.ClutterMap` s (read as they stand when λ is evaluated), coastal
+    bands (:class:`~ctxmodels.CoastalClutter`) and zones (:class:`~ctxmodels.Zone`: one value
+    inside polygons, another outside). Every value
     must be finite and strictly positive (trackers divide by λ).
 
     The paper's radar (eq. lambda-radar): ``ClutterDensityModel(factors=[
@@ -88,7 +90,7 @@ class ClutterDensityModel(ModelComponent):
     @property
     def uses_position(self) -> bool:
         return self._cached("uses_position", lambda: any(
-            isinstance(f, (RangeBands, ClutterMap, CoastalClutter)) for f in self.factors))
+            isinstance(f, (RangeBands, ClutterMap, CoastalClutter, Zone)) for f in self.factors))
 
     def _required_keys(self) -> frozenset[str]:
         """The metadata keys whose rule has no ``missing`` density."""
@@ -100,7 +102,7 @@ class ClutterDensityModel(ModelComponent):
             keys = self.metadata_keys
             parts = []
             for i, f in enumerate(self.factors):
-                if isinstance(f, (RangeBands, CoastalClutter)):
+                if isinstance(f, (RangeBands, CoastalClutter, Zone)):
                     parts.append(f._compiled())
                 elif isinstance(f, MetadataThreshold):
                     parts.append(f._compiled(keys.index(f.key)))
@@ -110,7 +112,7 @@ class ClutterDensityModel(ModelComponent):
                     parts.append(as_float(f, f"factors[{i}]"))
                 else:
                     raise TypeError(f"factors[{i}]: expected a float, RangeBands, "
-                                    "MetadataThreshold, ClutterMap or CoastalClutter, got "
+                                    "MetadataThreshold, ClutterMap, CoastalClutter or Zone, got "
                                     f"{type(f).__name__}")
             return _core.ClutterModel(parts)
         return self._cached("core", build)

@@ -115,9 +115,9 @@ impl LaneKernel for Densities<'_> {
                         density.store(o);
                     }
                 }
-                ClutterFactor::Coast(band) => {
+                ClutterFactor::Coast(_) | ClutterFactor::Zone(_) => {
                     for (o, p) in blocks.zip(xy.chunks_exact(8)) {
-                        let at = |i: usize| band.value_at([pose.x, pose.y], p[2 * i], p[2 * i + 1]);
+                        let at = |i: usize| f.point_value(pose, p[2 * i], p[2 * i + 1]);
                         let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);
                         if checks {
                             bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));

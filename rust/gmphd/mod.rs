@@ -131,7 +131,7 @@ impl Mixture {
         Ok(())
     }
 
-    /// Births at the `means` rows (N×D), each with `covar` (D×D), `weight`, the [`BIRTH`] tag
+    /// Births at the `means` rows (N×D), each with `covar` (D×D), its `weights` entry, the [`BIRTH`] tag
     /// and `time`, appended in order; with `circle` (x/y position indices, centre, radius)
     /// only those inside it. The same as [`Self::extend`]ing a fresh mixture, keeping its
     /// components inside the circle ([`Self::retain_inside_circle`]) and taking them all
@@ -140,7 +140,7 @@ impl Mixture {
         &mut self,
         means: &[f64],
         covar: &[f64],
-        weight: f64,
+        weights: &[f64],
         time: i64,
         circle: Option<([usize; 2], [f64; 2], f64)>,
     ) -> Result<()> {
@@ -152,14 +152,16 @@ impl Mixture {
             ));
         }
         let n = means.len() / d;
+        if weights.len() != n {
+            return Err(ModelError::shape(
+                "weights",
+                format!("must have {n} entries (one per birth), got {}", weights.len()),
+            ));
+        }
         let mut fresh = Mixture::new(d);
         let covars = memory::collected("covars", (0..n).flat_map(|_| covar.iter().copied()))?;
-        let (weights, tags, times) = (
-            memory::filled("weights", n, weight)?,
-            memory::filled("tags", n, BIRTH)?,
-            memory::filled("times", n, time)?,
-        );
-        fresh.extend(means, &covars, &weights, &tags, &times)?;
+        let (tags, times) = (memory::filled("tags", n, BIRTH)?, memory::filled("times", n, time)?);
+        fresh.extend(means, &covars, weights, &tags, &times)?;
         if let Some((position, centre, radius)) = circle.filter(|_| !fresh.is_empty()) {
             fresh.retain_inside_circle(position, centre, radius)?;
         }

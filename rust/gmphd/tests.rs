@@ -314,12 +314,21 @@ fn births_extend_as_a_fresh_mixture_kept_in_the_circle_and_taken() {
             mixture.extend(&[9.0; 4], &covar, &[0.25], &[BIRTH], &[1]).unwrap();
         }
         // (the NaN mean is refused by both, before anything changes)
-        assert!(one_call.extend_births(&means, &covar, 0.1, 7, circle).is_err());
+        assert!(one_call.extend_births(&means, &covar, &[0.1; 4], 7, circle).is_err());
         let finite = &means[..12];
-        one_call.extend_births(finite, &covar, 0.1, 7, circle).unwrap();
+        assert_eq!(
+            one_call
+                .extend_births(finite, &covar, &[0.1; 2], 7, circle)
+                .unwrap_err()
+                .argument(),
+            "weights"
+        );
+        one_call
+            .extend_births(finite, &covar, &[0.1, 0.2, 0.3], 7, circle)
+            .unwrap();
         let mut fresh = Mixture::new(4);
         fresh
-            .extend(finite, &covar.repeat(3), &[0.1; 3], &[BIRTH; 3], &[7; 3])
+            .extend(finite, &covar.repeat(3), &[0.1, 0.2, 0.3], &[BIRTH; 3], &[7; 3])
             .unwrap();
         if let Some((position, centre, radius)) = circle {
             fresh.retain_inside_circle(position, centre, radius).unwrap();

@@ -79,17 +79,17 @@ impl PyGaussianMixtureArrays {
             .map_err(super::to_py)
     }
 
-    /// Births at the `means` rows (N, D), each with `covar` (D, D), `weight`, tag 0 and
+    /// Births at the `means` rows (N, D), each with `covar` (D, D), its `weights` entry, tag 0 and
     /// `time`; with `circle` = `(position_mapping, centre, radius)` only those inside it (as
     /// `retain_inside_circle`). What extending a fresh mixture, keeping its components in the
     /// circle and taking them all does, in one call.
-    #[pyo3(signature = (means, covar, weight, time, circle = None))]
+    #[pyo3(signature = (means, covar, weights, time, circle = None))]
     #[allow(clippy::type_complexity)]
     fn extend_births(
         &mut self,
         means: Bound<'_, PyArray2<f64>>,
         covar: Bound<'_, PyArray2<f64>>,
-        weight: f64,
+        weights: Bound<'_, PyArray1<f64>>,
         time: i64,
         circle: Option<((usize, usize), (f64, f64), f64)>,
     ) -> PyResult<()> {
@@ -100,10 +100,20 @@ impl PyGaussianMixtureArrays {
         if covar.shape() != [d, d] {
             return Err(wrong_shape("covar", format!("({d}, {d})"), covar.shape()));
         }
-        let (m, c) = (borrow(&means, "means")?, borrow(&covar, "covar")?);
+        let (m, c, w) = (
+            borrow(&means, "means")?,
+            borrow(&covar, "covar")?,
+            borrow(&weights, "weights")?,
+        );
         let circle = circle.map(|(p, c, r)| ([p.0, p.1], [c.0, c.1], r));
         self.0
-            .extend_births(slice(&m, "means")?, slice(&c, "covar")?, weight, time, circle)
+            .extend_births(
+                slice(&m, "means")?,
+                slice(&c, "covar")?,
+                slice(&w, "weights")?,
+                time,
+                circle,
+            )
             .map_err(super::to_py)
     }
 

@@ -1,6 +1,6 @@
 //! The detection and clutter models and the factors they are built from, as Python classes:
 //! RangeBands, AngularSector, LandMask, LineOfSight, DetectionModel, CoastalBand,
-//! MetadataThreshold and ClutterModel. One file: a model's constructor tells its factors
+//! MetadataThreshold, Zone and ClutterModel. One file: a model's constructor tells its factors
 //! apart by their classes and reads what they hold, so the factor classes sit beside the
 //! two models that take them.
 
@@ -16,6 +16,7 @@ use crate::land::{LandMask, Polygon};
 use crate::range_bands::RangeBands;
 use crate::sector::AngularSector;
 use crate::sight::LineOfSight;
+use crate::zone::Zone;
 use numpy::{PyArray1, PyArray2, PyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use std::sync::Arc;
@@ -284,6 +285,19 @@ impl PyDetectionModel {
     }
 }
 
+#[pyclass(name = "Zone", module = "ctxmodels._core", frozen)]
+pub struct PyZone(Arc<Zone>);
+
+#[pymethods]
+impl PyZone {
+    /// `inside` within `polygons` (boundary included), `outside` elsewhere.
+    #[new]
+    fn new(polygons: &Bound<'_, PyLandMask>, inside: f64, outside: f64) -> PyResult<Self> {
+        let polygons = polygons.get().0.clone();
+        Ok(PyZone(Arc::new(Zone::new(polygons, inside, outside).map_err(to_py)?)))
+    }
+}
+
 #[pyclass(name = "CoastalBand", module = "ctxmodels._core", frozen)]
 pub struct PyCoastalBand(Arc<CoastalBand>);
 
@@ -352,13 +366,15 @@ impl PyClutterModel {
                 ClutterFactor::Map(map.get().0.clone())
             } else if let Ok(band) = f.cast::<PyCoastalBand>() {
                 ClutterFactor::Coast(band.get().0.clone())
+            } else if let Ok(zone) = f.cast::<PyZone>() {
+                ClutterFactor::Zone(zone.get().0.clone())
             } else if let Ok(v) = f.extract::<f64>() {
                 ClutterFactor::Constant(v)
             } else {
                 return Err(type_error(
                     "factors",
                     format_args!(
-                        "factor {i} is a {}, expected a float, RangeBands, MetadataThreshold, ClutterMap or CoastalBand",
+                        "factor {i} is a {}, expected a float, RangeBands, MetadataThreshold, ClutterMap, CoastalBand or Zone",
                         f.get_type().name()?
                     ),
                 ));

@@ -28,7 +28,7 @@ from ctxmodels import (AngularSector, ClutterDensityModel, CoastalClutter, Const
                        DetectionProbabilityModel,
                        DetectionSet, DetectorContext, LandMask, LineOfSight, MetadataThreshold,
                        Mounting, NavigationTrack, Pose, RadarEquation, RadarHorizon, RangeBands,
-                       SensorModel, _core)
+                       SensorModel, Zone, _core)
 
 T0 = datetime.datetime(2024, 5, 1, 12, 0, 0)
 RNG = np.random.default_rng(99)
@@ -96,6 +96,9 @@ FACTORIES = {
     "MetadataThreshold-missing": lambda: MetadataThreshold(key="snr", threshold=3.5, below=2.0,
                                                            at_or_above=0.5, missing=1.0),
     "CoastalClutter": lambda: CoastalClutter(land=land_mask(), width=30.0, inside=20.0),
+    "Zone": lambda: Zone(polygons=land_mask(), inside=10.0, outside=0.5),
+    "ClutterDensityModel-zone": lambda: ClutterDensityModel(factors=[
+        1e-3, Zone(polygons=land_mask(), inside=0.01)]),
     "ClutterDensityModel-coast": lambda: ClutterDensityModel(factors=[
         1e-3, CoastalClutter(land=land_mask(), width=15.0, inside=50.0, seen_only=False)]),
     "ClutterDensityModel": lambda: ClutterDensityModel(factors=[
@@ -113,6 +116,8 @@ FACTORIES = {
 def behaviour(obj):
     """What the component computes, as arrays/tuples to compare bit for bit."""
     pose = Pose(x=15.0, y=-20.0, heading=2.2)
+    if isinstance(obj, Zone):
+        return obj(STATES[:, 0::2] / 4)
     if isinstance(obj, (RangeBands, RadarHorizon)):
         return obj(np.linspace(0, 40_000, 4001))
     if isinstance(obj, RadarEquation):
@@ -206,6 +211,7 @@ def test_equal_values_are_equal_and_hash_alike(factory):
         reference_snr=13.0, reference_range=1500.0, false_alarm_probability=1e-6, swerling=4,
         pulses=4, loss=1.5)),
     (FACTORIES["RadarHorizon"], lambda: RadarHorizon(antenna_height=20.0, target_height=3.5)),
+    (FACTORIES["Zone"], lambda: Zone(polygons=land_mask(), inside=10.0, outside=0.25)),
     (land_mask, lambda: LandMask(polygons=[ISLAND])),
     (FACTORIES["MetadataThreshold"], lambda: MetadataThreshold(key="area", threshold=10, below=1e-1,
                                                                at_or_above=1e-3, missing=1.0)),

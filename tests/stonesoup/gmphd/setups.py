@@ -91,6 +91,42 @@ def tracks_difference(expected, got, where="") -> float:
     return worst
 
 
+def lockstep(reference, tracker, compare_mixtures=False, explained=None):
+    """Runs both trackers scan by scan; after each, the same tracks (creation order) to
+    within the returned worst relative difference; with ``compare_mixtures`` also the same
+    mixture (components in order, tags matched one to one). Where the reference reports
+    its detections' clutter probabilities, the array tracker reports the same (to the
+    worst difference); ``explained`` (a list) collects those below 1."""
+    worst, scans = 0.0, 0
+    tag_map: dict = {}
+    # (a LearningTracker is iterated as itself, its learners run; its tracker is compared)
+    inner = lambda t: getattr(t, "tracker", t)  # noqa: E731
+    for (t1, _), (t2, _) in zip(reference, tracker):
+        assert t1 == t2
+        scans += 1
+        worst = max(worst, tracks_difference(inner(reference).target_tracks.values(),
+                                             inner(tracker).target_tracks.values(), f"scan {scans}"))
+        expected = inner(reference).clutter_probabilities
+        if expected is not None:
+            got = inner(tracker).clutter_probabilities
+            assert got[0] == expected[0] == t1 and got[1].keys() == expected[1].keys()
+            a = np.array(list(expected[1].values()))
+            b = np.array([got[1][d] for d in expected[1]])
+            worst = max(worst, float(np.max(np.abs(a - b), initial=0.0)))
+            if explained is not None:
+                explained.extend(a[a < 1])
+        if compare_mixtures:
+            expected = reference.gaussian_mixture.components
+            got = tracker.gaussian_mixture.components
+            assert len(expected) == len(got), f"scan {scans}: mixture sizes"
+            for a, b in zip(expected, got):
+                assert tag_map.setdefault(a.tag, b.tag) == b.tag, f"scan {scans}: tags"
+                worst = max(worst, state_difference(a, b))
+    assert scans > 0
+    assert sum(1 for _ in tracker) == 0, "the array tracker has scans left over"
+    return worst
+
+
 def cv_model(q):
     return CombinedLinearGaussianTransitionModel([ConstantVelocity(q), ConstantVelocity(q)])
 

@@ -34,47 +34,10 @@ from ctxmodels.stonesoup import (
     PointProcessMultiTargetTracker,
 )
 
-from .setups import (RTOL, START, birth_component, radar_lidar_scenario, relative_difference,
-                     seeded_uuids, state_difference, stock_components, tracks_difference,
-                     tutorial_scenario, with_contexts)
+from .setups import (RTOL, START, birth_component, lockstep, radar_lidar_scenario, relative_difference,
+                     seeded_uuids, stock_components, tutorial_scenario, with_contexts)
 
 pytestmark = pytest.mark.usefixtures("stock_in_stable_order")
-
-
-def lockstep(reference, tracker, compare_mixtures=False, explained=None):
-    """Runs both trackers scan by scan; after each, the same tracks (creation order) to
-    within the returned worst relative difference; with ``compare_mixtures`` also the same
-    mixture (components in order, tags matched one to one). Where the reference reports
-    its detections' clutter probabilities, the array tracker reports the same (to the
-    worst difference); ``explained`` (a list) collects those below 1."""
-    worst, scans = 0.0, 0
-    tag_map: dict = {}
-    # (a LearningTracker is iterated as itself, its learners run; its tracker is compared)
-    inner = lambda t: getattr(t, "tracker", t)  # noqa: E731
-    for (t1, _), (t2, _) in zip(reference, tracker):
-        assert t1 == t2
-        scans += 1
-        worst = max(worst, tracks_difference(inner(reference).target_tracks.values(),
-                                             inner(tracker).target_tracks.values(), f"scan {scans}"))
-        expected = inner(reference).clutter_probabilities
-        if expected is not None:
-            got = inner(tracker).clutter_probabilities
-            assert got[0] == expected[0] == t1 and got[1].keys() == expected[1].keys()
-            a = np.array(list(expected[1].values()))
-            b = np.array([got[1][d] for d in expected[1]])
-            worst = max(worst, float(np.max(np.abs(a - b), initial=0.0)))
-            if explained is not None:
-                explained.extend(a[a < 1])
-        if compare_mixtures:
-            expected = reference.gaussian_mixture.components
-            got = tracker.gaussian_mixture.components
-            assert len(expected) == len(got), f"scan {scans}: mixture sizes"
-            for a, b in zip(expected, got):
-                assert tag_map.setdefault(a.tag, b.tag) == b.tag, f"scan {scans}: tags"
-                worst = max(worst, state_difference(a, b))
-    assert scans > 0
-    assert sum(1 for _ in tracker) == 0, "the array tracker has scans left over"
-    return worst
 
 
 def pair(scans, components, **tracker_options):
@@ -432,9 +395,10 @@ def test_births_queue_in_one_core_call_as_in_steps():
     means, covar = rng.normal(0.0, 10.0, (12, 4)), np.diag([4.0, 1.0, 4.0, 1.0])
     for circle in (None, ((0, 2), (1.0, -2.0), 9.0)):
         one, steps = _core.GaussianMixtureArrays(4), _core.GaussianMixtureArrays(4)
-        one.extend_births(means, covar, 0.1, 5, circle)
+        weights = rng.uniform(0.01, 0.2, 12)
+        one.extend_births(means, covar, weights, 5, circle)
         fresh = _core.GaussianMixtureArrays(4)
-        fresh.extend(means, np.broadcast_to(covar, (12, 4, 4)).copy(), np.full(12, 0.1),
+        fresh.extend(means, np.broadcast_to(covar, (12, 4, 4)).copy(), weights,
                      [0] * 12, [5] * 12)
         if circle is not None:
             fresh.retain_inside_circle(*circle)
@@ -443,4 +407,6 @@ def test_births_queue_in_one_core_call_as_in_steps():
             assert getattr(one, name)().tobytes() == getattr(steps, name)().tobytes()
         assert 0 < len(one) <= 12
     with pytest.raises(ValueError, match="covar"):
-        one.extend_births(means, np.eye(3), 0.1, 5)
+        one.extend_births(means, np.eye(3), np.full(12, 0.1), 5)
+    with pytest.raises(ValueError, match="^weights: must have 12 entries"):
+        one.extend_births(means, covar, np.full(11, 0.1), 5)

@@ -200,10 +200,12 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
         self._arrays = self._as_arrays(components, next_tag)
 
     # --- births -----------------------------------------------------------------------------
-    def _queue_births(self, detections, time: int) -> None:
+    def _queue_births(self, detections, time: int, context) -> None:
         """The scan's detections' births wait in ``_pending`` for a scan that can see them."""
         birth = self.birth
-        means = birth.means(detections, self._positions(detections, birth.position_mapping))
+        positions = self._positions(detections, birth.position_mapping)
+        means = birth.means(detections, positions)
+        weights = np.ascontiguousarray(birth.weights(detections, positions, context), dtype=np.float64)
         n, ndim = means.shape
         covar = np.ascontiguousarray(birth.birth_covar, dtype=np.float64)
         if self._pending is None:
@@ -214,12 +216,12 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
         if region is None or type(region) is CircularRegion:  # (in one call into the core)
             circle = None if region is None else (
                 tuple(map(int, self.position_mapping)), region.centre, region.radius)
-            self._pending.extend_births(means, covar, float(birth.birth_weight), time, circle)
+            self._pending.extend_births(means, covar, weights, time, circle)
             return
         covars = np.empty((n,) + covar.shape)
         covars[...] = covar  # (one per birth)
         fresh = _core.GaussianMixtureArrays(ndim)
-        fresh.extend(means, covars, np.full(n, float(birth.birth_weight)), [_BIRTH] * n,
+        fresh.extend(means, covars, weights, [_BIRTH] * n,
                      [time] * n)
         self._within_region(fresh)
         self._pending.take_from(fresh, [True] * len(fresh))
@@ -378,7 +380,7 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
         arrays.reduce(**plan.reduce)
         self._update_tracks_from_arrays(time)
         if self.birth is not None and detections:
-            self._queue_births(detections, now)
+            self._queue_births(detections, now, context)
         self._scan_positions = {}
 
     def _positions(self, detections, mapping) -> np.ndarray:

@@ -24,6 +24,13 @@ pass the update unchanged, so deferring it is the same as entering it earlier �
 next scan when there is no context (the stock, uniform-P_D case). Births still waiting
 after ``max_delay`` are dropped.
 
+With a ``birth_density`` the weights follow the context as λ does: detection :math:`z` of a
+scan by a sensor in state :math:`S` gives a birth of weight
+:math:`w_b(z) = w_b\, b(z; S)`, :math:`b` the product of the density model's factors at the
+detection's world position — births likelier at a harbour mouth (a
+:class:`~ctxmodels.Zone`), at the edge of the coverage where targets enter (range bands),
+less likely on land (a ``Zone`` of the land with a small ``inside``).
+
 The components carry ``tag='birth'``, like the stock birth component: the hypothesiser gives
 a detected birth a fresh tag (a new potential track), the updater drops an undetected one,
 and the tracker never turns a ``'birth'`` component into a track.
@@ -38,7 +45,9 @@ from stonesoup.base import Base, Property
 from stonesoup.types.array import CovarianceMatrix
 from stonesoup.types.state import TaggedWeightedGaussianState
 
+from ...clutter import ClutterDensityModel
 from ...context import detection_positions
+from ...errors import ArgumentError, ArgumentTypeError
 from ...foreign import as_array_context
 
 #: Table I of the paper: track initialisation covariance for [x, vx, y, vy].
@@ -82,6 +91,10 @@ class MeasurementDrivenBirth(Base):
     max_delay: datetime.timedelta = Property(
         default=None, doc="Births no scan could see within this long after their detection "
                           "are dropped; None: no limit.")
+    birth_density: ClutterDensityModel = Property(
+        default=None, doc="Relative birth density b(z; S): each birth's weight is "
+                          "``birth_weight`` × b at its detection, for the pose of the scan's "
+                          "sensor (needs each scan's detector context). None: b = 1.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -117,6 +130,9 @@ class MeasurementDrivenBirth(Base):
         if mean.shape != (len(velocity),) or not np.all(np.isfinite(mean)):
             raise ValueError(f"velocity_mean: needs one finite value per velocity index "
                              f"({len(velocity)}), got {self.velocity_mean!r}")
+        if self.birth_density is not None and not isinstance(self.birth_density, ClutterDensityModel):
+            raise ArgumentTypeError("birth_density", f"expected a ClutterDensityModel, got "
+                                                     f"{type(self.birth_density).__name__}")
         if self.max_delay is not None and not isinstance(self.max_delay, datetime.timedelta):
             raise TypeError(f"max_delay: expected a datetime.timedelta, "
                             f"got {type(self.max_delay).__name__}")
@@ -131,22 +147,45 @@ class MeasurementDrivenBirth(Base):
     def ndim_state(self) -> int:
         return self.birth_covar.shape[0]
 
-    def components(self, detections, timestamp: datetime.datetime | None = None
-                   ) -> list[TaggedWeightedGaussianState]:
+    def components(self, detections, timestamp: datetime.datetime | None = None,
+                   detector_context=None) -> list[TaggedWeightedGaussianState]:
         """A birth component at each detection of one scan (world position through each
         detection's measurement model: linear models by pseudo-inverse, non-linear ones by
-        their ``inverse_function``). ``timestamp`` defaults to each detection's own."""
+        their ``inverse_function``). ``timestamp`` defaults to each detection's own; the
+        ``detector_context`` (default: the detection set's) gives the pose that a
+        ``birth_density`` is evaluated for."""
+        if detector_context is None:
+            detector_context = getattr(detections, "detector_context", None)
         detections = list(detections)
         if not detections:
             return []
-        means = self.means(detections)
+        positions = detection_positions(detections, self._position)
+        means = self.means(detections, positions)
+        weights = self.weights(detections, positions, detector_context)
         return [TaggedWeightedGaussianState(
                     state_vector=mean.reshape(-1, 1),
                     covar=self.birth_covar.copy(),
-                    weight=self.birth_weight,
+                    weight=weight,
                     tag=TaggedWeightedGaussianState.BIRTH,
                     timestamp=timestamp if timestamp is not None else detection.timestamp)
-                for mean, detection in zip(means, detections)]
+                for mean, weight, detection in zip(means, weights, detections)]
+
+    def weights(self, detections: Sequence, positions=None, detector_context=None) -> np.ndarray:
+        """The (N,) birth weights of ``detections``: ``birth_weight`` each, times the
+        ``birth_density`` at each detection's world position (``positions``, (N, 2), if
+        already computed) for the pose of ``detector_context``'s sensor, in one call."""
+        n = len(detections)
+        if self.birth_density is None:
+            return np.full(n, float(self.birth_weight))
+        pose = getattr(detector_context, "pose", None)
+        if pose is None:
+            raise ArgumentError("birth_density", "needs each scan's detector context with its "
+                                "sensor's pose (feed the tracker through a ContextFeeder)")
+        if positions is None:
+            positions = detection_positions(detections, self._position)
+        metadata = ([d.metadata for d in detections] if self.birth_density.metadata_keys
+                    else None)
+        return float(self.birth_weight) * self.birth_density.evaluate(pose, positions, metadata)
 
     def means(self, detections: Sequence, positions=None) -> np.ndarray:
         """The (N, D) birth means of ``detections`` (see :meth:`components`); ``positions``:

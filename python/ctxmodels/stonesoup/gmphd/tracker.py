@@ -212,7 +212,7 @@ class PointProcessMultiTargetTracker(_StockPointProcessTracker):
 
         if self.birth is not None:
             self._pending_births.extend(
-                self._inside(self.birth.components(detections, time)))
+                self._inside(self.birth.components(detections, time, context)))
         return time, self.tracks
 
 
