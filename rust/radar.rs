@@ -266,55 +266,84 @@ pub fn detection_probability(swerling: Swerling, pulses: u64, snr: f64, threshol
     pd.clamp(0.0, 1.0)
 }
 
-/// Σ_k Poisson(k; λ) Q(n + k, T), over k within λ ± (10√λ + 30) (the rest of the Poisson
-/// mass is below 1e-22): summed upwards (Q grows with k) when P_D is below ½, else as
+/// Σ_k Poisson(k; λ) Q(n + k, T) over the k whose Poisson weight is at least 1e-18 of the
+/// mode's (the tails left out hold below ~1e-17 of the mass: they fall faster than
+/// geometrically). Summed upwards (Q grows with k) for P_D below ½, else as
 /// 1 − Σ_k Poisson(k; λ) P(n + k, T) summed downwards (P falls with k), so that every
-/// recurrence adds.
+/// recurrence adds; the side is guessed from the mean of the summed power, n + λ, against
+/// T, and the other side summed only when the guess was wrong.
 fn swerling0(n: u64, lambda: f64, t: f64) -> f64 {
     if lambda > 1e15 {
         // T < 1e4 (Q(n, T) ≥ 1e-300, n ≤ 1024): no Poisson mass where P(n + k, T) is not 0
         return 1.0;
     }
-    let spread = 10.0 * lambda.sqrt() + 30.0;
-    let lo = (lambda - spread).max(0.0).floor() as u64;
-    let hi = (lambda + spread).ceil() as u64;
+    // A sure lower end first (below it lies < 1e-20 of the Poisson mass): where every
+    // k above it misses with probability < 1e-18, P_D is 1 to double precision.
+    let floor = (lambda - 10.0 * lambda.sqrt() - 10.0).max(0.0) as u64;
+    if gamma::regularized(n + floor, t).0 < 1e-18 {
+        return 1.0;
+    }
+    let mode = lambda.floor() as u64;
+    let peak = gamma::term(mode, lambda);
+    let (mut lo, mut hi, mut w) = (mode, mode, peak);
+    while lo > 0 && w > 1e-18 * peak {
+        w *= lo as f64 / lambda;
+        lo -= 1;
+    }
+    w = peak;
+    while w > 1e-18 * peak {
+        hi += 1;
+        w *= lambda / hi as f64;
+    }
+    let q_lo = gamma::regularized(n + lo, t).1;
     // t_a = e^{−T} T^a / a!, with t_{a+1} = t_a T / (a + 1)
-    let (p_lo, q_lo) = gamma::regularized(n + lo, t);
-    if p_lo < 1e-18 {
-        return 1.0; // every k ≥ lo misses with probability < 1e-18, and k < lo has no mass
-    }
-    let mut weight = gamma::term(lo, lambda);
-    let (mut q, mut step) = (q_lo, gamma::term(n + lo, t));
-    let (mut pd, mut total) = (0.0, 0.0);
-    for k in lo..=hi {
-        pd += weight * q;
-        total += weight;
-        q += step;
-        step *= t / (n + k + 1) as f64;
-        weight *= lambda / (k + 1) as f64;
-    }
-    // (the window holds all but 1e-22 of the Poisson mass: dividing by its computed sum
-    // removes the rounding of the first weight, which every later one inherits)
-    if pd < 0.5 * total {
-        return pd / total;
-    }
-    let (mut p, _) = gamma::regularized(n + hi, t);
-    let mut weight = gamma::term(hi, lambda);
-    let mut step = gamma::term(n + hi - 1, t); // t_{n+k−1}: P(n+k−1) = P(n+k) + t_{n+k−1}
-    let (mut miss, mut total) = (0.0, 0.0);
-    let mut k = hi;
-    loop {
-        miss += weight * p;
-        total += weight;
-        if k == lo {
-            break;
+    let detected = || {
+        let mut weight = gamma::term(lo, lambda);
+        let (mut q, mut step) = (q_lo, gamma::term(n + lo, t));
+        let (mut pd, mut total) = (0.0, 0.0);
+        for k in lo..=hi {
+            pd += weight * q;
+            total += weight;
+            q += step;
+            step *= t / (n + k + 1) as f64;
+            weight *= lambda / (k + 1) as f64;
         }
-        p += step;
-        k -= 1;
-        weight *= (k + 1) as f64 / lambda;
-        step *= (n + k) as f64 / t;
+        // (dividing by the window's computed mass removes the rounding of the first weight,
+        // which every later one inherits)
+        pd / total
+    };
+    let missed = || {
+        let (mut p, _) = gamma::regularized(n + hi, t);
+        let mut weight = gamma::term(hi, lambda);
+        let mut step = gamma::term(n + hi - 1, t); // t_{n+k−1}: P(n+k−1) = P(n+k) + t_{n+k−1}
+        let (mut miss, mut total) = (0.0, 0.0);
+        let mut k = hi;
+        loop {
+            miss += weight * p;
+            total += weight;
+            if k == lo {
+                break;
+            }
+            p += step;
+            k -= 1;
+            weight *= (k + 1) as f64 / lambda;
+            step *= (n + k) as f64 / t;
+        }
+        miss / total
+    };
+    if t >= n as f64 + lambda {
+        let pd = detected();
+        if pd < 0.5 {
+            return pd;
+        }
+        1.0 - missed()
+    } else {
+        let miss = missed();
+        if miss <= 0.5 {
+            return 1.0 - miss;
+        }
+        detected()
     }
-    1.0 - miss / total
 }
 
 /// Σ_{k=0}^{n} C(n, k) β^{−k} (1 − 1/β)^{n−k} Q(2n − k, T/β), β = 1 + S/2 (S > 0).

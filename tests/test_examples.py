@@ -91,6 +91,16 @@ def test_example_runs(example, tmp_path):
             "with the coverage 0.990",
             "context-aware estimate 3 m from the target, 78 m from the sensor"], output
         assert _run(example, tmp_path, hash_seed="4242") == output
+    if example.stem == "coastal_surveillance_radar":
+        lines = output.splitlines()
+        assert lines[0] == "P_D at 3, 6, 9, 12 km: [0.98 0.76 0.27 0.03]; horizon 21.8 km", output
+        held = {line.split(":")[0]: tuple(int(v) for v in re.findall(r"(\d+)%", line))
+                for line in lines[1:]}
+        # seen: near 99 % / 99 %, far 29 % / 65 %, behind 28 % / 28 %
+        assert min(held["near"]) >= 90, output
+        flat, aware = held["far"]
+        assert aware >= 2 * flat and aware >= 50, output  # the claim: the far boat held
+        assert _run(example, tmp_path, hash_seed="4242") == output
     if example.stem == "coastline_from_geojson":
         lines = output.splitlines()
         assert lines[0] == "2 polygons, 108 vertices, 1 hole", output
