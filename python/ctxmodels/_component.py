@@ -171,7 +171,10 @@ def as_float(value: Any, name: str, *, finite: bool = True) -> float:
     """`value` as a float, with a clear error naming the argument."""
     if isinstance(value, _NOT_NUMBERS) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ArgumentTypeError(name, f"expected a number, got {type(value).__name__}")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:  # a Python int beyond a double's range
+        raise ArgumentError(name, "is too large for a float") from None
     if finite and not math.isfinite(value):
         raise ArgumentError(name, f"must be finite, got {value}")
     return value

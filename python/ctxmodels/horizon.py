@@ -10,6 +10,7 @@ from stonesoup.base import Property
 from . import _core
 from ._component import ModelComponent, as_float
 from .errors import ArgumentError
+from .radar import _ranges
 
 #: The Earth's mean radius, metres.
 EARTH_RADIUS = 6_371_000.0
@@ -47,8 +48,12 @@ class RadarHorizon(ModelComponent):
         for name in ("k", "earth_radius"):
             if not as_float(getattr(self, name), name) > 0:
                 raise ArgumentError(name, f"must be > 0, got {getattr(self, name)}")
-        if not math.isfinite(self.range):
-            raise ArgumentError("earth_radius", f"k R h overflows: k {self.k}, R {self.earth_radius}")
+        reach = 2.0 * float(self.k) * float(self.earth_radius)
+        if not math.isfinite(reach):
+            raise ArgumentError("earth_radius", f"2 k R overflows: k {self.k}, R {self.earth_radius}")
+        for name in ("antenna_height", "target_height"):
+            if not math.isfinite(reach * float(getattr(self, name))):
+                raise ArgumentError(name, f"2 k R h overflows: h {getattr(self, name)}")
         self._compiled()
 
     @property
@@ -62,6 +67,5 @@ class RadarHorizon(ModelComponent):
         return self._cached("core", lambda: _core.RangeBands([self.range], [1.0, 0.0], [False]))
 
     def __call__(self, ranges) -> np.ndarray:
-        """1 at each range within the horizon, 0 beyond; NaN raises."""
-        r = np.atleast_1d(np.asarray(ranges, dtype=np.float64)).ravel()
-        return self._compiled().at(np.ascontiguousarray(r))
+        """1 at each range (metres, ≥ 0) within the horizon, 0 beyond; NaN raises."""
+        return self._compiled().at(_ranges(ranges))

@@ -7,6 +7,7 @@ from stonesoup.base import Property
 
 from . import _core
 from ._component import ModelComponent, as_array, as_float, as_int
+from .errors import ArgumentError, ArgumentTypeError
 
 #: Most pulses summed (the detection sums cost O(pulses) per state).
 MAX_PULSES = 1024
@@ -56,9 +57,10 @@ class RadarEquation(ModelComponent):
     """
 
     reference_snr: float = Property(doc="Per-pulse SNR at ``reference_range``, dB.")
-    reference_range: float = Property(doc="Range at which the SNR is ``reference_snr``, metres (> 0).")
+    reference_range: float = Property(
+        doc="Range at which the SNR is ``reference_snr``, metres, within [1e-6, 1e12).")
     false_alarm_probability: float = Property(
-        doc="The detector's false-alarm probability per resolution cell, in (0, 1).")
+        doc="The detector's false-alarm probability per resolution cell, in (1e-300, 0.5].")
     swerling: int = Property(default=1, doc="Swerling case of the target, 0–4.")
     pulses: int = Property(default=1, doc=f"Pulses summed non-coherently, 1–{MAX_PULSES}.")
     loss: float = Property(default=0.0, doc="System loss, dB (≥ 0), subtracted from the SNR.")
@@ -92,4 +94,14 @@ class RadarEquation(ModelComponent):
 
 
 def _ranges(ranges) -> np.ndarray:
-    return as_array(np.atleast_1d(np.asarray(ranges, dtype=np.float64)).ravel(), "ranges", 1)
+    """Ranges (metres, ≥ 0; NaN passes) as a 1-D float64 array, or an error naming them."""
+    if isinstance(ranges, (str, bytes)):
+        raise ArgumentTypeError("ranges", f"expected numbers, got {type(ranges).__name__}")
+    try:
+        values = np.atleast_1d(np.asarray(ranges))
+    except (TypeError, ValueError) as err:  # ragged lists and the like
+        raise ArgumentTypeError("ranges", f"cannot be read as numbers ({err})") from None
+    r = as_array(values, "ranges", 1, "a 1-D array of ranges")
+    if np.any(r < 0):
+        raise ArgumentError("ranges", f"must be >= 0 metres, got {r[r < 0][0]}")
+    return r

@@ -56,6 +56,17 @@ def test_p_d_is_the_averaged_non_central_chi_squared(case, pulses, pfa):
     assert worst < RELATIVE, worst
 
 
+@pytest.mark.parametrize("pfa", [1e-16, 1e-30, 1e-100, 1.0000001e-300])
+@pytest.mark.parametrize("pulses", [1, 4])
+def test_a_steady_targets_p_d_keeps_its_relative_accuracy_at_a_tiny_false_alarm_rate(pfa, pulses):
+    """Far below the mode's window, the Poisson tail still carries a P_D near P_FA."""
+    radar = RadarEquation(reference_snr=13.0, reference_range=1500.0, false_alarm_probability=pfa,
+                          swerling=0, pulses=pulses)
+    r = np.array([1304.55, 3000.0, 6000.0])
+    expected = stats.ncx2.sf(2 * radar.threshold, 2 * pulses, 2 * pulses * radar.snr(r))
+    np.testing.assert_allclose(radar(r), expected, rtol=1e-12)
+
+
 @pytest.mark.parametrize("pulses", [1, 2, 7, 100, 1024])
 @pytest.mark.parametrize("pfa", [0.5, 1e-2, 1e-6, 1e-10, 1e-200])
 def test_the_threshold_is_the_inverse_incomplete_gamma(pulses, pfa):
@@ -158,6 +169,9 @@ def test_the_horizon_is_the_spherical_earths_within_two_hundredths_of_a_percent(
     ({"reference_snr": float("nan")}, "reference_snr", ArgumentError),
     ({"reference_range": 0.0}, "reference_range", ArgumentError),
     ({"false_alarm_probability": 1.0}, "false_alarm_probability", ArgumentError),
+    ({"false_alarm_probability": 0.6}, "false_alarm_probability", ArgumentError),
+    ({"reference_range": 1e-200}, "reference_range", ArgumentError),
+    ({"reference_snr": 10**400}, "reference_snr", ArgumentError),
     ({"false_alarm_probability": 0.0}, "false_alarm_probability", ArgumentError),
     ({"false_alarm_probability": -0.1}, "false_alarm_probability", ArgumentError),
     ({"swerling": 5}, "swerling", ArgumentError),
@@ -183,8 +197,24 @@ def test_bad_radar_parameters_name_their_argument(kwargs, argument, kind):
     ({"k": -4 / 3}, "k"),
     ({"earth_radius": 0.0}, "earth_radius"),
     ({"earth_radius": 1e308, "k": 1e10}, "earth_radius"),
+    ({"antenna_height": 1.7e308}, "antenna_height"),
+    ({"target_height": 1.7e308}, "target_height"),
+    ({"k": 10**400}, "k"),
 ])
 def test_bad_horizon_parameters_name_their_argument(kwargs, argument):
     with pytest.raises(ArgumentError) as info:
         RadarHorizon(**{"antenna_height": 10.0, **kwargs})
     assert info.value.argument == argument, str(info.value)
+
+
+@pytest.mark.parametrize("ranges, kind", [
+    ("1500", ArgumentTypeError), ([[1.0, 2.0], [3.0]], ArgumentTypeError), (None, ArgumentTypeError),
+    (np.zeros((2, 2)), ArgumentError), ([-1.0], ArgumentError), (-np.inf, ArgumentError),
+])
+def test_bad_ranges_are_named(ranges, kind):
+    radar = RadarEquation(reference_snr=13.0, reference_range=1000.0, false_alarm_probability=1e-6)
+    horizon = RadarHorizon(antenna_height=10.0)
+    for call in (radar, radar.snr, horizon):
+        with pytest.raises(kind) as info:
+            call(ranges)
+        assert info.value.argument == "ranges", str(info.value)

@@ -10,7 +10,7 @@ from stonesoup.serialise import YAML
 
 from ctxmodels import (ClutterDensityModel, DetectionSet, LandMask, MetadataThreshold, RangeBands,
                        Zone, detection_positions)
-from ctxmodels.errors import ArgumentError, ArgumentTypeError
+from ctxmodels.errors import ArgumentError, ArgumentTypeError, ShapeError
 from ctxmodels.stonesoup import (ArrayPointProcessTracker, CircularRegion, MeasurementDrivenBirth,
                                  PointProcessMultiTargetTracker)
 
@@ -78,6 +78,24 @@ def test_a_density_needs_the_scans_context():
     with pytest.raises(ArgumentTypeError) as info:
         MeasurementDrivenBirth(birth_density=RangeBands(edges=(1.0,), values=(1.0, 2.0)))
     assert info.value.argument == "birth_density"
+
+
+def test_positions_must_match_the_detections_and_weights_stay_finite():
+    scenario = radar_lidar_scenario(n_scans=6)
+    _, scan = next((t, s) for t, s in with_contexts(scenario["scans"]) if len(s) >= 3)
+    detections, context = list(scan), scan.detector_context
+    birth = MeasurementDrivenBirth(birth_weight=1e-3, birth_density=_density())
+    with pytest.raises(ShapeError) as info:
+        birth.weights(detections, np.zeros((len(detections) - 1, 2)), context)
+    assert info.value.argument == "positions"
+    huge = MeasurementDrivenBirth(birth_weight=1e300,
+                                  birth_density=ClutterDensityModel(factors=[1e300]))
+    with pytest.raises(ArgumentError) as info:
+        huge.weights(detections, None, context)
+    assert info.value.argument == "birth_density"
+    with pytest.raises(ArgumentError) as info:
+        MeasurementDrivenBirth(birth_weight=10**400)
+    assert info.value.argument == "birth_weight"
 
 
 def test_birth_with_a_density_serialises():

@@ -45,9 +45,10 @@ from stonesoup.base import Base, Property
 from stonesoup.types.array import CovarianceMatrix
 from stonesoup.types.state import TaggedWeightedGaussianState
 
+from ..._component import as_float
 from ...clutter import ClutterDensityModel
 from ...context import detection_positions
-from ...errors import ArgumentError, ArgumentTypeError
+from ...errors import ArgumentError, ArgumentTypeError, ShapeError
 from ...foreign import as_array_context
 
 #: Table I of the paper: track initialisation covariance for [x, vx, y, vy].
@@ -98,10 +99,7 @@ class MeasurementDrivenBirth(Base):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        weight = self.birth_weight
-        if isinstance(weight, bool) or not isinstance(
-                weight, (int, float, np.integer, np.floating)):
-            raise TypeError(f"birth_weight: expected a number, got {type(weight).__name__}")
+        weight = as_float(self.birth_weight, "birth_weight", finite=False)
         if not np.isfinite(weight) or weight <= 0:
             raise ValueError(f"birth_weight: must be finite and > 0, got {weight}")
         if self.birth_covar is None:
@@ -183,9 +181,18 @@ class MeasurementDrivenBirth(Base):
                                 "sensor's pose (feed the tracker through a ContextFeeder)")
         if positions is None:
             positions = detection_positions(detections, self._position)
+        elif np.shape(positions) != (n, 2):
+            raise ShapeError("positions", f"must be ({n}, 2), one row per detection, got "
+                                          f"shape {np.shape(positions)}")
         metadata = ([d.metadata for d in detections] if self.birth_density.metadata_keys
                     else None)
-        return float(self.birth_weight) * self.birth_density.evaluate(pose, positions, metadata)
+        density = self.birth_density.evaluate(pose, positions, metadata)
+        with np.errstate(over="ignore", under="ignore"):  # (refused below, by name)
+            weights = float(self.birth_weight) * density
+        if not np.all(np.isfinite(weights) & (weights > 0)):
+            raise ArgumentError("birth_density", f"birth_weight {self.birth_weight} times the "
+                                "density overflows or underflows at a detection")
+        return weights
 
     def means(self, detections: Sequence, positions=None) -> np.ndarray:
         """The (N, D) birth means of ``detections`` (see :meth:`components`); ``positions``:
