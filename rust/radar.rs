@@ -186,14 +186,7 @@ impl RadarEquation {
     /// P_D at squared range `r2` (NaN stays NaN): the reference [`Self::lanes_at_squared`]
     /// gives the bits of.
     pub fn at_squared(&self, r2: f64) -> f64 {
-        if let Some(form) = OnePulse::of(self.swerling, self.pulses) {
-            return form
-                .at(Portable::splat(self.snr_at_squared(r2)), self.threshold)
-                .to_array()[0];
-        }
-        if r2.is_nan() {
-            return f64::NAN;
-        }
+        // (NaN r² gives a NaN SNR, which detection_probability keeps)
         detection_probability(
             self.swerling,
             self.pulses,
