@@ -7,17 +7,20 @@ use crate::simd::Lanes;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
-/// Which columns of a state row hold the x and y position. Stone Soup's constant-velocity
-/// state [x, vx, y, vy] maps to (0, 2).
+/// Which columns of a state row hold the x and y position, and the height z when the
+/// model is evaluated in 3-D. Stone Soup's constant-velocity state [x, vx, y, vy] maps to
+/// (0, 2); [x, vx, y, vy, z, vz] to (0, 2, 4). Without a height, targets are taken to be
+/// at the sensor's height (ranges are plane distances).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PositionMapping {
     pub x: usize,
     pub y: usize,
+    pub z: Option<usize>,
 }
 
 impl Default for PositionMapping {
     fn default() -> Self {
-        PositionMapping { x: 0, y: 2 }
+        PositionMapping { x: 0, y: 2, z: None }
     }
 }
 
@@ -29,21 +32,43 @@ impl PositionMapping {
                 format!("x and y must be different columns, got ({x}, {y})"),
             ));
         }
-        Ok(PositionMapping { x, y })
+        Ok(PositionMapping { x, y, z: None })
+    }
+
+    /// The mapping (x, y, z): states with a height, evaluated in 3-D.
+    pub fn raised(x: usize, y: usize, z: usize) -> Result<Self> {
+        if z == x || z == y || x == y {
+            return Err(ModelError::invalid(
+                "position_mapping",
+                format!("x, y and z must be different columns, got ({x}, {y}, {z})"),
+            ));
+        }
+        Ok(PositionMapping { x, y, z: Some(z) })
+    }
+
+    /// The largest column the mapping reads.
+    pub fn widest(&self) -> usize {
+        self.x.max(self.y).max(self.z.unwrap_or(0))
     }
 
     /// Checks the mapping against the number of columns of the state array.
     pub fn check(&self, ncols: usize, argument: &'static str) -> Result<()> {
-        if self.x >= ncols || self.y >= ncols {
+        if self.widest() >= ncols {
             return Err(ModelError::shape(
                 argument,
-                format!(
-                    "position_mapping ({}, {}) is out of range for rows of {ncols} columns",
-                    self.x, self.y
-                ),
+                format!("position_mapping {self} is out of range for rows of {ncols} columns"),
             ));
         }
         Ok(())
+    }
+}
+
+impl std::fmt::Display for PositionMapping {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.z {
+            None => write!(f, "({}, {})", self.x, self.y),
+            Some(z) => write!(f, "({}, {}, {z})", self.x, self.y),
+        }
     }
 }
 
@@ -144,6 +169,84 @@ impl Positions for Columns<'_> {
     }
 }
 
+/// Where the states' heights are read: nowhere (a planar evaluation, every target at the
+/// sensor's height) or a column of their rows or particles. The kernels are generic over
+/// it, so the planar ones carry no height code.
+pub trait Heights: Copy {
+    /// Whether the states have heights (false: the planar evaluation).
+    const RAISED: bool;
+    /// The heights of states `first..first + 4`.
+    fn lanes<L: Lanes>(self, first: usize) -> L;
+    /// The height of state `i`.
+    fn one(self, i: usize) -> f64;
+    /// As [`Self::lanes`] for the `count` < 4 states from `first`, zero-padded.
+    #[inline(always)]
+    fn partial<L: Lanes>(self, first: usize, count: usize) -> L {
+        let mut zs = [0.0; 4];
+        for (i, z) in zs.iter_mut().enumerate().take(count) {
+            *z = self.one(first + i);
+        }
+        L::from_array(zs)
+    }
+}
+
+/// No heights: the planar evaluation.
+#[derive(Clone, Copy)]
+pub struct Planar;
+
+impl Heights for Planar {
+    const RAISED: bool = false;
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, _: usize) -> L {
+        L::splat(0.0)
+    }
+    #[inline(always)]
+    fn one(self, _: usize) -> f64 {
+        0.0
+    }
+}
+
+/// Heights in column `z` of (N, ncols) rows.
+#[derive(Clone, Copy)]
+pub struct RowHeights<'a> {
+    pub data: &'a [f64],
+    pub ncols: usize,
+    pub z: usize,
+}
+
+impl Heights for RowHeights<'_> {
+    const RAISED: bool = true;
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> L {
+        L::from_array([
+            self.one(first),
+            self.one(first + 1),
+            self.one(first + 2),
+            self.one(first + 3),
+        ])
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> f64 {
+        self.data[i * self.ncols + self.z]
+    }
+}
+
+/// Heights as a contiguous run (the z row of a (D, N) C-ordered particle array).
+#[derive(Clone, Copy)]
+pub struct ColumnHeights<'a>(pub &'a [f64]);
+
+impl Heights for ColumnHeights<'_> {
+    const RAISED: bool = true;
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> L {
+        L::load(&self.0[first..])
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> f64 {
+        self.0[i]
+    }
+}
+
 /// Memory order of a (D, N) particle array.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MemoryOrder {
@@ -215,13 +318,10 @@ pub fn check_columns(
     mapping: PositionMapping,
     argument: &'static str,
 ) -> Result<()> {
-    if mapping.x >= ndim || mapping.y >= ndim {
+    if mapping.widest() >= ndim {
         return Err(ModelError::shape(
             argument,
-            format!(
-                "has {ndim} rows (state dimensions), but position_mapping ({}, {}) reads beyond them",
-                mapping.x, mapping.y
-            ),
+            format!("has {ndim} rows (state dimensions), but position_mapping {mapping} reads beyond them"),
         ));
     }
     if states.len() != ndim * n_out {

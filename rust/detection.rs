@@ -2,18 +2,27 @@
 //! over whole arrays of states.
 //!
 //! P_D(x; S) = Π_f f(x; S), each factor in [0, 1]: constants, range bands, body-frame
-//! angular sectors, the radar equation (P_D from the SNR at range), a land mask (0 on land)
-//! and line of sight (0 when shadowed by land).
+//! angular sectors, the radar equation (P_D from the SNR at range), elevation sectors, the
+//! radar horizon at the target's height, a land mask (0 on land) and line of sight (0 when
+//! shadowed by land).
 //! The expected P_D of a Gaussian position, E[P_D(p)] with p ~ N(m, P), is evaluated with a
 //! [`Rule`](crate::cubature::Rule).
+//!
+//! States are planar (x, y: every target at the sensor's height) or raised (x, y, z, by
+//! the [`PositionMapping`]'s height column). With heights, ranges (bands, the radar
+//! equation) are slant ranges from the sensor at its pose's height, elevations are the
+//! target's angle above the sensor's horizontal plane, and bearings (sectors), land and
+//! line of sight are read on the plane below the target.
 
 use crate::batch::{
-    check_columns, check_rows, for_each_chunk_from, Columns, CvRows, Layout, MemoryOrder, PositionMapping, Rows, CHUNK,
-    PARALLEL_THRESHOLD,
+    check_columns, check_rows, for_each_chunk_from, ColumnHeights, Columns, CvRows, Heights, Layout, MemoryOrder,
+    Planar, PositionMapping, Positions, RowHeights, Rows, CHUNK, PARALLEL_THRESHOLD,
 };
 use crate::cubature::Rule;
 use crate::detection_estimate::{read_estimate, SharedEstimate};
+use crate::elevation::ElevationSector;
 use crate::error::{check_probability, ModelError, Result};
+use crate::horizon::Horizon;
 use crate::land::LandMask;
 use crate::pose::{Pose, SensorFrame};
 use crate::radar::RadarEquation;
@@ -32,6 +41,10 @@ pub enum DetectionFactor {
     Sector(AngularSector),
     /// P_D of a Swerling target from the SNR at its range.
     Radar(RadarEquation),
+    /// A band of elevations above the sensor's horizontal plane.
+    Elevation(ElevationSector),
+    /// 0 beyond the radar horizon of a target at its own height (raised states only).
+    Horizon(Horizon),
     /// Land (boundary included) gets `on_land`, water 1.
     Land(Arc<LandMask>),
     /// A target shadowed from the sensor by land gets 0.
@@ -56,7 +69,12 @@ impl DetectionModel {
                     sector = s.values();
                     &sector
                 }
-                DetectionFactor::Radar(_)
+                DetectionFactor::Elevation(e) => {
+                    sector = e.values();
+                    &sector
+                }
+                DetectionFactor::Horizon(_)
+                | DetectionFactor::Radar(_)
                 | DetectionFactor::Land(_)
                 | DetectionFactor::Sight(_)
                 | DetectionFactor::Estimate(_) => &[], // (probabilities by construction)
@@ -101,6 +119,8 @@ impl DetectionModel {
                 }
                 DetectionFactor::Sector(s) => steps.push(Step::Sector(s.in_frame(&frame))),
                 DetectionFactor::Radar(radar) => steps.push(Step::Radar(radar.clone())),
+                DetectionFactor::Elevation(e) => steps.push(Step::Elevation(e.clone())),
+                DetectionFactor::Horizon(h) => steps.push(Step::Horizon(h.clone())),
                 DetectionFactor::Land(land) => indexed.push(Indexed::Land(Arc::clone(land))),
                 DetectionFactor::Sight(sight) => indexed.push(Indexed::Sight(Arc::clone(sight))),
             }
@@ -124,6 +144,39 @@ enum Step {
     Bands(RangeBands),
     Sector(FramedSector),
     Radar(RadarEquation),
+    Elevation(ElevationSector),
+    Horizon(Horizon),
+}
+
+/// Where a target is from the sensor: what every step reads. Planar states have dz = 0,
+/// r2 = h2 and z the sensor's height.
+#[derive(Clone, Copy)]
+pub(crate) struct Offsets<T> {
+    /// World-frame plane offsets.
+    pub dx: T,
+    pub dy: T,
+    /// Squared plane distance dx² + dy².
+    pub h2: T,
+    /// Height above the sensor.
+    pub dz: T,
+    /// Squared slant range h2 + dz².
+    pub r2: T,
+    /// The target's height.
+    pub z: T,
+}
+
+impl Step {
+    /// The step's value at one target.
+    fn at(&self, g: &Offsets<f64>) -> f64 {
+        match self {
+            Step::SquaredBands(bands) => bands.at_squared(g.r2),
+            Step::Bands(bands) => bands.at(g.r2.sqrt()),
+            Step::Sector(sector) => sector.at_squared(g.dx, g.dy, g.h2),
+            Step::Radar(radar) => radar.at_squared(g.r2),
+            Step::Elevation(e) => e.at(g.dz, g.r2),
+            Step::Horizon(h) => h.at(g.h2, g.z),
+        }
+    }
 }
 
 /// A factor evaluated point by point (a spatial index lookup each).
@@ -147,22 +200,64 @@ pub struct ScanDetection {
 }
 
 impl ScanDetection {
-    /// P_D at one world point, one factor after another: the readable reference the lane
-    /// kernels ([`lanes`]) must match bit for bit.
+    /// P_D at one world point at the sensor's height, one factor after another: the
+    /// readable reference the planar lane kernels ([`lanes`]) must match bit for bit.
     pub fn at_point(&self, x: f64, y: f64) -> f64 {
         let [ox, oy] = self.frame.origin;
         let (dx, dy) = (x - ox, y - oy);
-        let r2 = dx * dx + dy * dy;
+        let h2 = dx * dx + dy * dy;
+        let z = self.frame.height;
+        self.at_offsets(
+            x,
+            y,
+            &Offsets {
+                dx,
+                dy,
+                h2,
+                dz: 0.0,
+                r2: h2,
+                z,
+            },
+        )
+    }
+
+    /// P_D at one world point at height `z`: the reference of the raised kernels.
+    pub fn at_raised(&self, x: f64, y: f64, z: f64) -> f64 {
+        let [ox, oy] = self.frame.origin;
+        let (dx, dy, dz) = (x - ox, y - oy, z - self.frame.height);
+        let h2 = dx * dx + dy * dy;
+        self.at_offsets(
+            x,
+            y,
+            &Offsets {
+                dx,
+                dy,
+                h2,
+                dz,
+                r2: h2 + dz * dz,
+                z,
+            },
+        )
+    }
+
+    fn at_offsets(&self, x: f64, y: f64, g: &Offsets<f64>) -> f64 {
         let mut pd = self.constant;
         for step in &self.steps {
-            pd *= match step {
-                Step::SquaredBands(bands) => bands.at_squared(r2),
-                Step::Bands(bands) => bands.at(r2.sqrt()),
-                Step::Sector(sector) => sector.at_squared(dx, dy, r2),
-                Step::Radar(radar) => radar.at_squared(r2),
-            };
+            pd *= step.at(g);
         }
         self.indexed_at(x, y, pd)
+    }
+
+    /// Whether the scan reads the targets' heights (a horizon at the target's height):
+    /// planar states are then refused, naming `position_mapping`.
+    fn check_heights(&self, mapping: PositionMapping) -> Result<()> {
+        if mapping.z.is_none() && self.steps.iter().any(|s| matches!(s, Step::Horizon(_))) {
+            return Err(ModelError::invalid(
+                "position_mapping",
+                format!("{mapping} gives no height, but the model's radar horizon is at each target's height; give the (x, y, z) indices of the state"),
+            ));
+        }
+        Ok(())
     }
 
     /// `pd` after the land and sight factors at (x, y): skipped once it is 0.
@@ -185,6 +280,7 @@ impl ScanDetection {
 
     /// P_D at the position of each state row. `states` is (N, ncols) row-major.
     pub fn at_states(&self, states: &[f64], ncols: usize, mapping: PositionMapping, out: &mut [f64]) -> Result<()> {
+        self.check_heights(mapping)?;
         mapping.check(ncols, "states")?;
         check_rows(states, ncols, out.len(), "states")?;
         match self.at_layout(states, Layout::Rows { ncols }, mapping, out) {
@@ -204,6 +300,7 @@ impl ScanDetection {
         mapping: PositionMapping,
         out: &mut [f64],
     ) -> Result<()> {
+        self.check_heights(mapping)?;
         check_columns(particles, ndim, out.len(), mapping, "particles")?;
         match self.at_layout(particles, order.layout(ndim, out.len()), mapping, out) {
             Some(i) => Err(ModelError::invalid(
@@ -216,40 +313,49 @@ impl ScanDetection {
 
     /// P_D of every state of a checked array; the first state whose position is not finite.
     fn at_layout(&self, states: &[f64], layout: Layout, mapping: PositionMapping, out: &mut [f64]) -> Option<usize> {
-        for_each_chunk_from(out, self.parallel_from, |first, chunk| match layout {
-            Layout::Rows { ncols: 4 } if mapping == PositionMapping::default() => dispatch(lanes::AtStates {
-                scan: self,
-                positions: CvRows(states),
-                first,
-                out: chunk,
-            }),
-            Layout::Rows { ncols } => dispatch(lanes::AtStates {
-                scan: self,
-                positions: Rows {
+        for_each_chunk_from(out, self.parallel_from, |first, chunk| match (layout, mapping.z) {
+            (Layout::Rows { ncols: 4 }, _) if mapping == PositionMapping::default() => {
+                self.run(CvRows(states), Planar, first, chunk)
+            }
+            (Layout::Rows { ncols }, z) => {
+                let rows = Rows {
                     data: states,
                     ncols,
                     mapping,
-                },
-                first,
-                out: chunk,
-            }),
-            Layout::Columns { nstates } => {
-                let (xs, ys) = (
-                    &states[mapping.x * nstates..][..nstates],
-                    &states[mapping.y * nstates..][..nstates],
-                );
-                dispatch(lanes::AtStates {
-                    scan: self,
-                    positions: Columns { xs, ys },
-                    first,
-                    out: chunk,
-                })
+                };
+                match z {
+                    None => self.run(rows, Planar, first, chunk),
+                    Some(z) => self.run(rows, RowHeights { data: states, ncols, z }, first, chunk),
+                }
+            }
+            (Layout::Columns { nstates }, z) => {
+                let row = |i: usize| &states[i * nstates..][..nstates];
+                let columns = Columns {
+                    xs: row(mapping.x),
+                    ys: row(mapping.y),
+                };
+                match z {
+                    None => self.run(columns, Planar, first, chunk),
+                    Some(z) => self.run(columns, ColumnHeights(row(z)), first, chunk),
+                }
             }
         })
     }
 
+    /// The P_D kernel for this CPU over one chunk.
+    fn run<P: Positions, H: Heights>(&self, positions: P, heights: H, first: usize, out: &mut [f64]) -> Option<usize> {
+        dispatch(lanes::AtStates {
+            scan: self,
+            positions,
+            heights,
+            first,
+            out,
+        })
+    }
+
     /// Expected P_D over each Gaussian N(mean_i, P_i), P_i the position block of the
-    /// (ncols × ncols) covariance `covars[i]`.
+    /// (ncols × ncols) covariance `covars[i]` (x, y, and z when the mapping has a height:
+    /// then under the rule's 3-D form).
     pub fn expected_at_gaussians(
         &self,
         means: &[f64],
@@ -259,6 +365,7 @@ impl ScanDetection {
         rule: &Rule,
         out: &mut [f64],
     ) -> Result<()> {
+        self.check_heights(mapping)?;
         mapping.check(ncols, "means")?;
         let n = check_rows(means, ncols, out.len(), "means")?;
         if covars.len() != n * ncols * ncols {
@@ -278,16 +385,31 @@ impl ScanDetection {
             },
             covars,
         };
+        let spatial = mapping.z.map(|z| (z, rule.spatial()));
         // The first bad row of each chunk, with what is wrong with it.
         let problems = std::sync::Mutex::new(Vec::<(usize, lanes::BadGaussian)>::new());
         let bad = for_each_chunk_from(out, self.parallel_from, |first, chunk| {
-            let (i, kind) = dispatch(lanes::Expected {
-                scan: self,
-                gaussians,
-                rule,
-                first,
-                out: chunk,
-            })?;
+            let (i, kind) = match &spatial {
+                None => dispatch(lanes::Expected {
+                    scan: self,
+                    gaussians,
+                    rule,
+                    first,
+                    out: chunk,
+                }),
+                Some((z, rule)) => dispatch(lanes::ExpectedRaised {
+                    scan: self,
+                    gaussians,
+                    heights: RowHeights {
+                        data: means,
+                        ncols,
+                        z: *z,
+                    },
+                    rule,
+                    first,
+                    out: chunk,
+                }),
+            }?;
             // (one entry per chunk at most, so not user-sized beyond the output; a poisoned
             // lock still holds whole entries: the push is its only use)
             problems
@@ -312,6 +434,8 @@ impl ScanDetection {
 mod column_tests;
 #[cfg(test)]
 mod lane_tests;
+#[cfg(test)]
+mod raised_tests;
 
 #[cfg(test)]
 mod tests;

@@ -160,6 +160,10 @@ pub(crate) fn detection_factor() -> impl Strategy<Value = Option<DetectionFactor
                 let swerling = crate::radar::Swerling::from_case(case).ok()?;
                 crate::radar::RadarEquation::new(snr, range, 1.0, pfa, swerling, pulses).ok().map(DetectionFactor::Radar)
             }),
+        2 => (prop_oneof![3 => -1.6..1.6f64, 1 => wild()], prop_oneof![3 => -1.6..1.6f64, 1 => wild()], probability(), probability())
+            .prop_map(|(lo, hi, i, o)| crate::elevation::ElevationSector::new(lo, hi, i, o).ok().map(DetectionFactor::Elevation)),
+        1 => (prop_oneof![3 => 0.0..1e5f64, 1 => wild()], prop_oneof![3 => 1.0..2e7f64, 1 => wild()])
+            .prop_map(|(a, s)| crate::horizon::Horizon::new(a, s).ok().map(DetectionFactor::Horizon)),
     ]
 }
 
@@ -196,8 +200,20 @@ pub(crate) fn states() -> impl Strategy<Value = (Vec<f64>, usize, usize)> {
     })
 }
 
-pub(crate) fn mapping() -> impl Strategy<Value = (usize, usize)> {
-    prop_oneof![4 => Just((0, 2)), 1 => (0usize..7, 0usize..7)]
+/// (x, y) and, about every third time, a height column.
+pub(crate) fn mapping() -> impl Strategy<Value = (usize, usize, Option<usize>)> {
+    prop_oneof![
+        4 => Just((0, 2, None)),
+        2 => Just((0, 2, Some(4))),
+        1 => (0usize..7, 0usize..7, prop::option::of(0usize..7))
+    ]
+}
+
+pub(crate) fn mapping_of((x, y, z): (usize, usize, Option<usize>)) -> Option<PositionMapping> {
+    match z {
+        None => PositionMapping::new(x, y).ok(),
+        Some(z) => PositionMapping::raised(x, y, z).ok(),
+    }
 }
 
 fn rule() -> impl Strategy<Value = Option<Rule>> {
@@ -290,13 +306,14 @@ proptest! {
         factors in prop::collection::vec(detection_factor(), 0..5),
         p in pose(),
         (states, ncols, n) in states(),
-        (mx, my) in mapping(),
+        m in mapping(),
+        height in prop_oneof![3 => Just(0.0), 1 => coord()],
         out_len_delta in prop_oneof![8 => Just(0i64), 1 => Just(-1i64), 1 => Just(1i64)],
     ) {
         let factors: Vec<DetectionFactor> = factors.into_iter().flatten().collect();
         let Ok(model) = DetectionModel::new(factors) else { return Ok(()); };
-        let Ok(pose) = Pose::new(p.0, p.1, p.2) else { return Ok(()); };
-        let Ok(mapping) = PositionMapping::new(mx, my) else { return Ok(()); };
+        let Ok(pose) = Pose::raised(p.0, p.1, p.2, height) else { return Ok(()); };
+        let Some(mapping) = mapping_of(m) else { return Ok(()); };
         let scan = model.at_pose(&pose);
         let mut out = vec![-7.0; (n as i64 + out_len_delta).max(0) as usize];
         if scan.at_states(&states, ncols, mapping, &mut out).is_ok() {
@@ -314,6 +331,7 @@ proptest! {
         covar_kind in 0u8..5,
         wild_entry in wild(),
         rule in rule(),
+        raised in any::<bool>(),
     ) {
         let factors: Vec<DetectionFactor> = factors.into_iter().flatten().collect();
         let Ok(model) = DetectionModel::new(factors) else { return Ok(()); };
@@ -337,13 +355,14 @@ proptest! {
         }
         let mut out = vec![-7.0; n];
         let scan = model.at_pose(&pose);
-        if scan.expected_at_gaussians(&means, &covars, ncols, PositionMapping::default(), &rule, &mut out).is_ok() {
+        let mapping = if raised { PositionMapping::raised(0, 2, 4).unwrap() } else { PositionMapping::default() };
+        if scan.expected_at_gaussians(&means, &covars, ncols, mapping, &rule, &mut out).is_ok() {
             for (i, v) in out.iter().enumerate() {
                 prop_assert!((0.0..=1.0).contains(v), "row {}: expected P_D {} outside [0, 1]", i, v);
             }
         }
         // A covariance array of the wrong length is an error, not a panic.
-        let _ = scan.expected_at_gaussians(&means, &covars[..covars.len().saturating_sub(1)], ncols, PositionMapping::default(), &rule, &mut out);
+        let _ = scan.expected_at_gaussians(&means, &covars[..covars.len().saturating_sub(1)], ncols, mapping, &rule, &mut out);
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! ctxmodels core: context-aware sensor models for multi-target tracking.
 //!
 //! Pure Rust, no Python: coverage geometry (range bands, body-frame sectors, land masks,
-//! line of sight), detection probability P_D(x; S) and clutter density λ(z; S), evaluated
+//! line of sight, elevation sectors and the radar horizon in 3-D), detection probability P_D(x; S) and clutter density λ(z; S), evaluated
 //! over whole arrays for one sensor pose S. The Python binding lives in [`python`] and is
 //! compiled only with the `python` feature.
 
@@ -13,10 +13,12 @@ pub mod cubature;
 pub mod detection;
 pub mod detection_estimate;
 pub mod distinct;
+pub mod elevation;
 pub mod error;
 #[cfg(test)]
 mod fuzz;
 pub mod gmphd;
+pub mod horizon;
 pub mod jpda;
 pub mod kalman;
 pub mod land;
@@ -37,7 +39,9 @@ pub use clutter::{ClutterFactor, ClutterModel, MetadataThreshold};
 pub use cubature::Rule;
 pub use detection::{DetectionFactor, DetectionModel, ScanDetection};
 pub use distinct::{ln_in_place, Distinct};
+pub use elevation::ElevationSector;
 pub use error::{ModelError, Result};
+pub use horizon::Horizon;
 pub use land::{LandMask, Polygon};
 pub use pose::{Mounting, Pose, SensorFrame};
 pub use range_bands::RangeBands;

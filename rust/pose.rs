@@ -3,50 +3,65 @@
 //! Angle convention (the whole crate): Stone Soup's. World coordinates are x/y Cartesian
 //! metres; headings and bearings are radians measured counter-clockwise from +x. A sensor's
 //! body frame has its x axis along the sensor heading (boresight), y to its left, so a
-//! body-frame bearing of π is straight astern.
+//! body-frame bearing of π is straight astern. Heights (z) are metres up; a pose's frame
+//! turns about the vertical only (no pitch or roll), so elevations are the world's.
 
 use crate::error::{ModelError, Result};
 
 /// Where a sensor sits on its platform: a lever arm in the platform's body frame
-/// (forward, left; metres) and a yaw offset of the sensor's boresight (radians).
+/// (forward, left, up; metres) and a yaw offset of the sensor's boresight (radians).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Mounting {
     pub forward: f64,
     pub left: f64,
     pub yaw: f64,
+    pub up: f64,
 }
 
 impl Mounting {
     pub fn new(forward: f64, left: f64, yaw: f64) -> Result<Self> {
+        Mounting::raised(forward, left, yaw, 0.0)
+    }
+
+    /// A mounting `up` metres above the platform's reference point.
+    pub fn raised(forward: f64, left: f64, yaw: f64, up: f64) -> Result<Self> {
         for (name, v) in [
             ("mounting.forward", forward),
             ("mounting.left", left),
             ("mounting.yaw", yaw),
+            ("mounting.up", up),
         ] {
             if !v.is_finite() {
                 return Err(ModelError::invalid(name, format!("must be finite, got {v}")));
             }
         }
-        Ok(Mounting { forward, left, yaw })
+        Ok(Mounting { forward, left, yaw, up })
     }
 }
 
-/// Position and heading of a platform (or directly of a sensor) in the world frame.
+/// Position, height and heading of a platform (or directly of a sensor) in the world frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pose {
     pub x: f64,
     pub y: f64,
     pub heading: f64,
+    /// Height, metres (0 for a planar pose).
+    pub z: f64,
 }
 
 impl Pose {
     pub fn new(x: f64, y: f64, heading: f64) -> Result<Self> {
-        for (name, v) in [("pose.x", x), ("pose.y", y), ("pose.heading", heading)] {
+        Pose::raised(x, y, heading, 0.0)
+    }
+
+    /// A pose at height `z`.
+    pub fn raised(x: f64, y: f64, heading: f64, z: f64) -> Result<Self> {
+        for (name, v) in [("pose.x", x), ("pose.y", y), ("pose.heading", heading), ("pose.z", z)] {
             if !v.is_finite() {
                 return Err(ModelError::invalid(name, format!("must be finite, got {v}")));
             }
         }
-        Ok(Pose { x, y, heading })
+        Ok(Pose { x, y, heading, z })
     }
 
     /// The pose of a sensor mounted on this platform; an error naming `mounting` when the
@@ -58,10 +73,11 @@ impl Pose {
             self.y + s * mounting.forward + c * mounting.left,
         );
         let heading = self.heading + mounting.yaw;
-        if !(x.is_finite() && y.is_finite() && heading.is_finite()) {
-            return Err(ModelError::invalid("mounting", format!("the mounted sensor pose ({x}, {y}, {heading}) is not finite: the lever arm or yaw overflows the platform's pose")));
+        let z = self.z + mounting.up;
+        if !(x.is_finite() && y.is_finite() && heading.is_finite() && z.is_finite()) {
+            return Err(ModelError::invalid("mounting", format!("the mounted sensor pose ({x}, {y}, {heading}) at height {z} is not finite: the lever arm or yaw overflows the platform's pose")));
         }
-        Ok(Pose { x, y, heading })
+        Ok(Pose { x, y, heading, z })
     }
 
     /// The precomputed world→sensor transform of this pose.
@@ -69,6 +85,7 @@ impl Pose {
         let (sin, cos) = self.heading.sin_cos();
         SensorFrame {
             origin: [self.x, self.y],
+            height: self.z,
             cos,
             sin,
         }
@@ -79,6 +96,7 @@ impl Pose {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SensorFrame {
     pub origin: [f64; 2],
+    pub height: f64,
     pub cos: f64,
     pub sin: f64,
 }
@@ -138,6 +156,19 @@ mod tests {
         assert!((sensor.x - 0.0).abs() < 1e-12);
         assert!((sensor.y - 5.0).abs() < 1e-12);
         assert!((sensor.heading - (FRAC_PI_2 + 0.5)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_mounting_raises_the_sensor() {
+        let platform = Pose::raised(0.0, 0.0, 0.0, 12.0).unwrap();
+        let sensor = platform.mount(&Mounting::raised(0.0, 0.0, 0.0, 3.5).unwrap()).unwrap();
+        assert_eq!(sensor.z, 15.5);
+        assert_eq!(sensor.frame().height, 15.5);
+        assert_eq!(Pose::raised(0.0, 0.0, 0.0, f64::NAN).unwrap_err().argument(), "pose.z");
+        assert_eq!(
+            Mounting::raised(0.0, 0.0, 0.0, f64::INFINITY).unwrap_err().argument(),
+            "mounting.up"
+        );
     }
 
     #[test]

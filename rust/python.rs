@@ -26,6 +26,7 @@ mod at_pose;
 mod clutter_map;
 mod detection_estimate;
 mod gmphd;
+mod heights;
 mod initiation;
 mod jpda;
 mod kalman;
@@ -159,20 +160,49 @@ fn first_non_finite(rows: &[f64], width: usize) -> Option<usize> {
         .position(|row| row.iter().any(|v| !v.is_finite()))
 }
 
-fn pose_of(pose: (f64, f64, f64)) -> PyResult<Pose> {
-    Pose::new(pose.0, pose.1, pose.2).map_err(to_py)
+/// A pose from Python: (x, y, heading), or (x, y, heading, z) with the sensor's height.
+#[derive(FromPyObject)]
+enum PoseTuple {
+    Raised((f64, f64, f64, f64)),
+    Flat((f64, f64, f64)),
 }
 
-fn mapping_of(mapping: (i64, i64)) -> PyResult<PositionMapping> {
-    let index = |i: i64| {
-        usize::try_from(i).map_err(|_| {
+/// A position mapping from Python: (x, y) or, for states with a height, (x, y, z).
+#[derive(FromPyObject)]
+enum MappingTuple {
+    Raised((i64, i64, i64)),
+    Flat((i64, i64)),
+}
+
+fn pose_of(pose: PoseTuple) -> PyResult<Pose> {
+    match pose {
+        PoseTuple::Flat((x, y, heading)) => Pose::new(x, y, heading),
+        PoseTuple::Raised((x, y, heading, z)) => Pose::raised(x, y, heading, z),
+    }
+    .map_err(to_py)
+}
+
+fn mapping_of(mapping: MappingTuple) -> PyResult<PositionMapping> {
+    let (indices, raised): (&[i64], bool) = match &mapping {
+        MappingTuple::Flat((x, y)) => (&[*x, *y], false),
+        MappingTuple::Raised((x, y, z)) => (&[*x, *y, *z], true),
+    };
+    let mut checked = [0usize; 3];
+    for (c, &i) in checked.iter_mut().zip(indices) {
+        *c = usize::try_from(i).map_err(|_| {
             value_error(
                 "position_mapping",
-                format_args!("indices must be >= 0, got {mapping:?}"),
+                format_args!("indices must be >= 0, got {indices:?}"),
             )
-        })
-    };
-    PositionMapping::new(index(mapping.0)?, index(mapping.1)?).map_err(to_py)
+        })?;
+    }
+    let [x, y, z] = checked;
+    if raised {
+        PositionMapping::raised(x, y, z)
+    } else {
+        PositionMapping::new(x, y)
+    }
+    .map_err(to_py)
 }
 
 /// The output buffer, borrowed for writing: the caller's `out` (checked) or a new array.
@@ -278,13 +308,14 @@ fn rule_of(rule: &str, order: i64) -> PyResult<Rule> {
     }
 }
 
-/// The pose (x, y, heading) of a sensor mounted on a platform at `pose`.
+/// The pose (x, y, heading, z) of a sensor mounted on a platform at `pose`.
 #[pyfunction]
-fn mount(pose: (f64, f64, f64), forward: f64, left: f64, yaw: f64) -> PyResult<(f64, f64, f64)> {
+#[pyo3(signature = (pose, forward, left, yaw, up = 0.0))]
+fn mount(pose: PoseTuple, forward: f64, left: f64, yaw: f64, up: f64) -> PyResult<(f64, f64, f64, f64)> {
     let mounted = pose_of(pose)?
-        .mount(&Mounting::new(forward, left, yaw).map_err(to_py)?)
+        .mount(&Mounting::raised(forward, left, yaw, up).map_err(to_py)?)
         .map_err(to_py)?;
-    Ok((mounted.x, mounted.y, mounted.heading))
+    Ok((mounted.x, mounted.y, mounted.heading, mounted.z))
 }
 
 /// The build of the array kernels this process runs: "avx2" or "portable" (see
@@ -312,6 +343,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyAngularSector>()?;
     m.add_class::<models::PyLandMask>()?;
     m.add_class::<models::PyLineOfSight>()?;
+    m.add_class::<heights::PyElevationSector>()?;
+    m.add_class::<heights::PyHorizon>()?;
     m.add_class::<models::PyDetectionModel>()?;
     m.add_class::<at_pose::PyDetectionAtPose>()?;
     m.add_class::<at_pose::PyClutterAtPose>()?;

@@ -14,6 +14,7 @@ from .detection import DetectionProbabilityModel
 from .detection_estimate import DetectionEstimate
 from .errors import (ArgumentError, ArgumentTypeError, InfeasibleAssignmentError, InvalidLandError,
                      NonFiniteError, NotPositiveDefiniteError, ShapeError)
+from .elevation import ElevationSector
 from .horizon import RadarHorizon
 from .land import LandMask, LineOfSight
 from .pose import ConstantPose, Mounting, NavigationTrack, Pose, PoseSource
@@ -40,6 +41,7 @@ __all__ = [
     "DetectionProbabilityModel",
     "DetectionSet",
     "DetectorContext",
+    "ElevationSector",
     "LandMask",
     "LineOfSight",
     "MetadataThreshold",

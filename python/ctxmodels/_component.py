@@ -208,21 +208,27 @@ def as_int(value: Any, name: str, *, low: int = 0, high: int | None = None) -> i
 _MAX_INDEX = 2**31
 
 
-def as_position_mapping(mapping: Any, name: str = "position_mapping") -> tuple[int, int]:
-    """Two different non-negative integer column indices, as a tuple of ints."""
-    if type(mapping) is tuple and len(mapping) == 2 and type(mapping[0]) is int \
-            and type(mapping[1]) is int and 0 <= mapping[0] <= _MAX_INDEX \
-            and 0 <= mapping[1] <= _MAX_INDEX and mapping[0] != mapping[1]:
+def as_position_mapping(mapping: Any, name: str = "position_mapping", *,
+                        heights: bool = False) -> tuple[int, ...]:
+    """Two different non-negative integer column indices (x, y), as a tuple of ints; with
+    ``heights``, also three (x, y, z) for states with a height."""
+    sizes = (2, 3) if heights else (2,)
+    if type(mapping) is tuple and len(mapping) in sizes \
+            and all(type(i) is int and 0 <= i <= _MAX_INDEX for i in mapping) \
+            and len(set(mapping)) == len(mapping):
         return mapping  # already canonical (a SensorModel's own): nothing to convert
+    wanted = "two or three integer indices" if heights else "two integer indices"
     if isinstance(mapping, (str, bytes, Mapping)) or not isinstance(mapping, (Sequence, np.ndarray)):
-        raise ArgumentTypeError(name, f"expected two integer indices, got {mapping!r}")
+        raise ArgumentTypeError(name, f"expected {wanted}, got {mapping!r}")
     indices = tuple(mapping)
-    if len(indices) != 2:
-        raise ArgumentError(name, f"must be two indices (x, y), got {len(indices)}: {indices!r}")
-    x, y = (as_int(i, name, high=_MAX_INDEX) for i in indices)
-    if x == y:
-        raise ArgumentError(name, f"x and y must be different indices, got ({x}, {y})")
-    return x, y
+    if len(indices) not in sizes:
+        what = "two indices (x, y) or three (x, y, z)" if heights else "two indices (x, y)"
+        raise ArgumentError(name, f"must be {what}, got {len(indices)}: {indices!r}")
+    checked = tuple(as_int(i, name, high=_MAX_INDEX) for i in indices)
+    if len(set(checked)) != len(checked):
+        axes = "x, y and z" if len(checked) == 3 else "x and y"
+        raise ArgumentError(name, f"{axes} must be different indices, got {checked}")
+    return checked
 
 
 #: NumPy dtype kinds read as real numbers: booleans, integers, floats.

@@ -22,7 +22,9 @@ __all__ = [
     "ClutterModel",
     "DetectionAtPose",
     "DetectionModel",
+    "ElevationSector",
     "GaussianMixtureArrays",
+    "Horizon",
     "MeasurementModel",
     "LandMask",
     "LineOfSight",
@@ -40,11 +42,11 @@ __all__ = [
     "simd_backend",
 ]
 
-_Pose: TypeAlias = tuple[float, float, float]
+_Pose: TypeAlias = tuple[float, float, float] | tuple[float, float, float, float]
 # `position_mapping` defaults to (0, 2) (Stone Soup's [x, vx, y, vy]). It is written `...`
 # below because PyO3 renders a tuple default as `...` in the runtime signature, and stubtest
 # (run bare by scripts/test.sh) checks stub defaults against that rendering.
-_Mapping: TypeAlias = tuple[int, int]
+_Mapping: TypeAlias = tuple[int, int] | tuple[int, int, int]
 _Floats: TypeAlias = NDArray[np.float64]
 _Bools: TypeAlias = NDArray[np.bool_]
 _Rule: TypeAlias = Literal["mean", "cubature", "unscented", "gauss-hermite"]
@@ -83,6 +85,20 @@ class RadarEquation:
         """The per-pulse SNR (linear) at each of `ranges`."""
 
 @final
+class ElevationSector:
+    """``inside`` between the elevations ``lower`` and ``upper`` (radians above the
+    sensor's horizontal plane), else ``outside``."""
+
+    def __new__(cls, lower: float, upper: float, inside: float, outside: float) -> ElevationSector: ...
+
+@final
+class Horizon:
+    """1 within the radar horizon of a target at its own height: plane distance at most
+    ``antenna_reach`` + √(``scale`` · max(z, 0)), 0 beyond."""
+
+    def __new__(cls, antenna_reach: float, scale: float) -> Horizon: ...
+
+@final
 class AngularSector:
     """Body-frame sector: ``inside`` within ``width / 2`` of ``centre`` (radians), else ``outside``."""
 
@@ -116,7 +132,15 @@ class DetectionModel:
     def __new__(
         cls,
         factors: Sequence[
-            float | RangeBands | AngularSector | LandMask | LineOfSight | DetectionEstimate
+            float
+            | RangeBands
+            | AngularSector
+            | RadarEquation
+            | ElevationSector
+            | Horizon
+            | LandMask
+            | LineOfSight
+            | DetectionEstimate
         ],
     ) -> DetectionModel:
         """`factors`: floats (constants), RangeBands, AngularSector, LandMask (0 on land),
@@ -329,8 +353,10 @@ class DetectionEstimate:
     def state(self) -> tuple[_Floats, _Floats]:
         """(hits, trials): the state an update changes."""
 
-def mount(pose: _Pose, forward: float, left: float, yaw: float) -> _Pose:
-    """The pose (x, y, heading) of a sensor mounted on a platform at `pose`."""
+def mount(
+    pose: _Pose, forward: float, left: float, yaw: float, up: float = 0.0
+) -> tuple[float, float, float, float]:
+    """The pose (x, y, heading, z) of a sensor mounted on a platform at `pose`."""
 
 def rule_points(rule: _Rule, order: int = 3) -> tuple[list[tuple[float, float]], list[float]]:
     """Points and weights of an integration rule in standard-normal space."""

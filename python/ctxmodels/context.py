@@ -316,7 +316,7 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
         ranges = None
         if clutter.uses_position:
             if positions is None:
-                positions = detection_positions(detections, self.sensor_model.position_mapping)
+                positions = detection_positions(detections, self.sensor_model.plane_mapping)
             ranges = ranges_for_bands(detections, positions, self.pose)
         else:
             positions = np.zeros((len(detections), 2))

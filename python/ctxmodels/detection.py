@@ -10,6 +10,7 @@ from . import _core
 from ._component import (ModelComponent, as_array, as_columns, as_float, as_int,
                          as_position_mapping, as_rows, as_sequence, check_out)
 from .detection_estimate import DetectionEstimate
+from .elevation import ElevationSector
 from .horizon import RadarHorizon
 from .land import LandMask, LineOfSight
 from .pose import Pose, pose_tuple
@@ -17,8 +18,8 @@ from .radar import RadarEquation
 from .range_bands import RangeBands
 from .sector import AngularSector
 
-DetectionFactor = (float | RangeBands | AngularSector | RadarEquation | RadarHorizon | LandMask
-                   | LineOfSight | DetectionEstimate)
+DetectionFactor = (float | RangeBands | AngularSector | RadarEquation | RadarHorizon
+                   | ElevationSector | LandMask | LineOfSight | DetectionEstimate)
 
 #: Integration rules for the expected P_D of a Gaussian (see :class:`SensorModel`).
 PD_RULES = ("mean", "cubature", "unscented", "gauss-hermite")
@@ -34,10 +35,16 @@ class DetectionProbabilityModel(ModelComponent):
 
     where :math:`S` is the sensor pose at the scan. Factors: constants (floats), range
     bands (:class:`RangeBands`, over range from the sensor), body-frame sectors
-    (:class:`AngularSector`), land (:class:`LandMask`: 0 on land) and line of sight
-    (:class:`LineOfSight`: 0 when shadowed by land) and range bands learned online
-    (:class:`DetectionEstimate`: read as they stand when the model is put at a scan's pose).
-    Every factor value must lie in [0, 1].
+    (:class:`AngularSector`), the radar equation (:class:`RadarEquation`) and horizon
+    (:class:`RadarHorizon`), elevation sectors (:class:`ElevationSector`), land
+    (:class:`LandMask`: 0 on land) and line of sight (:class:`LineOfSight`: 0 when shadowed
+    by land) and range bands learned online (:class:`DetectionEstimate`: read as they stand
+    when the model is put at a scan's pose). Every factor value must lie in [0, 1].
+
+    States are read at ``position_mapping``: (x, y) puts every target at the sensor's
+    height; (x, y, z) reads each one's height, and then ranges are slant ranges from the
+    pose's height ``z``, elevations are angles above the sensor's horizontal plane, and
+    bearings, land and line of sight are read on the plane below the target.
 
     The paper's radar (eq. pd-radar): ``DetectionProbabilityModel(factors=[
     RangeBands(edges=(50, 1612), values=(0, 0.4, 0), upper_owns=(False, True)),
@@ -55,8 +62,8 @@ class DetectionProbabilityModel(ModelComponent):
         def build():
             parts = []
             for i, factor in enumerate(self.factors):
-                if isinstance(factor, (RangeBands, AngularSector, RadarEquation, RadarHorizon, LandMask,
-                                       LineOfSight)):
+                if isinstance(factor, (RangeBands, AngularSector, RadarEquation, RadarHorizon,
+                                       ElevationSector, LandMask, LineOfSight)):
                     parts.append(factor._compiled())
                 elif isinstance(factor, DetectionEstimate):
                     parts.append(factor._core)  # shared: its updates reach this model
@@ -64,8 +71,8 @@ class DetectionProbabilityModel(ModelComponent):
                     parts.append(as_float(factor, f"factors[{i}]"))
                 else:
                     raise TypeError(f"factors[{i}]: expected a float, RangeBands, AngularSector, "
-                                    "RadarEquation, RadarHorizon, LandMask, LineOfSight or "
-                                    "DetectionEstimate, got "
+                                    "RadarEquation, RadarHorizon, ElevationSector, LandMask, "
+                                    "LineOfSight or DetectionEstimate, got "
                                     f"{type(factor).__name__}")
             return _core.DetectionModel(parts)
         return self._cached("core", build)
@@ -105,7 +112,7 @@ class DetectionProbabilityModel(ModelComponent):
         ``missed``: also 1 - P_D (or its log), as a pair. See
         :meth:`~ctxmodels.DetectorContext.prob_detection_particles`."""
         columns = as_columns(particles, "particles")
-        mapping = as_position_mapping(position_mapping)
+        mapping = as_position_mapping(position_mapping, heights=True)
         return self._compiled().evaluate_particles(pose_tuple(pose), columns, mapping,
                                                    bool(log), bool(missed))
 
@@ -120,8 +127,8 @@ class DetectionProbabilityModel(ModelComponent):
                                          check_out(out, means.shape[0], means=means, covars=covars))
 
 
-def _mapping_within(position_mapping, rows: np.ndarray, name: str) -> tuple[int, int]:
-    mapping = as_position_mapping(position_mapping)
+def _mapping_within(position_mapping, rows: np.ndarray, name: str) -> tuple[int, ...]:
+    mapping = as_position_mapping(position_mapping, heights=True)
     if max(mapping) >= rows.shape[1]:
         raise ValueError(f"position_mapping: {mapping} is out of range for {name} rows of "
                          f"{rows.shape[1]} columns")

@@ -3,7 +3,8 @@
 Angle convention, once for the whole library: Stone Soup's. World coordinates are x/y
 Cartesian metres; headings and bearings are radians counter-clockwise from +x (not compass
 bearings). A sensor's body frame has x along its heading and y to its left, so a body
-bearing of π is astern.
+bearing of π is astern. Heights z are metres up; a pose turns about the vertical only
+(heading), so a sensor's elevations are measured from its horizontal plane.
 """
 from __future__ import annotations
 
@@ -18,79 +19,86 @@ from stonesoup.base import Property
 from . import _core
 from ._upstream import property_slot
 from ._component import ModelComponent, as_float, as_rows, as_sequence, frozen_copy
-from .errors import argument_error
+from .errors import ShapeError, argument_error
 
 
 class Pose(ModelComponent):
-    """Position (x, y, metres) and heading (radians from +x, counter-clockwise)."""
+    """Position (x, y, metres), heading (radians from +x, counter-clockwise) and height
+    (z, metres: where a sensor model with a height in its ``position_mapping`` measures
+    slant ranges and elevations from)."""
 
     x: float = Property(doc="World x, metres.")
     y: float = Property(doc="World y, metres.")
     heading: float = Property(default=0.0, doc="Heading, radians counter-clockwise from +x.")
+    z: float = Property(default=0.0, doc="Height, metres (read only for states with a height).")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        for name in ("x", "y", "heading"):
+        for name in ("x", "y", "heading", "z"):
             as_float(getattr(self, name), name)
 
-    def as_tuple(self) -> tuple[float, float, float]:
-        return float(self.x), float(self.y), float(self.heading)
+    def as_tuple(self) -> tuple[float, float, float, float]:
+        """(x, y, heading, z), the core's form."""
+        return float(self.x), float(self.y), float(self.heading), float(self.z)
 
 
 def as_pose(pose, name: str = "pose") -> Pose:
-    """``pose``, a :class:`Pose` or an (x, y, heading) sequence of finite numbers, as a
-    :class:`Pose`; TypeError or ValueError naming ``name`` for anything else."""
+    """``pose``, a :class:`Pose` or an (x, y, heading) or (x, y, heading, z) sequence of
+    finite numbers, as a :class:`Pose`; TypeError or ValueError naming ``name`` for
+    anything else."""
     if isinstance(pose, Pose):
         return pose
     if isinstance(pose, (str, bytes)) or not isinstance(pose, (Sequence, np.ndarray)):
         raise TypeError(f"{name}: expected a Pose or an (x, y, heading) sequence, got "
                         f"{type(pose).__name__}")
     values = tuple(np.ravel(pose)) if isinstance(pose, np.ndarray) else tuple(pose)
-    if len(values) != 3:
-        raise TypeError(f"{name}: expected a Pose or an (x, y, heading) sequence, got "
-                         f"{len(values)} values")
+    if len(values) not in (3, 4):
+        raise TypeError(f"{name}: expected a Pose or an (x, y, heading) or (x, y, heading, z) "
+                        f"sequence, got {len(values)} values")
     try:
-        x, y, heading = (as_float(v, axis) for v, axis in zip(values, ("x", "y", "heading")))
+        x, y, heading, *z = (as_float(v, axis) for v, axis in zip(values, ("x", "y", "heading", "z")))
     except (TypeError, ValueError) as err:
         raise argument_error(name, str(err), err) from None
-    return _computed_pose(x, y, heading)
+    return _computed_pose(x, y, heading, *z)
 
 
-def pose_tuple(pose, name: str = "pose") -> tuple[float, float, float]:
-    """``pose`` (a :class:`Pose` or an (x, y, heading) sequence) as the core's tuple."""
+def pose_tuple(pose, name: str = "pose") -> tuple[float, float, float, float]:
+    """``pose`` (a :class:`Pose` or a sequence :func:`as_pose` reads) as the core's tuple."""
     return as_pose(pose, name).as_tuple()
 
 
-_X, _Y, _HEADING = property_slot("x"), property_slot("y"), property_slot("heading")
+_X, _Y, _HEADING, _Z = (property_slot(name) for name in ("x", "y", "heading", "z"))
 
 
-def _computed_pose(x: float, y: float, heading: float) -> Pose:
-    """The :class:`Pose` ``Pose(x=x, y=y, heading=heading)`` builds, for floats computed from
-    already validated ones (interpolated, mounted): without the per-Property checks, which
-    cost more than the rest of a scan's context."""
+def _computed_pose(x: float, y: float, heading: float, z: float = 0.0) -> Pose:
+    """The :class:`Pose` ``Pose(x=x, y=y, heading=heading, z=z)`` builds, for floats computed
+    from already validated ones (interpolated, mounted): without the per-Property checks,
+    which cost more than the rest of a scan's context."""
     pose = object.__new__(Pose)
-    pose.__dict__.update({"_initialised": True, _X: x, _Y: y, _HEADING: heading})
+    pose.__dict__.update({"_initialised": True, _X: x, _Y: y, _HEADING: heading, _Z: z})
     return pose
 
 
 class Mounting(ModelComponent):
-    """Where a sensor sits on its platform: lever arm in the platform's body frame and the
-    yaw of the sensor's boresight relative to the platform heading."""
+    """Where a sensor sits on its platform: lever arm in the platform's body frame (and
+    height above it) and the yaw of the sensor's boresight relative to the platform
+    heading."""
 
     forward: float = Property(default=0.0, doc="Lever arm along the platform heading, metres.")
     left: float = Property(default=0.0, doc="Lever arm to the platform's left, metres.")
     yaw: float = Property(default=0.0, doc="Boresight yaw relative to the platform, radians.")
+    up: float = Property(default=0.0, doc="Height of the sensor above the platform's z, metres.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        for name in ("forward", "left", "yaw"):
+        for name in ("forward", "left", "yaw", "up"):
             as_float(getattr(self, name), name)
 
     def apply(self, platform: Pose) -> Pose:
         """The sensor's pose on a platform at ``platform``."""
-        x, y, heading = _core.mount(platform.as_tuple(), float(self.forward), float(self.left),
-                                    float(self.yaw))
-        return _computed_pose(x, y, heading)
+        x, y, heading, z = _core.mount(platform.as_tuple(), float(self.forward), float(self.left),
+                                       float(self.yaw), float(self.up))
+        return _computed_pose(x, y, heading, z)
 
 
 class PoseSource(ModelComponent):
@@ -130,14 +138,19 @@ class NavigationTrack(PoseSource):
 
     timestamps: Sequence[datetime.datetime] = Property(
         doc="Strictly increasing log times, all naive or all timezone-aware (stored as a tuple).")
-    positions: np.ndarray = Property(doc="(T, 2) world x/y positions, metres.")
+    positions: np.ndarray = Property(doc="(T, 2) world x/y positions, or (T, 3) x/y/z with the "
+                                         "platform's height, metres.")
     headings: np.ndarray = Property(doc="(T,) headings, radians counter-clockwise from +x.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         object.__setattr__(self, "_initialised", False)
         self.timestamps = as_sequence(self.timestamps, "timestamps", "datetimes")
-        self.positions = frozen_copy(as_rows(self.positions, "positions", ncols=2))
+        positions = as_rows(self.positions, "positions")
+        if positions.shape[1] not in (2, 3):
+            raise ShapeError("positions", f"must have 2 columns (x, y) or 3 (x, y, z), got shape "
+                                          f"{positions.shape}")
+        self.positions = frozen_copy(positions)
         headings = np.asarray(self.headings)
         if headings.dtype == object or not (np.issubdtype(headings.dtype, np.integer)
                                             or np.issubdtype(headings.dtype, np.floating)):
@@ -184,16 +197,17 @@ class NavigationTrack(PoseSource):
                 f"[{self.timestamps[0]}, {self.timestamps[-1]}]")
         k = bisect.bisect_right(seconds, t) - 1
         if k >= len(seconds) - 1:
-            x, y = log.positions[-1]
-            pose = _computed_pose(x, y, log.headings[-1])
+            pose = _computed_pose(*log.positions[-1][:2], log.headings[-1], *log.positions[-1][2:])
         else:
             # Python floats: the same IEEE operations, one rounding each, as on the arrays
             f = (t - seconds[k]) / (seconds[k + 1] - seconds[k])
-            (x0, y0), (x1, y1) = log.positions[k], log.positions[k + 1]
+            # (x, y, and z when the log has heights)
+            p0, p1 = log.positions[k], log.positions[k + 1]
             h0, h1 = log.headings[k], log.headings[k + 1]
             turn = math.remainder(h1 - h0, 2 * math.pi)
             heading = math.remainder(h0 + f * turn, 2 * math.pi)
-            pose = _computed_pose((1 - f) * x0 + f * x1, (1 - f) * y0 + f * y1, heading)
+            x, y, *z = ((1 - f) * a + f * b for a, b in zip(p0, p1))
+            pose = _computed_pose(x, y, heading, *z)
         if type(timestamp) is datetime.datetime:
             log.last = (timestamp, pose)
         return pose

@@ -49,7 +49,9 @@ class SensorModel(ModelComponent):
     detection: DetectionProbabilityModel = Property(doc="P_D(x; S).")
     clutter: ClutterDensityModel = Property(doc="λ(z; S), in the detections' measurement space.")
     position_mapping: Sequence[int] = Property(
-        default=(0, 2), doc="Indices of x and y in the track state (Stone Soup CV: (0, 2)).")
+        default=(0, 2), doc="Indices of x and y in the track state (Stone Soup CV: (0, 2)), or "
+                            "of x, y and z for a sensor that covers heights (ranges are then "
+                            "slant ranges from the pose's z; λ is read on the x/y plane).")
     mounting: Mounting = Property(default=None, doc="Sensor mounting on the platform; "
                                                     "default: at the platform's reference point.")
     pd_evaluation: str = Property(default="mean", doc="One of 'mean', 'cubature', "
@@ -66,7 +68,7 @@ class SensorModel(ModelComponent):
             raise TypeError(f"clutter: expected a ClutterDensityModel, "
                             f"got {type(self.clutter).__name__}")
         # Any integer type (NumPy's too), stored as a tuple of ints.
-        self._replace("position_mapping", as_position_mapping(self.position_mapping))
+        self._replace("position_mapping", as_position_mapping(self.position_mapping, heights=True))
         if self.pd_evaluation not in PD_RULES:
             raise ValueError(f"pd_evaluation: must be one of {PD_RULES}, got {self.pd_evaluation!r}")
         try:
@@ -75,6 +77,12 @@ class SensorModel(ModelComponent):
             raise ArgumentError(err.argument, err.detail) from None
         if self.mounting is not None and not isinstance(self.mounting, Mounting):
             raise TypeError(f"mounting: expected a Mounting, got {type(self.mounting).__name__}")
+
+    @property
+    def plane_mapping(self) -> tuple[int, int]:
+        """The state indices of x and y: where λ, the detections' positions and what is
+        learned from them are read (the plane below a target with a height)."""
+        return tuple(self.position_mapping[:2])
 
     def sensor_pose(self, platform_pose: Pose) -> Pose:
         """The sensor's own pose on a platform at ``platform_pose``."""

@@ -144,6 +144,7 @@ fn lanes(
         AtStates {
             scan,
             positions,
+            heights: crate::batch::Planar,
             first,
             out: &mut out,
         },
@@ -270,7 +271,10 @@ fn expected_pd_gives_the_reference_bits() {
     for model in models() {
         let scan = model.at_pose(&pose);
         // Stone Soup's [x, vx, y, vy] rows (read as vectors) and any other layout.
-        for (k, mapping) in [(4, PositionMapping::default()), (6, PositionMapping { x: 3, y: 1 })] {
+        for (k, mapping) in [
+            (4, PositionMapping::default()),
+            (6, PositionMapping { x: 3, y: 1, z: None }),
+        ] {
             for n in [1, 3, 4, 9, 130] {
                 let means = rows(n, k, mapping);
                 let mut covars = vec![0.0; k * k * n];

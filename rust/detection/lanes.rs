@@ -4,22 +4,24 @@
 //! Written once over [`Lanes`]; [`crate::simd::dispatch`] picks the CPU's build. Each
 //! kernel gives the bits of [`ScanDetection::at_point`] (tested for every backend).
 
-use super::{ScanDetection, Step};
-use crate::batch::{CvRows, PositionMapping, Positions, Rows};
-use crate::cubature::{cholesky2_lanes, Rule};
+use super::{Offsets, ScanDetection, Step};
+use crate::batch::{CvRows, Heights, Planar, PositionMapping, Positions, RowHeights, Rows};
+use crate::cubature::{cholesky2_lanes, cholesky3, Rule, SpatialRule};
 use crate::range_bands::SquaredBands;
 use crate::sector::FramedSector;
 use crate::simd::{LaneKernel, Lanes};
 
 impl Step {
     #[inline(always)]
-    fn lanes_at<L: Lanes>(&self, dx: L, dy: L, r2: L) -> L {
+    fn lanes_at<L: Lanes>(&self, g: &Offsets<L>) -> L {
         match self {
-            Step::SquaredBands(bands) => bands.lanes_at_squared(r2),
+            Step::SquaredBands(bands) => bands.lanes_at_squared(g.r2),
             // (bands.lanes_at(r2.sqrt()), without the square root: the same bits)
-            Step::Bands(bands) => bands.lanes_at_root(r2),
-            Step::Sector(sector) => sector.lanes_at_squared(dx, dy, r2),
-            Step::Radar(radar) => radar.lanes_at_squared(r2),
+            Step::Bands(bands) => bands.lanes_at_root(g.r2),
+            Step::Sector(sector) => sector.lanes_at_squared(g.dx, g.dy, g.h2),
+            Step::Radar(radar) => radar.lanes_at_squared(g.r2),
+            Step::Elevation(e) => e.lanes_at(g.dz, g.r2),
+            Step::Horizon(h) => h.lanes_at(g.h2, g.z),
         }
     }
 }
@@ -29,27 +31,27 @@ impl Step {
 /// paper's radar and lidar). `apply` multiplies `pd` by each step's value in order: the
 /// same bits as the general slice of steps.
 trait FixedSteps: Copy {
-    fn apply<L: Lanes>(self, pd: L, dx: L, dy: L, r2: L) -> L;
+    fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L;
 }
 
 impl FixedSteps for () {
     #[inline(always)]
-    fn apply<L: Lanes>(self, pd: L, _: L, _: L, _: L) -> L {
+    fn apply<L: Lanes>(self, pd: L, _: &Offsets<L>) -> L {
         pd
     }
 }
 
 impl FixedSteps for &SquaredBands {
     #[inline(always)]
-    fn apply<L: Lanes>(self, pd: L, _: L, _: L, r2: L) -> L {
-        pd * self.lanes_at_squared(r2)
+    fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
+        pd * self.lanes_at_squared(g.r2)
     }
 }
 
 impl FixedSteps for &FramedSector {
     #[inline(always)]
-    fn apply<L: Lanes>(self, pd: L, dx: L, dy: L, r2: L) -> L {
-        pd * self.lanes_at_squared(dx, dy, r2)
+    fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
+        pd * self.lanes_at_squared(g.dx, g.dy, g.h2)
     }
 }
 
@@ -59,24 +61,24 @@ struct Narrow<'a>(&'a FramedSector);
 
 impl FixedSteps for Narrow<'_> {
     #[inline(always)]
-    fn apply<L: Lanes>(self, pd: L, dx: L, dy: L, r2: L) -> L {
-        pd * self.0.lanes_narrow(dx, dy, r2)
+    fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
+        pd * self.0.lanes_narrow(g.dx, g.dy, g.h2)
     }
 }
 
 impl<A: FixedSteps, B: FixedSteps> FixedSteps for (A, B) {
     #[inline(always)]
-    fn apply<L: Lanes>(self, pd: L, dx: L, dy: L, r2: L) -> L {
-        self.1.apply(self.0.apply(pd, dx, dy, r2), dx, dy, r2)
+    fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
+        self.1.apply(self.0.apply(pd, g), g)
     }
 }
 
 /// Any other sequence, dispatched step by step.
 impl FixedSteps for &[Step] {
     #[inline(always)]
-    fn apply<L: Lanes>(self, mut pd: L, dx: L, dy: L, r2: L) -> L {
+    fn apply<L: Lanes>(self, mut pd: L, g: &Offsets<L>) -> L {
         for step in self {
-            pd = pd * step.lanes_at(dx, dy, r2);
+            pd = pd * step.lanes_at(g);
         }
         pd
     }
@@ -130,16 +132,39 @@ macro_rules! with_fixed_steps {
 }
 
 impl ScanDetection {
-    /// [`Self::at_point`] at four world points, and the squared ranges: infinite or NaN
-    /// where a position is (or, rarely, where a finite one is very far away).
+    /// [`Self::at_point`] (or, with heights `H`, [`Self::at_raised`]) at four world
+    /// points, and the squared ranges: infinite or NaN where a position is (or, rarely,
+    /// where a finite one is very far away).
     /// `INDEXED`: whether the scan has land or sight steps (`!self.indexed.is_empty()`),
     /// fixed at compile time so that the common loop carries none of their code.
     #[inline(always)]
-    fn lanes_at<L: Lanes, S: FixedSteps, const INDEXED: bool>(&self, steps: S, x: L, y: L) -> (L, L) {
+    fn lanes_at<L: Lanes, S: FixedSteps, H: Heights, const INDEXED: bool>(&self, steps: S, x: L, y: L, z: L) -> (L, L) {
         let [ox, oy] = self.frame.origin;
         let (dx, dy) = (x - L::splat(ox), y - L::splat(oy));
-        let r2 = dx * dx + dy * dy;
-        let pd = steps.apply(L::splat(self.constant), dx, dy, r2);
+        let h2 = dx * dx + dy * dy;
+        let oz = L::splat(self.frame.height);
+        let g = if H::RAISED {
+            let dz = z - oz;
+            Offsets {
+                dx,
+                dy,
+                h2,
+                dz,
+                r2: h2 + dz * dz,
+                z,
+            }
+        } else {
+            Offsets {
+                dx,
+                dy,
+                h2,
+                dz: L::splat(0.0),
+                r2: h2,
+                z: oz,
+            }
+        };
+        let r2 = g.r2;
+        let pd = steps.apply(L::splat(self.constant), &g);
         if !INDEXED {
             return (pd, r2);
         }
@@ -153,14 +178,15 @@ impl ScanDetection {
 
 /// P_D of states `first..first + out.len()`; the index (in `out`) of the first state whose
 /// position is not finite.
-pub(super) struct AtStates<'a, P> {
+pub(super) struct AtStates<'a, P, H> {
     pub scan: &'a ScanDetection,
     pub positions: P,
+    pub heights: H,
     pub first: usize,
     pub out: &'a mut [f64],
 }
 
-impl<P: Positions> LaneKernel for AtStates<'_, P> {
+impl<P: Positions, H: Heights> LaneKernel for AtStates<'_, P, H> {
     type Output = Option<usize>;
 
     #[inline(always)]
@@ -169,12 +195,13 @@ impl<P: Positions> LaneKernel for AtStates<'_, P> {
     }
 }
 
-impl<P: Positions> AtStates<'_, P> {
+impl<P: Positions, H: Heights> AtStates<'_, P, H> {
     #[inline(always)]
     fn run_with<L: Lanes, S: FixedSteps, const INDEXED: bool>(self, steps: S) -> Option<usize> {
         let AtStates {
             scan,
             positions,
+            heights,
             first,
             out,
         } = self;
@@ -187,20 +214,23 @@ impl<P: Positions> AtStates<'_, P> {
         // Exact chunks: the stores need no bounds checks.
         for (j, o) in out[..full].chunks_exact_mut(4).enumerate() {
             let (x, y) = positions.lanes::<L>(first + 4 * j);
-            let (pd, r2) = scan.lanes_at::<L, S, INDEXED>(steps, x, y);
+            let z = heights.lanes::<L>(first + 4 * j);
+            let (pd, r2) = scan.lanes_at::<L, S, H, INDEXED>(steps, x, y, z);
             bad = L::or(bad, r2.non_finite());
             pd.store(o);
         }
         if full < n {
             let (x, y) = positions.partial::<L>(first + full, n - full);
-            let (pd, r2) = scan.lanes_at::<L, S, INDEXED>(steps, x, y);
+            let z = heights.partial::<L>(first + full, n - full);
+            let (pd, r2) = scan.lanes_at::<L, S, H, INDEXED>(steps, x, y, z);
             bad = L::or(bad, r2.non_finite());
             out[full..].copy_from_slice(&pd.to_array()[..n - full]);
         }
         if !L::any(bad) {
             return None;
         }
-        (0..n).find(|&i| !positions.one(first + i).iter().all(|v| v.is_finite()))
+        (0..n)
+            .find(|&i| !(positions.one(first + i).iter().all(|v| v.is_finite()) && heights.one(first + i).is_finite()))
     }
 }
 
@@ -219,6 +249,21 @@ pub(super) struct Gaussians<'a> {
 }
 
 impl Gaussians<'_> {
+    /// The (x, y, z) block of row `row`'s covariance, z the height column, row-major.
+    #[inline(always)]
+    fn block3(self, row: usize, z: usize) -> [f64; 9] {
+        let k = self.means.ncols;
+        let c = &self.covars[row * k * k..][..k * k];
+        let axes = [self.means.mapping.x, self.means.mapping.y, z];
+        let mut block = [0.0; 9];
+        for (a, &i) in axes.iter().enumerate() {
+            for (b, &j) in axes.iter().enumerate() {
+                block[3 * a + b] = c[i * k + j];
+            }
+        }
+        block
+    }
+
     /// Entry `e` (row-major) of the covariances of the `count` ≤ 4 Gaussians from `first`,
     /// zero-padded. A method, not a closure: closures are compiled apart from the kernel,
     /// without its AVX2, and cost a call per use.
@@ -342,7 +387,7 @@ impl Expected<'_> {
                 for (u, &w) in rule.points().iter().zip(rule.weights()) {
                     let (u0, u1) = (L::splat(u[0]), L::splat(u[1]));
                     let (x, y) = (mx + l11 * u0, my + l21 * u0 + l22 * u1);
-                    expected = expected + L::splat(w) * scan.lanes_at::<L, S, INDEXED>(steps, x, y).0;
+                    expected = expected + L::splat(w) * scan.lanes_at::<L, S, Planar, INDEXED>(steps, x, y, zero).0;
                 }
                 // Rounding can push a weighted sum of values in [0, 1] a hair outside.
                 expected = L::select(expected.lt(zero), zero, L::select(expected.gt(one), one, expected));
@@ -355,6 +400,99 @@ impl Expected<'_> {
         }
         bad
     }
+}
+
+/// Expected P_D of Gaussians with heights `first..first + out.len()` under the 3-D form of
+/// a rule: each Gaussian's 3×3 position block factored once ([`cholesky3`]), its points
+/// m + L u evaluated four Gaussians at a time. The first Gaussian that cannot be evaluated,
+/// with the reason (its own entry is then meaningless).
+pub(super) struct ExpectedRaised<'a> {
+    pub scan: &'a ScanDetection,
+    pub gaussians: Gaussians<'a>,
+    pub heights: RowHeights<'a>,
+    pub rule: &'a SpatialRule,
+    pub first: usize,
+    pub out: &'a mut [f64],
+}
+
+impl LaneKernel for ExpectedRaised<'_> {
+    type Output = Option<(usize, BadGaussian)>;
+
+    #[inline(always)]
+    fn run<L: Lanes>(self) -> Self::Output {
+        with_fixed_steps!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
+    }
+}
+
+impl ExpectedRaised<'_> {
+    #[inline(always)]
+    fn run_with<L: Lanes, S: FixedSteps, const INDEXED: bool>(self, steps: S) -> <Self as LaneKernel>::Output {
+        let ExpectedRaised {
+            scan,
+            gaussians,
+            heights,
+            rule,
+            first,
+            out,
+        } = self;
+        let mut bad = None;
+        let (zero, one) = (L::splat(0.0), L::splat(1.0));
+        for (j, block) in out.chunks_mut(4).enumerate() {
+            // Lane by lane: the mean and the factor, or a point mass at the origin in the
+            // place of a Gaussian that cannot be evaluated (said for the first).
+            let (mut m, mut l) = ([[0.0; 4]; 3], [[0.0; 4]; 6]);
+            for (i, _) in block.iter().enumerate() {
+                let row = first + 4 * j + i;
+                let [x, y] = gaussians.means.one(row);
+                let z = heights.one(row);
+                let factor = cholesky3(gaussians.block3(row, heights.z));
+                let problem = if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+                    Some(BadGaussian::Mean)
+                } else if factor.is_none() {
+                    Some(BadGaussian::Covar)
+                } else {
+                    None
+                };
+                if let Some(kind) = problem {
+                    bad = bad.or(Some((4 * j + i, kind)));
+                    continue;
+                }
+                for (k, v) in [x, y, z].into_iter().enumerate() {
+                    m[k][i] = v;
+                }
+                for (k, v) in factor.unwrap_or_default().into_iter().enumerate() {
+                    l[k][i] = v;
+                }
+            }
+            let [mx, my, mz] = m.map(L::from_array);
+            let [l11, l21, l22, l31, l32, l33] = l.map(L::from_array);
+            let mut expected = zero;
+            for (u, &w) in rule.points().iter().zip(rule.weights()) {
+                let (u0, u1, u2) = (L::splat(u[0]), L::splat(u[1]), L::splat(u[2]));
+                let x = mx + l11 * u0;
+                let y = my + l21 * u0 + l22 * u1;
+                let z = mz + l31 * u0 + l32 * u1 + l33 * u2;
+                expected = expected + L::splat(w) * scan.lanes_at::<L, S, RowHeights, INDEXED>(steps, x, y, z).0;
+            }
+            expected = L::select(expected.lt(zero), zero, L::select(expected.gt(one), one, expected));
+            block.copy_from_slice(&expected.to_array()[..block.len()]);
+        }
+        bad
+    }
+}
+
+/// The scalar formula for one Gaussian with a height, for tests: Σ_k w_k P_D(m + L u_k),
+/// clamped, L = [l11, l21, l22, l31, l32, l33].
+#[cfg(test)]
+pub(super) fn expected_raised_reference(scan: &ScanDetection, mean: [f64; 3], l: [f64; 6], rule: &SpatialRule) -> f64 {
+    let mut expected = 0.0;
+    for (u, &w) in rule.points().iter().zip(rule.weights()) {
+        let x = mean[0] + l[0] * u[0];
+        let y = mean[1] + l[1] * u[0] + l[2] * u[1];
+        let z = mean[2] + l[3] * u[0] + l[4] * u[1] + l[5] * u[2];
+        expected += w * scan.at_raised(x, y, z);
+    }
+    expected.clamp(0.0, 1.0)
 }
 
 /// The scalar formula for one Gaussian, for tests: Σ_k w_k P_D(m + L u_k), clamped.

@@ -6,7 +6,9 @@
 //! checks, raising its errors that name the argument.
 
 use super::models::{PyClutterModel, PyDetectionModel};
-use super::{borrow, detached, guarded, mapping_of, output, pose_of, rule_of, slice, value_error};
+use super::{
+    borrow, detached, guarded, mapping_of, output, pose_of, rule_of, slice, value_error, MappingTuple, PoseTuple,
+};
 use crate::batch::PositionMapping;
 use crate::cubature::Rule;
 use crate::detection::ScanDetection;
@@ -29,11 +31,11 @@ pub struct PyDetectionAtPose {
 #[pymethods]
 impl PyDetectionAtPose {
     #[new]
-    #[pyo3(signature = (model, pose, position_mapping = (0, 2), rule = "mean", order = 3))]
+    #[pyo3(signature = (model, pose, position_mapping = MappingTuple::Flat((0, 2)), rule = "mean", order = 3))]
     fn new(
         model: &Bound<'_, PyDetectionModel>,
-        pose: (f64, f64, f64),
-        position_mapping: (i64, i64),
+        pose: PoseTuple,
+        position_mapping: MappingTuple,
         rule: &str,
         order: i64,
     ) -> PyResult<Self> {
@@ -85,10 +87,11 @@ impl PyDetectionAtPose {
     /// P_D at one state vector, a float64 (D, 1) column or (D,) array whose position is
     /// finite: the same bits as a row of [`Self::evaluate`]. None for anything else.
     fn at(&self, vector: &Bound<'_, PyAny>) -> Option<f64> {
-        let (px, py) = self.position_of(vector)?;
+        let position = self.position_of(vector)?;
+        let (packed, mapping) = self.packed();
         let mut pd = [0.0];
         self.scan
-            .at_states(&[px, py], 2, PositionMapping { x: 0, y: 1 }, &mut pd)
+            .at_states(&position[..packed], packed, mapping, &mut pd)
             .ok()?;
         Some(pd[0])
     }
@@ -99,27 +102,28 @@ impl PyDetectionAtPose {
     /// model's `expected`. None for anything else, or a position or covariance block the
     /// general path refuses (it then names the fault).
     fn expected_at(&self, vector: &Bound<'_, PyAny>, state: &Bound<'_, PyAny>) -> Option<f64> {
-        let (px, py) = self.position_of(vector)?;
-        let PositionMapping { x, y } = self.mapping;
+        let position = self.position_of(vector)?;
         let covar = state.getattr(pyo3::intern!(state.py(), "covar")).ok()?;
         let covar = covar.cast::<PyArray2<f64>>().ok()?;
         let d = covar.shape()[0];
         if covar.shape()[1] != d || vector.len().ok()? != d {
             return None;
         }
-        let block = [
-            covar.get_owned([x, x])?,
-            covar.get_owned([x, y])?,
-            covar.get_owned([y, x])?,
-            covar.get_owned([y, y])?,
-        ];
+        let (packed, mapping) = self.packed();
+        let axes = self.axes();
+        let mut block = [0.0; 9];
+        for a in 0..packed {
+            for b in 0..packed {
+                block[a * packed + b] = covar.get_owned([axes[a], axes[b]])?;
+            }
+        }
         let mut pd = [0.0];
         self.scan
             .expected_at_gaussians(
-                &[px, py],
-                &block,
-                2,
-                PositionMapping { x: 0, y: 1 },
+                &position[..packed],
+                &block[..packed * packed],
+                packed,
+                mapping,
                 &self.rule,
                 &mut pd,
             )
@@ -135,19 +139,42 @@ impl PyDetectionAtPose {
         self.scan.at_states(rows, ncols, self.mapping, out)
     }
 
-    /// The mapped position of a float64 (D, 1) column or (D,) array; None for anything else.
-    fn position_of(&self, vector: &Bound<'_, PyAny>) -> Option<(f64, f64)> {
-        let PositionMapping { x, y } = self.mapping;
+    /// The state indices the mapping reads: x, y and the height's if it has one (else x
+    /// again, unread).
+    fn axes(&self) -> [usize; 3] {
+        let PositionMapping { x, y, z } = self.mapping;
+        [x, y, z.unwrap_or(x)]
+    }
+
+    /// How many values a packed position holds (2, or 3 with a height) and the mapping of
+    /// such a packed row.
+    fn packed(&self) -> (usize, PositionMapping) {
+        match self.mapping.z {
+            None => (2, PositionMapping { x: 0, y: 1, z: None }),
+            Some(_) => (3, PositionMapping { x: 0, y: 1, z: Some(2) }),
+        }
+    }
+
+    /// The mapped position (x, y and the height if mapped) of a float64 (D, 1) column or
+    /// (D,) array; None for anything else.
+    fn position_of(&self, vector: &Bound<'_, PyAny>) -> Option<[f64; 3]> {
+        let axes = self.axes();
+        let mut position = [0.0; 3];
         if let Ok(column) = vector.cast::<PyArray2<f64>>() {
             if column.shape()[1] != 1 {
                 return None;
             }
-            Some((column.get_owned([x, 0])?, column.get_owned([y, 0])?))
+            for (p, &i) in position.iter_mut().zip(&axes) {
+                *p = column.get_owned([i, 0])?;
+            }
         } else if let Ok(flat) = vector.cast::<PyArray1<f64>>() {
-            Some((flat.get_owned([x])?, flat.get_owned([y])?))
+            for (p, &i) in position.iter_mut().zip(&axes) {
+                *p = flat.get_owned([i])?;
+            }
         } else {
-            None
+            return None;
         }
+        Some(position)
     }
 }
 
@@ -160,7 +187,7 @@ pub struct PyClutterAtPose {
 #[pymethods]
 impl PyClutterAtPose {
     #[new]
-    fn new(model: Py<PyClutterModel>, pose: (f64, f64, f64)) -> PyResult<Self> {
+    fn new(model: Py<PyClutterModel>, pose: PoseTuple) -> PyResult<Self> {
         Ok(PyClutterAtPose {
             model,
             pose: pose_of(pose)?,

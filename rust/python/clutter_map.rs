@@ -1,7 +1,7 @@
 //! The learned clutter map at the boundary: one estimator shared (not copied) with every
 //! clutter model built from it.
 
-use super::{array_of, borrow, guarded, points_slice, pose_of, slice, value_error};
+use super::{array_of, borrow, guarded, points_slice, pose_of, slice, value_error, PoseTuple};
 use crate::clutter::{read_map, SharedMap};
 use crate::clutter_map::{ClutterMap, MapSpace, Pooling};
 use numpy::{PyArray1, PyArray2};
@@ -76,7 +76,7 @@ impl PyClutterMap {
     #[pyo3(signature = (pose, positions, ranges = None, gates = None, weights = None))]
     fn update(
         &self,
-        pose: (f64, f64, f64),
+        pose: PoseTuple,
         positions: Bound<'_, PyArray2<f64>>,
         ranges: Option<Bound<'_, PyArray1<f64>>>,
         gates: Option<Bound<'_, PyArray2<f64>>>,
@@ -104,7 +104,7 @@ impl PyClutterMap {
     fn intensity<'py>(
         &self,
         py: Python<'py>,
-        pose: (f64, f64, f64),
+        pose: PoseTuple,
         positions: Bound<'py, PyArray2<f64>>,
         ranges: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {

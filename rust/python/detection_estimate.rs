@@ -1,7 +1,7 @@
 //! The learned detection probability at the boundary: one estimate shared (not copied)
 //! with every detection model built from it.
 
-use super::{array_of, borrow, guarded, points_slice, pose_of, slice};
+use super::{array_of, borrow, guarded, points_slice, pose_of, slice, PoseTuple};
 use crate::detection_estimate::{read_estimate, DetectionEstimate, SharedEstimate};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -47,7 +47,7 @@ impl PyDetectionEstimate {
     /// One scan's trials: track `positions` (M, 2), `detected` (M,) 0/1, `weights` (M,).
     fn update(
         &self,
-        pose: (f64, f64, f64),
+        pose: PoseTuple,
         positions: Bound<'_, PyArray2<f64>>,
         detected: Bound<'_, PyArray1<f64>>,
         weights: Bound<'_, PyArray1<f64>>,

@@ -6,7 +6,7 @@
 
 use super::{
     borrow, clutter_map, detached, detection_estimate, finite_points, guarded, mapping_of, output, particles,
-    points_slice, pose_of, rule_of, shape_error, slice, to_py, type_error, value_error,
+    points_slice, pose_of, rule_of, shape_error, slice, to_py, type_error, value_error, MappingTuple, PoseTuple,
 };
 use crate::clutter::{ClutterFactor, ClutterModel, MetadataThreshold};
 use crate::coast::CoastalBand;
@@ -157,7 +157,8 @@ pub struct PyDetectionModel(pub(super) DetectionModel);
 
 #[pymethods]
 impl PyDetectionModel {
-    /// `factors`: floats (constants), RangeBands, AngularSector, RadarEquation, LandMask (0 on land),
+    /// `factors`: floats (constants), RangeBands, AngularSector, RadarEquation, ElevationSector,
+    /// Horizon, LandMask (0 on land),
     /// LineOfSight (0 when shadowed), DetectionEstimate (shared, read as it stands). P_D is
     /// their product.
     #[new]
@@ -171,6 +172,10 @@ impl PyDetectionModel {
                 DetectionFactor::Sector(s.get().0.clone())
             } else if let Ok(r) = f.cast::<super::radar::PyRadarEquation>() {
                 DetectionFactor::Radar(r.get().0.clone())
+            } else if let Ok(e) = f.cast::<super::heights::PyElevationSector>() {
+                DetectionFactor::Elevation(e.get().0.clone())
+            } else if let Ok(h) = f.cast::<super::heights::PyHorizon>() {
+                DetectionFactor::Horizon(h.get().0.clone())
             } else if let Ok(l) = f.cast::<PyLandMask>() {
                 DetectionFactor::Land(l.get().0.clone())
             } else if let Ok(l) = f.cast::<PyLineOfSight>() {
@@ -183,7 +188,7 @@ impl PyDetectionModel {
                 return Err(type_error(
                     "factors",
                     format_args!(
-                        "factor {i} is a {}, expected a float, RangeBands, AngularSector, RadarEquation, LandMask, LineOfSight or DetectionEstimate",
+                        "factor {i} is a {}, expected a float, RangeBands, AngularSector, RadarEquation, ElevationSector, Horizon, LandMask, LineOfSight or DetectionEstimate",
                         f.get_type().name()?
                     ),
                 ));
@@ -193,13 +198,13 @@ impl PyDetectionModel {
     }
 
     /// P_D at the positions of `states` (N, D) for a sensor at `pose` (x, y, heading).
-    #[pyo3(signature = (pose, states, position_mapping = (0, 2), out = None))]
+    #[pyo3(signature = (pose, states, position_mapping = MappingTuple::Flat((0, 2)), out = None))]
     fn evaluate<'py>(
         &self,
         py: Python<'py>,
-        pose: (f64, f64, f64),
+        pose: PoseTuple,
         states: Bound<'py, PyArray2<f64>>,
-        position_mapping: (i64, i64),
+        position_mapping: MappingTuple,
         out: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
@@ -225,13 +230,13 @@ impl PyDetectionModel {
     /// P_D at each particle of `particles` (D, N), C- or Fortran-ordered, read in place;
     /// `log`: log P_D (log 0 = -inf, NumPy's bits); `missed`: also 1 − P_D (or its log),
     /// returned as a pair.
-    #[pyo3(signature = (pose, particles, position_mapping = (0, 2), log = false, missed = false))]
+    #[pyo3(signature = (pose, particles, position_mapping = MappingTuple::Flat((0, 2)), log = false, missed = false))]
     fn evaluate_particles<'py>(
         &self,
         py: Python<'py>,
-        pose: (f64, f64, f64),
+        pose: PoseTuple,
         particles: Bound<'py, PyArray2<f64>>,
-        position_mapping: (i64, i64),
+        position_mapping: MappingTuple,
         log: bool,
         missed: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
@@ -239,15 +244,15 @@ impl PyDetectionModel {
     }
 
     /// Expected P_D of Gaussians (`means` (N, D), `covars` (N, D, D)) under `rule`.
-    #[pyo3(signature = (pose, means, covars, position_mapping = (0, 2), rule = "cubature", order = 3, out = None))]
+    #[pyo3(signature = (pose, means, covars, position_mapping = MappingTuple::Flat((0, 2)), rule = "cubature", order = 3, out = None))]
     #[allow(clippy::too_many_arguments)]
     fn expected<'py>(
         &self,
         py: Python<'py>,
-        pose: (f64, f64, f64),
+        pose: PoseTuple,
         means: Bound<'py, PyArray2<f64>>,
         covars: Bound<'py, PyArray3<f64>>,
-        position_mapping: (i64, i64),
+        position_mapping: MappingTuple,
         rule: &str,
         order: i64,
         out: Option<Bound<'py, PyArray1<f64>>>,
@@ -317,7 +322,7 @@ impl PyCoastalBand {
     fn evaluate<'py>(
         &self,
         py: Python<'py>,
-        pose: (f64, f64, f64),
+        pose: PoseTuple,
         positions: Bound<'py, PyArray2<f64>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
@@ -399,7 +404,7 @@ impl PyClutterModel {
     fn evaluate<'py>(
         &self,
         py: Python<'py>,
-        pose: (f64, f64, f64),
+        pose: PoseTuple,
         positions: Bound<'py, PyArray2<f64>>,
         metadata: Bound<'py, PyArray2<f64>>,
         out: Option<Bound<'py, PyArray1<f64>>>,

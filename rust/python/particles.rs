@@ -7,7 +7,7 @@
 //!
 //! [`ScanDetection::at_particles`]: crate::detection::ScanDetection::at_particles
 
-use super::{borrow_contiguous, detached, mapping_of, pose_of, slice};
+use super::{borrow_contiguous, detached, mapping_of, pose_of, slice, MappingTuple, PoseTuple};
 use crate::batch::MemoryOrder;
 use crate::detection::DetectionModel;
 use crate::distinct::{Distinct, MAX_DISTINCT};
@@ -19,9 +19,9 @@ use pyo3::types::PyTuple;
 pub(super) fn evaluate<'py>(
     py: Python<'py>,
     model: &DetectionModel,
-    pose: (f64, f64, f64),
+    pose: PoseTuple,
     particles: Bound<'py, PyArray2<f64>>,
-    position_mapping: (i64, i64),
+    position_mapping: MappingTuple,
     log: bool,
     missed: bool,
 ) -> PyResult<Bound<'py, PyAny>> {

@@ -25,10 +25,9 @@ from stonesoup.types.state import GaussianState, ParticleState, State
 
 import ctxmodels
 from ctxmodels import (AngularSector, ClutterDensityModel, CoastalClutter, ConstantPose,
-                       DetectionProbabilityModel,
-                       DetectionSet, DetectorContext, LandMask, LineOfSight, MetadataThreshold,
-                       Mounting, NavigationTrack, Pose, RadarEquation, RadarHorizon, RangeBands,
-                       SensorModel, Zone, _core)
+                       DetectionProbabilityModel, DetectionSet, DetectorContext, ElevationSector,
+                       LandMask, LineOfSight, MetadataThreshold, Mounting, NavigationTrack, Pose,
+                       RadarEquation, RadarHorizon, RangeBands, SensorModel, Zone, _core)
 
 T0 = datetime.datetime(2024, 5, 1, 12, 0, 0)
 RNG = np.random.default_rng(99)
@@ -37,6 +36,9 @@ STATES = np.column_stack([RNG.uniform(-2000, 2000, 4000), RNG.normal(0, 5, 4000)
 STATES[:200, 0::2] = RNG.uniform(-100, 100, (200, 2))
 COVARS = np.tile(np.diag([400.0, 4.0, 900.0, 4.0]), (4000, 1, 1))
 AREAS = RNG.uniform(0, 20, (4000, 1))
+# [x, vx, y, vy, z, vz]: the states with heights, for the factors that read them
+STATES_3D = np.column_stack([STATES, RNG.uniform(-50, 800, 4000), RNG.normal(0, 1, 4000)])
+COVARS_3D = np.tile(np.diag([400.0, 4.0, 900.0, 4.0, 2500.0, 1.0]), (4000, 1, 1))
 ISLAND = np.array([[100.0, -50.0], [300.0, -50.0], [300.0, 150.0], [100.0, 150.0]])
 LAKE = np.array([[150.0, 0.0], [250.0, 0.0], [200.0, 100.0]])
 
@@ -67,6 +69,20 @@ def lidar_sensor():
         name="lidar")
 
 
+def spatial_sensor():
+    """A 3-D radar: slant range, an elevation beam and the horizon at each target's height."""
+    return SensorModel(detection=spatial_detection(), clutter=ClutterDensityModel(factors=[1e-4]),
+                       position_mapping=(0, 2, 4), mounting=Mounting(forward=1.0, up=12.0),
+                       pd_evaluation="cubature", name="3-D radar")
+
+
+def spatial_detection():
+    return DetectionProbabilityModel(factors=[
+        0.9, RangeBands(edges=(1500,), values=(1.0, 0.0)),
+        ElevationSector(lower=math.radians(-5), upper=math.radians(25)),
+        RadarHorizon(antenna_height=30.0, target_height=None, earth_radius=20_000.0)])
+
+
 def navigation():
     times = [T0 + datetime.timedelta(seconds=s) for s in (0.0, 1.5, 4.0)]
     return NavigationTrack(timestamps=times, positions=[[0.0, 0.0], [10.0, 5.0], [12.0, 30.0]],
@@ -86,7 +102,10 @@ FACTORIES = {
                                            false_alarm_probability=1e-6, swerling=3, pulses=4,
                                            loss=1.5),
     "RadarHorizon": lambda: RadarHorizon(antenna_height=20.0, target_height=3.0),
+    "RadarHorizon-target-height": lambda: RadarHorizon(antenna_height=20.0, target_height=None, k=1.2),
+    "ElevationSector": lambda: ElevationSector(lower=-0.05, upper=0.4, inside=0.8, outside=0.1),
     "DetectionProbabilityModel": radar_detection,
+    "DetectionProbabilityModel-3d": spatial_detection,
     "DetectionProbabilityModel-radar-equation": lambda: DetectionProbabilityModel(factors=[
         RadarEquation(reference_snr=10.0, reference_range=800.0, false_alarm_probability=1e-5),
         RadarHorizon(antenna_height=5.0)]),
@@ -105,17 +124,24 @@ FACTORIES = {
         2.0, RangeBands(edges=(1000,), values=(1e-3, 1e-2)),
         MetadataThreshold(key="area", threshold=10, below=1e-1, at_or_above=1e-3)]),
     "Pose": lambda: Pose(x=10.0, y=-3.5, heading=2.5),
+    "Pose-raised": lambda: Pose(x=10.0, y=-3.5, heading=2.5, z=40.0),
     "Mounting": lambda: Mounting(forward=4.0, left=-1.0, yaw=0.1),
+    "Mounting-up": lambda: Mounting(forward=4.0, left=-1.0, yaw=0.1, up=6.5),
     "ConstantPose": lambda: ConstantPose(pose=Pose(x=1.0, y=2.0, heading=-0.5)),
     "NavigationTrack": navigation,
+    "NavigationTrack-heights": lambda: NavigationTrack(
+        timestamps=[T0 + datetime.timedelta(seconds=s) for s in (0.0, 1.5, 4.0)],
+        positions=[[0.0, 0.0, 5.0], [10.0, 5.0, 7.5], [12.0, 30.0, 2.0]], headings=[3.0, -3.0, -1.0]),
     "SensorModel-radar": radar_sensor,
     "SensorModel-lidar": lidar_sensor,
+    "SensorModel-3d": spatial_sensor,
 }
 
 
 def behaviour(obj):
     """What the component computes, as arrays/tuples to compare bit for bit."""
     pose = Pose(x=15.0, y=-20.0, heading=2.2)
+    raised = Pose(x=15.0, y=-20.0, heading=2.2, z=25.0)
     if isinstance(obj, Zone):
         return obj(STATES[:, 0::2] / 4)
     if isinstance(obj, (RangeBands, RadarHorizon)):
@@ -124,6 +150,12 @@ def behaviour(obj):
         return obj(np.linspace(0, 4000, 4001)), obj.threshold
     if isinstance(obj, AngularSector):
         return DetectionProbabilityModel(factors=[obj]).evaluate(pose, STATES)
+    if isinstance(obj, ElevationSector):
+        return DetectionProbabilityModel(factors=[obj]).evaluate(raised, STATES_3D, (0, 2, 4))
+    if isinstance(obj, DetectionProbabilityModel) and any(
+            isinstance(f, ElevationSector) for f in obj.factors):
+        return (obj.evaluate(raised, STATES_3D, (0, 2, 4)),
+                obj.expected(raised, STATES_3D, COVARS_3D, (0, 2, 4), "cubature"))
     if isinstance(obj, LandMask):
         return obj.contains(STATES[:, 0::2] / 4)
     if isinstance(obj, LineOfSight):
@@ -150,6 +182,11 @@ def behaviour(obj):
         return obj.pose_at(T0).as_tuple()
     if isinstance(obj, NavigationTrack):
         return [obj.pose_at(T0 + datetime.timedelta(seconds=s)).as_tuple() for s in np.linspace(0, 4, 17)]
+    if isinstance(obj, SensorModel) and len(obj.position_mapping) == 3:
+        context = obj.context(raised, T0)
+        return (context.pose.as_tuple(), context.prob_detection_array(STATES_3D),
+                context.prob_detection_array(STATES_3D, COVARS_3D),
+                context.clutter_spatial_density_array(STATES_3D[:, 0::2][:, :2]))
     if isinstance(obj, SensorModel):
         context = obj.context(pose, T0)
         metadata = [{"area": a} for a in AREAS[:, 0]]
@@ -211,6 +248,11 @@ def test_equal_values_are_equal_and_hash_alike(factory):
         reference_snr=13.0, reference_range=1500.0, false_alarm_probability=1e-6, swerling=4,
         pulses=4, loss=1.5)),
     (FACTORIES["RadarHorizon"], lambda: RadarHorizon(antenna_height=20.0, target_height=3.5)),
+    (FACTORIES["RadarHorizon"], lambda: RadarHorizon(antenna_height=20.0, target_height=None)),
+    (FACTORIES["ElevationSector"], lambda: ElevationSector(lower=-0.05, upper=0.41, inside=0.8,
+                                                           outside=0.1)),
+    (FACTORIES["Pose-raised"], lambda: Pose(x=10.0, y=-3.5, heading=2.5, z=40.5)),
+    (FACTORIES["Mounting-up"], lambda: Mounting(forward=4.0, left=-1.0, yaw=0.1, up=6.0)),
     (FACTORIES["Zone"], lambda: Zone(polygons=land_mask(), inside=10.0, outside=0.25)),
     (land_mask, lambda: LandMask(polygons=[ISLAND])),
     (FACTORIES["MetadataThreshold"], lambda: MetadataThreshold(key="area", threshold=10, below=1e-1,

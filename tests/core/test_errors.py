@@ -49,7 +49,7 @@ def test_position_mapping_out_of_range_or_invalid():
     raises(ValueError, "position_mapping", RADAR.evaluate, POSE, np.zeros((2, 4)), (1, 1))
     raises(ValueError, "position_mapping", RADAR.expected, POSE, np.zeros((2, 4)), np.zeros((2, 4, 4)),
            (5, 0))
-    for mapping in [(0, 0), (0, -2), (0, 1, 2)]:
+    for mapping in [(0, 0), (0, -2), (0, 1, 1), (0, 1, 2, 3)]:
         raises(ValueError, "position_mapping", SensorModel, detection=RADAR, clutter=CLUTTER,
                position_mapping=mapping)
     context = SensorModel(detection=RADAR, clutter=CLUTTER, position_mapping=(0, 6)).context(POSE)
@@ -329,7 +329,7 @@ def test_navigation_track_errors():
     raises(ValueError, "timestamps", track, [], np.zeros((0, 2)), [])
     raises(TypeError, "timestamps", track, [0.0], np.zeros((1, 2)), [0])
     raises(ValueError, "positions", track, [t0], np.zeros((2, 2)), [0])
-    raises(ValueError, "positions", track, [t0], np.zeros((1, 3)), [0])
+    raises(ValueError, "positions", track, [t0], np.zeros((1, 4)), [0])  # (x, y, z) at most
     raises(ValueError, "headings", track, [t0], np.zeros((1, 2)), [np.nan])
     two = track([t0, later], np.zeros((2, 2)), [0, 1])
     raises(ValueError, "timestamp", two.pose_at, later + datetime.timedelta(seconds=1))

@@ -329,7 +329,8 @@ def test_numpy_integer_position_mapping_is_accepted():
 
 
 @pytest.mark.parametrize("mapping, exception", [
-    ((0, 2, 3), ValueError), ((0.0, 2.0), TypeError), ((0, 2.5), TypeError), ((False, True), TypeError),
+    ((0, 2, 3, 4), ValueError), ((0, 2, 2), ValueError), ((0.0, 2.0), TypeError),
+    ((0, 2.5), TypeError), ((False, True), TypeError),
     ((0, -1), ValueError), ((0, 2**70), ValueError), ((1, 1), ValueError), ("02", TypeError)])
 def test_bad_position_mappings_name_position_mapping(mapping, exception):
     names(lambda: SensorModel(detection=DETECTION, clutter=CLUTTER, position_mapping=mapping), exception,

@@ -34,7 +34,8 @@ NOT_POSITIONS = [None, "ab", 5.0, [1.0, 2.0], [[1.0, 2.0, 3.0]], [[[1.0, 2.0]]],
                  np.array([[1, 2]], dtype="timedelta64[s]"), np.array([[1 + 1j, 2]]),
                  np.array([[1.0, 2.0]], dtype=object), np.zeros((2, 2, 1))]
 #: Values no pose accepts.
-NOT_POSES = [None, "abc", 5.0, (0.0, 0.0), (0.0, 0.0, 0.0, 0.0), (0.0, NAN, 0.0),
+NOT_POSES = [None, "abc", 5.0, (0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0), (0.0, NAN, 0.0),
+             (0.0, 0.0, 0.0, NAN),
              (INF, 0.0, 0.0), (0.0, 0.0, "n"), (0.0, True, 0.0), {"x": 0}, object()]
 
 

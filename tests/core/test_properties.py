@@ -440,7 +440,8 @@ def test_mounting_matches_numpy_rotation(x, y, heading, forward, left, yaw):
     sensor = Mounting(forward=forward, left=left, yaw=yaw).apply(Pose(x=x, y=y, heading=heading))
     np.testing.assert_allclose([sensor.x, sensor.y], expected, rtol=1e-12, atol=1e-9)
     assert angle_off(sensor.heading, heading + yaw) < 1e-12
-    assert _core.mount((x, y, heading), forward, left, yaw) == (sensor.x, sensor.y, sensor.heading)
+    assert _core.mount((x, y, heading), forward, left, yaw) == (sensor.x, sensor.y, sensor.heading,
+                                                                 0.0)
     model = SensorModel(detection=DetectionProbabilityModel(factors=[1.0]),
                         clutter=ClutterDensityModel(factors=[1.0]),
                         mounting=Mounting(forward=forward, left=left, yaw=yaw))

@@ -17,8 +17,9 @@ SCRIPT = r'''
 import hashlib, json, math
 import numpy as np
 import ctxmodels._core as core
-from ctxmodels import (AngularSector, ClutterDensityModel, DetectionProbabilityModel, LandMask,
-                       LineOfSight, MetadataThreshold, RangeBands, SensorModel)
+from ctxmodels import (AngularSector, ClutterDensityModel, DetectionProbabilityModel,
+                       ElevationSector, LandMask, LineOfSight, MetadataThreshold, RadarHorizon,
+                       RangeBands, SensorModel)
 
 rng = np.random.default_rng(20261123)
 island = [[300.0, -200.0], [600.0, -200.0], [600.0, 200.0], [300.0, 200.0]]
@@ -53,6 +54,22 @@ for name, factors in models.items():
                   context.prob_detection_particles(states.T.copy()),
                   detection.evaluate(context.pose, wide, (4, 1))]
         digests[f"{name}/{rule}"] = hashlib.sha256(b"".join(v.tobytes() for v in values)).hexdigest()
+# states with heights: slant range, an elevation beam, the horizon at each target's height
+spatial = DetectionProbabilityModel(factors=[
+    0.9, RangeBands(edges=(700.0,), values=(0.93, 0.11)), ElevationSector(lower=-0.05, upper=0.5),
+    RadarHorizon(antenna_height=30.0, target_height=None, earth_radius=20_000.0),
+    AngularSector.blind(math.pi, 1.0), land, LineOfSight(land=land)])
+states3 = rng.uniform(-1800, 1800, size=(n, 6))
+states3[:, 4] = rng.uniform(-100, 900, n)
+covars3 = np.zeros((n, 6, 6))
+covars3[:, [0, 2, 4], [0, 2, 4]] = rng.uniform(1, 80, (n, 3)) ** 2
+for rule in ("mean", "cubature", "gauss-hermite"):
+    sensor = SensorModel(detection=spatial, clutter=ClutterDensityModel(factors=[1e-3]),
+                         position_mapping=(0, 2, 4), pd_evaluation=rule)
+    context = sensor.context((1.0, 2.0, 0.3, 25.0))
+    values = [context.prob_detection_array(states3), context.prob_detection_array(states3, covars3),
+              context.prob_detection_particles(states3.T.copy())]
+    digests[f"3d/{rule}"] = hashlib.sha256(b"".join(v.tobytes() for v in values)).hexdigest()
 clutter = ClutterDensityModel(factors=[
     0.7, RangeBands(edges=(100.0, 1000.0), values=(1e-3, 1e-2, 3e-2), upper_owns=(True, False)),
     MetadataThreshold(key="area", threshold=10.0, below=1e-1, at_or_above=1e-3, missing=1e-2)])
@@ -112,7 +129,7 @@ def test_portable_build_gives_the_bits_of_the_dispatched_one():
     backend = dispatched.pop("backend")
     if platform.machine() in ("x86_64", "AMD64") and _cpu_has_avx2():
         assert backend == "avx2"  # else this test would compare the portable build with itself
-    assert len(portable) == 11
+    assert len(portable) == 14
     # every error names its argument and the first bad row
     assert [e.split(":")[0] for e in portable["errors"]] == [
         "means", "means", "covars", "particles", "metadata"], portable["errors"]

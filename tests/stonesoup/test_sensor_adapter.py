@@ -1,7 +1,7 @@
 """Context models read off Stone Soup's own radars (ctxmodels.stonesoup.sensor_adapter):
 P_D > 0 exactly where the sensor's own ``is_detectable`` says so, on 10⁴ random targets
 per sensor type, mounted with offsets on fixed and moving platforms; the pose follows the
-platform's states."""
+platform's states. (The 3-D radars: test_sensor_adapter_3d.py.)"""
 from __future__ import annotations
 
 import datetime
@@ -13,8 +13,7 @@ import pytest
 from stonesoup.models.transition.linear import (CombinedLinearGaussianTransitionModel,
                                                 ConstantVelocity)
 from stonesoup.platform.base import FixedPlatform, MovingPlatform
-from stonesoup.sensor.radar.radar import (RadarBearing, RadarBearingRange,
-                                          RadarElevationBearingRange, RadarRotatingBearing,
+from stonesoup.sensor.radar.radar import (RadarBearing, RadarBearingRange, RadarRotatingBearing,
                                           RadarRotatingBearingRange)
 from stonesoup.types.array import StateVector
 from stonesoup.types.groundtruth import GroundTruthState
@@ -90,23 +89,6 @@ def test_pd_is_nonzero_exactly_where_the_sensor_can_detect(kind, platform):
     assert 0.02 < detectable.mean() < 0.98  # both sides of the coverage were asked about
 
 
-def test_a_3d_radar_is_read_on_its_plane_for_targets_at_its_height():
-    sensor = RadarElevationBearingRange(ndim_state=6, position_mapping=(0, 2, 4),
-                                        noise_covar=np.eye(3), max_range=700,
-                                        mounting_offset=StateVector([5.0, 2.0, 0.0]),
-                                        rotation_offset=StateVector([0, 0, 0.3]))
-    FixedPlatform(states=[State(StateVector([100.0, 0, -50.0, 0, 12.0, 0]), timestamp=T0)],
-                  position_mapping=(0, 2, 4), orientation=StateVector([0, 0, 0.7]),
-                  sensors=[sensor])
-    rng = np.random.default_rng(3)
-    position = np.asarray(sensor.position, dtype=float).ravel()
-    planar = _targets(rng, position)
-    states = np.column_stack([planar, np.full(N, position[2]), np.zeros(N)])  # at its height
-    pd, detectable = _agreement(sensor, states)
-    assert np.array_equal(pd > 0, detectable)
-    assert 0.02 < detectable.mean() < 0.98
-
-
 def test_the_pose_follows_the_platforms_states():
     sensor = RadarRotatingBearingRange(ndim_state=4, position_mapping=(0, 2), noise_covar=np.eye(2),
                                        dwell_centre=StateVector([0.4]), rpm=20,
@@ -134,16 +116,15 @@ def test_what_cannot_be_read_raises_naming_it():
     _fixed(tilted)
     with pytest.raises(ValueError, match="roll .* tilt the coverage"):
         sensor_pose(tilted)
-    # A subclass of a supported radar may add coverage rules (a rotating 3-D radar's field
-    # of view): refused, not read as its parent.
-    from stonesoup.sensor.radar.radar import RadarRotatingElevationBearingRange
-    rotating_3d = RadarRotatingElevationBearingRange(
-        ndim_state=6, position_mapping=(0, 2, 4), noise_covar=np.eye(3), max_range=800,
-        dwell_centre=StateVector([0.0]), tilt_centre=StateVector([0.0]), rpm=20,
-        vertical_extent=math.radians(10),
-        fov_angle=math.radians(60))
-    with pytest.raises(TypeError, match="RadarRotatingElevationBearingRange is not a Stone"):
-        sensor_model_from_stonesoup(rotating_3d, 0.9, 1e-4)
+    # A subclass of a supported radar may add coverage rules (a raster-scanning radar's
+    # frame): refused, not read as its parent.
+    from stonesoup.sensor.radar.radar import RadarRasterScanBearingRange
+    raster = RadarRasterScanBearingRange(
+        ndim_state=4, position_mapping=(0, 2), noise_covar=np.eye(2), max_range=800,
+        dwell_centre=StateVector([0.0]), rpm=20, fov_angle=math.radians(60),
+        for_angle=math.radians(120))
+    with pytest.raises(TypeError, match="RadarRasterScanBearingRange is not a Stone"):
+        sensor_model_from_stonesoup(raster, 0.9, 1e-4)
     unmounted = RadarBearingRange(ndim_state=4, position_mapping=(0, 2), noise_covar=np.eye(2),
                                   max_range=800)
     with pytest.raises(ValueError, match="sensor: has no position or orientation"):

@@ -104,7 +104,7 @@ def _scan(detections, model) -> tuple[list, np.ndarray]:
     ordered = in_stable_order(detections)
     if not ordered:
         return ordered, np.empty((0, 2))
-    return ordered, detection_positions(ordered, model.position_mapping)
+    return ordered, detection_positions(ordered, model.plane_mapping)
 
 
 _WEIGHTINGS = ("gates", "posterior")

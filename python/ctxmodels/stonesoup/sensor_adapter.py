@@ -30,11 +30,15 @@ decided exactly (:class:`~ctxmodels.RangeBands`): the same answer on every path,
 layout and SIMD backend, a target whose world range is exactly ``max_range`` inside, and
 agreement with ``is_detectable`` everywhere outside the sliver.
 
-Coverage is planar: a 3-D sensor (``RadarElevationBearingRange``) is read on the x/y
-plane of its ``position_mapping``, exact for targets at the sensor's height; roll or
-pitch would tilt the coverage out of the plane and raise. The clutter density is the
-caller's: Stone Soup's clutter models are generators, not densities in the detections'
-measurement space.
+A 3-D sensor (``RadarElevationBearingRange``, ``RadarRotatingElevationBearingRange``,
+``RadarElevationBearingRangeRate``) is read in 3-D: the model's ``position_mapping`` is
+the sensor's (x, y, z), the pose has the sensor's height, ``max_range`` bounds the slant
+range and a rotating one's ``vertical_extent`` is an
+:class:`~ctxmodels.ElevationSector` of :math:`\pm` ``vertical_extent``/2. Frames turn
+about the vertical only: a roll or pitch of the sensor, or a rotating radar's
+``tilt_centre``, would tilt the coverage and raise. The clutter density is the caller's:
+Stone Soup's clutter models are generators, not densities in the detections' measurement
+space.
 """
 from __future__ import annotations
 
@@ -59,8 +63,8 @@ from ..detection import DetectionProbabilityModel
 from ..pose import Pose, PoseSource
 from ..sensor import SensorModel, provide
 from .radar_context import SensorContext
-from .sensor_coverage import (ROTATING, SUPPORTED, coverage_factors, planar_yaw, sensor_kind,
-                              sensor_number)
+from .sensor_coverage import (ROTATING, SPATIAL, SUPPORTED, coverage_factors, planar_yaw,
+                              sensor_kind, sensor_number)
 
 
 def sensor_model_from_stonesoup(sensor, prob_detection: float, clutter_density: float,
@@ -97,8 +101,9 @@ provide("from_stonesoup", _model_of)
 
 
 def sensor_pose(sensor) -> Pose:
-    """The pose of a Stone Soup sensor now: x/y of its position and the heading of its
-    boresight (the antenna's, for a rotating radar), counter-clockwise from +x."""
+    """The pose of a Stone Soup sensor now: x/y of its position (and its height z for a 3-D
+    radar) and the heading of its boresight (the antenna's, for a rotating radar),
+    counter-clockwise from +x."""
     kind = sensor_kind(sensor)
     if sensor.position is None or sensor.orientation is None:
         raise ValueError("sensor: has no position or orientation; mount it on a platform")
@@ -106,7 +111,8 @@ def sensor_pose(sensor) -> Pose:
     heading = planar_yaw(sensor.orientation, "sensor orientation")
     if kind in ROTATING:
         heading += float(np.asarray(sensor.dwell_centre, dtype=float).ravel()[0])
-    return Pose(x=float(position[0]), y=float(position[1]), heading=heading)
+    z = float(position[2]) if kind in SPATIAL and position.size > 2 else 0.0
+    return Pose(x=float(position[0]), y=float(position[1]), heading=heading, z=z)
 
 
 class SensorPose(PoseSource):
@@ -151,7 +157,7 @@ def _range_model(sensor, kind: str):
             noise_covar=sensor.noise_covar, translation_offset=sensor.position,
             rotation_offset=StateVector(orientation))
         return model, 1
-    return sensor.measurement_model, 2 if kind == "RadarElevationBearingRange" else 1
+    return sensor.measurement_model, 2 if kind in SPATIAL else 1
 
 
 def sensor_context(sensor, sensor_model: SensorModel,
@@ -172,9 +178,10 @@ def sensor_context(sensor, sensor_model: SensorModel,
 
 
 def _check_mapping(sensor, sensor_model: SensorModel, argument: str) -> None:
-    """The model must read the target's position where the radar measures it."""
-    measured = tuple(int(i) for i in tuple(sensor.position_mapping)[:2])
+    """The model must read the target's position where the radar measures it (x and y, and
+    z if it reads heights)."""
     read = tuple(int(i) for i in sensor_model.position_mapping)
+    measured = tuple(int(i) for i in tuple(sensor.position_mapping)[:len(read)])
     if read != measured:
         raise ValueError(f"{argument}: position_mapping {read} is not the sensor's "
                          f"{measured}; the model would read another state entry as the "

@@ -9,19 +9,26 @@ import math
 import numpy as np
 
 from .._component import as_float, as_position_mapping
+from ..elevation import ElevationSector
 from ..errors import ArgumentError, ArgumentTypeError
 from ..range_bands import RangeBands
 from ..sector import AngularSector
 
 #: The Stone Soup sensor classes read here (by name, so the module imports without them).
 SUPPORTED = ("RadarBearingRange", "RadarRotatingBearingRange", "RadarBearing",
-             "RadarRotatingBearing", "RadarElevationBearingRange")
+             "RadarRotatingBearing", "RadarElevationBearingRange",
+             "RadarRotatingElevationBearingRange", "RadarElevationBearingRangeRate")
+
+#: The supported sensors that measure in 3-D: slant range from the sensor's height, and
+#: (the rotating one) elevation; read with the state's (x, y, z).
+SPATIAL = ("RadarElevationBearingRange", "RadarRotatingElevationBearingRange",
+           "RadarElevationBearingRangeRate")
 
 
 def sensor_kind(sensor) -> str:
     """The sensor's class name, which must be one of :data:`SUPPORTED` exactly: a subclass
-    (``RadarRotatingElevationBearingRange``, a range-rate radar, a user's own) may add
-    coverage rules these models would silently drop."""
+    (a 2-D range-rate radar, a raster-scan one, a user's own) may add coverage rules these
+    models would silently drop."""
     cls = type(sensor)
     if cls.__name__ in SUPPORTED and cls.__module__.startswith("stonesoup."):
         if getattr(sensor, "obstacles", None):
@@ -33,7 +40,8 @@ def sensor_kind(sensor) -> str:
 
 
 #: The supported sensors whose field of view turns with the antenna's dwell centre.
-ROTATING = ("RadarRotatingBearingRange", "RadarRotatingBearing")
+ROTATING = ("RadarRotatingBearingRange", "RadarRotatingBearing",
+            "RadarRotatingElevationBearingRange")
 
 
 def planar_yaw(orientation, argument: str) -> float:
@@ -44,9 +52,10 @@ def planar_yaw(orientation, argument: str) -> float:
     return yaw
 
 
-def coverage_factors(sensor) -> tuple[list, tuple[int, int]]:
-    """The P_D factors of the radar's coverage (its range limit, and a rotating radar's field
-    of view; none for an unlimited one) and the state indices of its x and y."""
+def coverage_factors(sensor) -> tuple[list, tuple[int, ...]]:
+    """The P_D factors of the radar's coverage (its range limit, a rotating radar's field
+    of view and a rotating 3-D radar's vertical extent; none for an unlimited one) and the
+    state indices of its x and y (and z for a 3-D radar)."""
     kind = sensor_kind(sensor)
     factors: list = []
     max_range = sensor_number(sensor, "max_range")
@@ -61,11 +70,24 @@ def coverage_factors(sensor) -> tuple[list, tuple[int, int]]:
             raise ValueError(f"sensor: fov_angle must be > 0, got {sensor.fov_angle!r}")
         if fov < 2 * math.pi:
             factors.append(AngularSector.field_of_view(0.0, fov))
+    if kind == "RadarRotatingElevationBearingRange":
+        tilt = float(np.asarray(sensor.tilt_centre, dtype=float).ravel()[0])
+        if tilt != 0.0:
+            raise ValueError(f"sensor: tilt_centre {tilt} rad tilts the coverage out of the "
+                             f"horizontal; only an untilted antenna is read")
+        extent = sensor_number(sensor, "vertical_extent")
+        if not extent > 0:
+            raise ValueError(f"sensor: vertical_extent must be > 0, got {sensor.vertical_extent!r}")
+        if extent < math.pi:
+            factors.append(ElevationSector(lower=-extent / 2, upper=extent / 2))
+    axes = 3 if kind in SPATIAL else 2
     try:
-        mapping = as_position_mapping(tuple(sensor.position_mapping)[:2], "sensor")
+        mapping = as_position_mapping(tuple(sensor.position_mapping)[:axes], "sensor",
+                                      heights=axes == 3)
     except (ArgumentError, ArgumentTypeError) as err:
-        raise type(err)("sensor", f"position_mapping {sensor.position_mapping!r} is not two "
-                                  f"state indices of x and y ({err.detail})") from None
+        which = "x, y and z" if axes == 3 else "x and y"
+        raise type(err)("sensor", f"position_mapping {sensor.position_mapping!r} is not "
+                                  f"{axes} state indices of {which} ({err.detail})") from None
     return factors, mapping
 
 

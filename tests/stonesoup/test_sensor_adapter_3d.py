@@ -1,0 +1,139 @@
+"""Stone Soup's 3-D radars read in 3-D (ctxmodels.stonesoup.sensor_adapter): the model reads
+the state's (x, y, z), the pose has the sensor's height, and P_D > 0 exactly where the
+sensor's own ``is_detectable`` says so on 10⁴ random targets at random heights per sensor
+type, mounted with offsets on fixed and moving (climbing) platforms."""
+from __future__ import annotations
+
+import datetime
+import math
+import zlib
+
+import numpy as np
+import pytest
+from stonesoup.models.transition.linear import (CombinedLinearGaussianTransitionModel,
+                                                ConstantVelocity)
+from stonesoup.platform.base import FixedPlatform, MovingPlatform
+from stonesoup.sensor.radar.radar import (RadarElevationBearingRange,
+                                          RadarElevationBearingRangeRate,
+                                          RadarRotatingElevationBearingRange)
+from stonesoup.types.array import StateVector
+from stonesoup.types.groundtruth import GroundTruthState
+from stonesoup.types.state import GaussianState, State
+
+from ctxmodels import ElevationSector, SensorModel
+from ctxmodels.stonesoup import sensor_context, sensor_pose
+
+T0 = datetime.datetime(2026, 1, 1)
+N = 10_000
+MOUNT = dict(mounting_offset=StateVector([5.0, 2.0, 3.0]), rotation_offset=StateVector([0, 0, 0.3]))
+
+
+def _sensor(kind: str):
+    common = dict(ndim_state=6, position_mapping=(0, 2, 4), max_range=800, **MOUNT)
+    if kind == "RadarElevationBearingRange":
+        return RadarElevationBearingRange(noise_covar=np.eye(3), **common)
+    if kind == "RadarElevationBearingRangeRate":
+        return RadarElevationBearingRangeRate(noise_covar=np.eye(4), velocity_mapping=(1, 3, 5),
+                                              **common)
+    return RadarRotatingElevationBearingRange(
+        noise_covar=np.eye(3), dwell_centre=StateVector([1.1]), tilt_centre=StateVector([0.0]),
+        rpm=20, fov_angle=math.radians(100), vertical_extent=math.radians(30), **common)
+
+
+def _mount(sensor, platform: str):
+    if platform == "fixed":
+        FixedPlatform(states=[State(StateVector([100.0, 0, -50.0, 0, 12.0, 0]), timestamp=T0)],
+                      position_mapping=(0, 2, 4), orientation=StateVector([0, 0, 0.7]),
+                      sensors=[sensor])
+        return
+    # north-east at 7 m/s, 40 m up, moved five seconds along (level: a climbing platform
+    # pitches its sensors, which is refused)
+    transition = CombinedLinearGaussianTransitionModel([ConstantVelocity(0.0)] * 3)
+    moving = MovingPlatform(states=[State(StateVector([0.0, 5.0, 0.0, 5.0, 40.0, 0.0]),
+                                          timestamp=T0)],
+                            position_mapping=(0, 2, 4), velocity_mapping=(1, 3, 5),
+                            transition_model=transition, sensors=[sensor])
+    for k in range(1, 6):
+        moving.move(T0 + datetime.timedelta(seconds=k))
+
+
+def _targets(rng, centre):
+    return np.column_stack([centre[0] + rng.uniform(-900, 900, N), rng.normal(0, 5, N),
+                            centre[1] + rng.uniform(-900, 900, N), rng.normal(0, 5, N),
+                            centre[2] + rng.uniform(-400, 400, N), rng.normal(0, 5, N)])
+
+
+KINDS = ["RadarElevationBearingRange", "RadarRotatingElevationBearingRange",
+         "RadarElevationBearingRangeRate"]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("platform", ["fixed", "moving"])
+def test_pd_is_nonzero_exactly_where_the_3d_sensor_can_detect(kind, platform):
+    sensor = _sensor(kind)
+    _mount(sensor, platform)
+    model = SensorModel.from_stonesoup(sensor, prob_detection=0.9, clutter_density=1e-4)
+    assert model.position_mapping == (0, 2, 4)
+    position = np.asarray(sensor.position, dtype=float).ravel()
+    pose = sensor_pose(sensor)
+    assert pose.z == position[2] != 0
+    rng = np.random.default_rng(zlib.crc32(f"{kind} {platform}".encode()))
+    states = _targets(rng, position)
+    detectable = np.array([bool(np.all(sensor.is_detectable(
+        GroundTruthState(s.reshape(-1, 1), timestamp=T0)))) for s in states])
+    for context in (model.context(pose, T0), sensor_context(sensor, model, T0)):
+        pd = context.prob_detection_array(states)
+        assert np.array_equal(pd > 0, detectable), int(((pd > 0) != detectable).sum())
+        assert set(np.unique(pd)) <= {0.0, 0.9}
+    assert 0.05 < detectable.mean() < 0.95  # both sides of the coverage were asked about
+    # The same targets at the sensor's height but read on the plane are not the same:
+    # heights matter (slant range, elevation) for a good share of them.
+    planar = SensorModel(detection=model.detection, clutter=model.clutter,
+                         position_mapping=(0, 2)).context(pose, T0).prob_detection_array(states)
+    assert ((planar > 0) != detectable).mean() > 0.02
+
+
+def test_the_rotating_3d_radars_vertical_extent_is_an_elevation_sector():
+    sensor = _sensor("RadarRotatingElevationBearingRange")
+    _mount(sensor, "fixed")
+    model = SensorModel.from_stonesoup(sensor, 0.9, 1e-4)
+    (sector,) = [f for f in model.detection.factors if isinstance(f, ElevationSector)]
+    assert (sector.lower, sector.upper) == (-math.radians(15), math.radians(15))
+    # straight up from the antenna: outside the ±15° beam, whatever the range
+    pose = sensor_pose(sensor)
+    above = np.array([[pose.x, 0, pose.y, 0, pose.z + 100.0, 0]])
+    assert model.context(pose, T0).prob_detection_array(above)[0] == 0.0
+
+
+def test_a_tilted_antenna_or_a_2d_state_is_refused_naming_it():
+    tilted = RadarRotatingElevationBearingRange(
+        ndim_state=6, position_mapping=(0, 2, 4), noise_covar=np.eye(3), max_range=800,
+        dwell_centre=StateVector([0.0]), tilt_centre=StateVector([0.1]), rpm=20,
+        fov_angle=math.radians(60), vertical_extent=math.radians(10), **MOUNT)
+    _mount(tilted, "fixed")
+    with pytest.raises(ValueError, match="sensor: tilt_centre 0.1 rad tilts the coverage"):
+        SensorModel.from_stonesoup(tilted, 0.9, 1e-4)
+    sensor = _sensor("RadarElevationBearingRange")
+    _mount(sensor, "fixed")
+    context = SensorModel.from_stonesoup(sensor, 0.9, 1e-4).context(sensor_pose(sensor), T0)
+    with pytest.raises(ValueError, match=r"means: position_mapping \(0, 2, 4\) is out of range "
+                                         r"for rows of 4 columns"):
+        context.prob_detection_array(np.zeros((3, 4)))
+    with pytest.raises(ValueError, match="position_mapping"):
+        context.prob_detection(GaussianState(StateVector([0.0, 0, 0, 0]), np.eye(4)))
+
+
+def test_a_planar_model_of_a_3d_radar_still_gets_its_context():
+    """A model built by hand with the x/y indices only reads targets at the sensor's height
+    (the plane), as before 3-D coverage: still the sensor's context."""
+    sensor = _sensor("RadarElevationBearingRange")
+    _mount(sensor, "fixed")
+    model = SensorModel.from_stonesoup(sensor, 0.9, 1e-4)
+    planar = SensorModel(detection=model.detection, clutter=model.clutter, position_mapping=(0, 2))
+    context = sensor_context(sensor, planar, T0)
+    pose = sensor_pose(sensor)
+    level = np.array([[pose.x + 700.0, 0, pose.y, 0, pose.z, 0],
+                      [pose.x + 700.0, 0, pose.y, 0, pose.z + 500.0, 0]])
+    np.testing.assert_array_equal(context.prob_detection_array(level), [0.9, 0.9])
+    np.testing.assert_array_equal(sensor_context(sensor, model, T0).prob_detection_array(level),
+                                  [0.9, 0.0])
