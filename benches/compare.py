@@ -29,6 +29,10 @@ inputs:
   against SciPy's non-central χ² survival function (``scipy.stats.ncx2.sf``). **The radar
   horizon** (``RadarHorizon``) against NumPy's ``r² ≤ d²``. States spread to 3× the
   reference range, so that P_D takes every value from 1 to P_FA.
+* **3-D coverage** on Stone Soup's 3-D constant-velocity rows [x, vx, y, vy, z, vz]: an
+  ``ElevationSector`` alone, and a beam (slant-range band × elevation sector ×
+  ``RadarHorizon`` at each target's height), against NumPy deciding the elevation as
+  r sin(lower) ≤ Δz ≤ r sin(upper) (no arctangent) on preallocated buffers.
 
 Agreement is checked on every run: answers must be identical except for points within 1e-6 m
 of a decision boundary (a range edge, the sector's cone, a coastline; for sight, segments
@@ -63,6 +67,7 @@ from ctxmodels import (
     RadarHorizon,
     ClutterDensityModel,
     DetectionProbabilityModel,
+    ElevationSector,
     LandMask,
     LineOfSight,
     MetadataThreshold,
@@ -546,6 +551,79 @@ def bench_radar(sizes, repeats, min_sample):
     return rows
 
 
+def bench_heights(sizes, repeats, min_sample):
+    """3-D coverage on (N, 6) states [x, vx, y, vy, z, vz]: an elevation sector alone, and a
+    beam (slant-range band × elevation sector × the horizon at each target's height)."""
+    rows = []
+    pose = (0.0, 0.0, 0.0, 25.0)
+    lower, upper = math.radians(-2), math.radians(30)
+    sector = ElevationSector(lower=lower, upper=upper)
+    horizon = RadarHorizon(antenna_height=25.0, target_height=None)
+    band = RangeBands(edges=(30_000.0,), values=(0.9, 0.0))
+    scale = 2 * horizon.k * horizon.earth_radius
+    reach = math.sqrt(scale * 25.0)
+    for n in sizes:
+        rng = np.random.default_rng(n + 2)
+        states = np.column_stack([rng.uniform(-40e3, 40e3, n), np.zeros(n), rng.uniform(-40e3, 40e3, n),
+                                  np.zeros(n), rng.uniform(-100, 6000, n), np.zeros(n)])
+        x, y, z = (np.ascontiguousarray(states[:, c]) for c in (0, 2, 4))
+        out = np.empty(n)
+        dz, h2, r2, r, tmp, edge = (np.empty(n) for _ in range(6))
+        m1, m2 = np.empty(n, bool), np.empty(n, bool)
+
+        def offsets():
+            np.subtract(z, 25.0, out=dz)
+            np.multiply(x, x, out=h2)
+            np.multiply(y, y, out=tmp)
+            np.add(h2, tmp, out=h2)
+            np.multiply(dz, dz, out=tmp)
+            np.add(h2, tmp, out=r2)
+
+        def beam_mask():
+            # r sin(lower) ≤ dz ≤ r sin(upper): no arctangent
+            np.sqrt(r2, out=r)
+            np.multiply(r, math.sin(lower), out=tmp)
+            np.greater_equal(dz, tmp, out=m1)
+            np.multiply(r, math.sin(upper), out=tmp)
+            np.less_equal(dz, tmp, out=m2)
+            np.logical_and(m1, m2, out=m1)
+            return m1
+
+        def numpy_sector():
+            offsets()
+            return np.multiply(beam_mask(), 1.0, out=out)
+
+        def numpy_beam():
+            offsets()
+            beam_mask()
+            np.less(r2, 30_000.0 ** 2, out=m2)
+            np.logical_and(m1, m2, out=m1)
+            # the horizon: h² ≤ (√(2kR h_a) + √(2kR max(z, 0)))²
+            np.maximum(z, 0.0, out=edge)
+            np.multiply(edge, scale, out=edge)
+            np.sqrt(edge, out=edge)
+            np.add(edge, reach, out=edge)
+            np.multiply(edge, edge, out=edge)
+            np.less_equal(h2, edge, out=m2)
+            np.logical_and(m1, m2, out=m1)
+            return np.multiply(m1, 0.9, out=out)
+
+        for name, factors, reference in [("pd_elevation_sector", [sector], numpy_sector),
+                                         ("pd_3d_beam_horizon", [band, sector, horizon], numpy_beam)]:
+            context = SensorModel(detection=DetectionProbabilityModel(factors=factors),
+                                  clutter=ClutterDensityModel(factors=[1e-4]),
+                                  position_mapping=(0, 2, 4)).context(pose)
+            ours = context.prob_detection_array(states, out=out).copy()
+            ref = np.array(reference(), copy=True)
+            elevation = np.arctan2(z - 25.0, np.hypot(x, y))
+            near = (np.abs(elevation - lower) < 1e-9) | (np.abs(elevation - upper) < 1e-9)
+            check = agreement(ours, ref, near)
+            t_ctx = median_time(lambda: context.prob_detection_array(states, out=out), repeats, min_sample)
+            t_ref = median_time(reference, repeats, min_sample)
+            rows.append(row(name, n, n, {"ctxmodels": t_ctx, "numpy": t_ref}, check))
+    return rows
+
+
 def row(name, size, per, times, check):
     """`per`: how many states / points / targets one call handles (1 if already per item)."""
     ns = {k: v / per * 1e9 for k, v in times.items()}
@@ -614,6 +692,7 @@ def main(argv=None) -> int:
     out += bench_sight(vertex_counts, n_targets, shapely_budget, repeats, min_sample)
     out += bench_pd_land_sight(*combo, repeats, min_sample)
     out += bench_radar(radar_sizes, repeats, min_sample)
+    out += bench_heights(radar_sizes, repeats, min_sample)
     print_table(results)
     bad = [r["benchmark"] for r in out if r["agreement"]["differ_far_from_boundary"]]
     results["agree"] = not bad

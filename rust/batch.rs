@@ -128,6 +128,35 @@ impl Positions for CvRows<'_> {
     }
 }
 
+/// Stone Soup's 3-D constant-velocity rows [x, vx, y, vy, z, vz]: the positions and the
+/// heights of four rows from six vector loads.
+#[derive(Clone, Copy)]
+pub struct Cv3Rows<'a>(pub &'a [f64]);
+
+impl Positions for Cv3Rows<'_> {
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> (L, L) {
+        let (x, y, _) = L::rows4_columns024(&self.0[first * 6..]);
+        (x, y)
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> [f64; 2] {
+        [self.0[i * 6], self.0[i * 6 + 2]]
+    }
+}
+
+impl Heights for Cv3Rows<'_> {
+    const RAISED: bool = true;
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> L {
+        L::rows4_columns024(&self.0[first * 6..]).2
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> f64 {
+        self.0[i * 6 + 4]
+    }
+}
+
 /// Any other (N, ncols) rows.
 #[derive(Clone, Copy)]
 pub struct Rows<'a> {

@@ -15,8 +15,8 @@
 //! line of sight are read on the plane below the target.
 
 use crate::batch::{
-    check_columns, check_rows, for_each_chunk_from, ColumnHeights, Columns, CvRows, Heights, Layout, MemoryOrder,
-    Planar, PositionMapping, Positions, RowHeights, Rows, CHUNK, PARALLEL_THRESHOLD,
+    check_columns, check_rows, for_each_chunk_from, ColumnHeights, Columns, Cv3Rows, CvRows, Heights, Layout,
+    MemoryOrder, Planar, PositionMapping, Positions, RowHeights, Rows, CHUNK, PARALLEL_THRESHOLD,
 };
 use crate::cubature::Rule;
 use crate::detection_estimate::{read_estimate, SharedEstimate};
@@ -316,6 +316,9 @@ impl ScanDetection {
         for_each_chunk_from(out, self.parallel_from, |first, chunk| match (layout, mapping.z) {
             (Layout::Rows { ncols: 4 }, _) if mapping == PositionMapping::default() => {
                 self.run(CvRows(states), Planar, first, chunk)
+            }
+            (Layout::Rows { ncols: 6 }, Some(4)) if (mapping.x, mapping.y) == (0, 2) => {
+                self.run(Cv3Rows(states), Cv3Rows(states), first, chunk)
             }
             (Layout::Rows { ncols }, z) => {
                 let rows = Rows {

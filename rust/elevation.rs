@@ -4,9 +4,11 @@
 //! A target at offset (dx, dy, dz) from the sensor has elevation ε = atan2(dz, √(dx²+dy²))
 //! in [−π/2, π/2]. It is inside [lower, upper] (boundary included) when
 //! r sin(lower) ≤ dz ≤ r sin(upper), r = √(dx²+dy²+dz²) the slant range: sin is increasing
-//! on [−π/2, π/2] and dz = r sin ε, so no arctangent is needed. A limit at ±π/2 bounds
-//! nothing and is not tested (so a target straight above or below is inside it whatever
-//! the rounding). The sensor's own position (r = 0) is inside.
+//! on [−π/2, π/2] and dz = r sin ε, so no arctangent is needed — nor a square root: with
+//! s = sin(limit) and r² the squared slant range, dz ≥ r s ⇔ (dz ≥ 0 and dz² ≥ r² s²) when
+//! s ≥ 0, and (dz ≥ 0 or dz² ≤ r² s²) when s < 0; dz ≤ r s mirrors it. A limit at ±π/2
+//! bounds nothing and is not tested (so a target straight above or below is inside it
+//! whatever the rounding). The sensor's own position (r = 0) is inside.
 
 use crate::error::{ModelError, Result};
 use crate::range_bands::select;
@@ -19,8 +21,33 @@ pub struct ElevationSector {
     upper: f64,
     inside: f64,
     outside: f64,
-    sin_lower: f64,
-    sin_upper: f64,
+    below: Limit,
+    above: Limit,
+}
+
+/// How one limit is tested: not at all (±π/2), or against sin²(limit) on the side its
+/// sign says.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Limit {
+    Open,
+    /// sin(limit) ≥ 0, and its square.
+    NonNegative(f64),
+    /// sin(limit) < 0, and its square.
+    Negative(f64),
+}
+
+impl Limit {
+    fn of(angle: f64) -> Limit {
+        if angle.abs() >= FRAC_PI_2 {
+            return Limit::Open;
+        }
+        let s = angle.sin();
+        if s >= 0.0 {
+            Limit::NonNegative(s * s)
+        } else {
+            Limit::Negative(s * s)
+        }
+    }
 }
 
 impl ElevationSector {
@@ -49,8 +76,8 @@ impl ElevationSector {
             upper,
             inside,
             outside,
-            sin_lower: lower.sin(),
-            sin_upper: upper.sin(),
+            below: Limit::of(lower),
+            above: Limit::of(upper),
         })
     }
 
@@ -65,21 +92,41 @@ impl ElevationSector {
     /// The value at height offset `dz` and squared slant range `r2`.
     #[inline(always)]
     pub fn at(&self, dz: f64, r2: f64) -> f64 {
-        let r = r2.sqrt();
-        let above = self.lower <= -FRAC_PI_2 || dz >= r * self.sin_lower;
-        let below = self.upper >= FRAC_PI_2 || dz <= r * self.sin_upper;
+        let dz2 = dz * dz;
+        // dz ≥ r sin(lower)
+        let above = match self.below {
+            Limit::Open => true,
+            Limit::NonNegative(s2) => dz >= 0.0 && dz2 >= r2 * s2,
+            Limit::Negative(s2) => dz >= 0.0 || dz2 <= r2 * s2,
+        };
+        // dz ≤ r sin(upper)
+        let below = match self.above {
+            Limit::Open => true,
+            Limit::NonNegative(s2) => dz <= 0.0 || dz2 <= r2 * s2,
+            Limit::Negative(s2) => dz <= 0.0 && dz2 >= r2 * s2,
+        };
         select(above & below, self.inside, self.outside)
     }
 
-    /// [`Self::at`] for four targets, the same bits.
+    /// [`Self::at`] for four targets, the same bits. Which test applies to each limit is a
+    /// property of the sector, chosen outside the lanes.
     #[inline(always)]
     pub(crate) fn lanes_at<L: Lanes>(&self, dz: L, r2: L) -> L {
-        let r = r2.sqrt();
-        let inside = match (self.lower <= -FRAC_PI_2, self.upper >= FRAC_PI_2) {
-            (true, true) => return L::splat(self.inside),
-            (true, false) => dz.le(r * L::splat(self.sin_upper)),
-            (false, true) => dz.ge(r * L::splat(self.sin_lower)),
-            (false, false) => L::and(dz.ge(r * L::splat(self.sin_lower)), dz.le(r * L::splat(self.sin_upper))),
+        let (zero, dz2) = (L::splat(0.0), dz * dz);
+        let above = match self.below {
+            Limit::Open => None,
+            Limit::NonNegative(s2) => Some(L::and(dz.ge(zero), dz2.ge(r2 * L::splat(s2)))),
+            Limit::Negative(s2) => Some(L::or(dz.ge(zero), dz2.le(r2 * L::splat(s2)))),
+        };
+        let below = match self.above {
+            Limit::Open => None,
+            Limit::NonNegative(s2) => Some(L::or(dz.le(zero), dz2.le(r2 * L::splat(s2)))),
+            Limit::Negative(s2) => Some(L::and(dz.le(zero), dz2.ge(r2 * L::splat(s2)))),
+        };
+        let inside = match (above, below) {
+            (None, None) => return L::splat(self.inside),
+            (Some(m), None) | (None, Some(m)) => m,
+            (Some(a), Some(b)) => L::and(a, b),
         };
         L::select(inside, L::splat(self.inside), L::splat(self.outside))
     }
@@ -108,9 +155,20 @@ mod tests {
             assert_eq!(value_at(&s, f64::to_radians(deg)), want, "{deg}°");
         }
         assert_eq!(s.at(0.0, 0.0), 1.0, "the sensor's own position is inside");
-        // exactly on a limit: dz = r sin(upper) with r the slant range
+        // on a limit, to rounding: dz = r sin(upper) with r the slant range
         let up = 30f64.to_radians();
-        assert_eq!(s.at(500.0 * up.sin(), 500.0 * 500.0), 1.0);
+        assert_eq!(s.at(500.0 * up.sin() * (1.0 - 1e-12), 500.0 * 500.0), 1.0);
+        assert_eq!(s.at(500.0 * up.sin() * (1.0 + 1e-12), 500.0 * 500.0), 0.0);
+        // negative limits: below −2° is outside, between them inside, for either sign of dz
+        let (lo, hi) = (-2f64.to_radians(), -1f64.to_radians());
+        let neg = ElevationSector::new(lo, hi, 1.0, 0.0).unwrap();
+        for (deg, want) in [(-2.5, 0.0), (-1.5, 1.0), (-0.5, 0.0), (0.5, 0.0)] {
+            assert_eq!(value_at(&neg, f64::to_radians(deg)), want, "{deg}°");
+        }
+        let pos = ElevationSector::new(1f64.to_radians(), 2f64.to_radians(), 1.0, 0.0).unwrap();
+        for (deg, want) in [(0.5, 0.0), (1.5, 1.0), (2.5, 0.0), (-1.5, 0.0)] {
+            assert_eq!(value_at(&pos, f64::to_radians(deg)), want, "{deg}°");
+        }
     }
 
     #[test]

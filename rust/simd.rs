@@ -28,6 +28,9 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     /// Columns 0 and 2 of four consecutive rows of four values: the positions of four
     /// Stone Soup constant-velocity states [x, vx, y, vy], read straight from the rows.
     fn rows4_columns02(rows: &[f64]) -> (Self, Self);
+    /// Columns 0, 2 and 4 of four consecutive rows of six values: the positions of four
+    /// Stone Soup 3-D constant-velocity states [x, vx, y, vy, z, vz].
+    fn rows4_columns024(rows: &[f64]) -> (Self, Self, Self);
     /// The x and y of four consecutive (x, y) pairs.
     fn pairs(xy: &[f64]) -> (Self, Self);
     fn sqrt(self) -> Self;
@@ -197,6 +200,15 @@ impl Lanes for Portable {
         (
             Portable([r[0], r[4], r[8], r[12]]),
             Portable([r[2], r[6], r[10], r[14]]),
+        )
+    }
+    #[inline(always)]
+    fn rows4_columns024(rows: &[f64]) -> (Self, Self, Self) {
+        let r = &rows[..24];
+        (
+            Portable([r[0], r[6], r[12], r[18]]),
+            Portable([r[2], r[8], r[14], r[20]]),
+            Portable([r[4], r[10], r[16], r[22]]),
         )
     }
     #[inline(always)]

@@ -7,6 +7,7 @@
 use super::{Offsets, ScanDetection, Step};
 use crate::batch::{CvRows, Heights, Planar, PositionMapping, Positions, RowHeights, Rows};
 use crate::cubature::{cholesky2_lanes, cholesky3, Rule, SpatialRule};
+use crate::elevation::ElevationSector;
 use crate::range_bands::SquaredBands;
 use crate::sector::FramedSector;
 use crate::simd::{LaneKernel, Lanes};
@@ -52,6 +53,13 @@ impl FixedSteps for &FramedSector {
     #[inline(always)]
     fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
         pd * self.lanes_at_squared(g.dx, g.dy, g.h2)
+    }
+}
+
+impl FixedSteps for &ElevationSector {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
+        pd * self.lanes_at(g.dz, g.r2)
     }
 }
 
@@ -108,6 +116,10 @@ macro_rules! with_fixed_steps {
                 $body
             }
             [Step::Sector(a)] => {
+                let $steps = a;
+                $body
+            }
+            [Step::Elevation(a)] => {
                 let $steps = a;
                 $body
             }

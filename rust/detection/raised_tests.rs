@@ -4,7 +4,7 @@
 
 use super::lanes::{expected_raised_reference, AtStates, ExpectedRaised, Gaussians};
 use super::*;
-use crate::batch::{ColumnHeights, Columns, Positions, RowHeights, Rows};
+use crate::batch::{ColumnHeights, Columns, Cv3Rows, Positions, RowHeights, Rows};
 use crate::cubature::cholesky3;
 use crate::land::Polygon;
 use crate::simd::{run_on, Backend};
@@ -153,6 +153,11 @@ fn raised_rows_and_columns_give_the_reference_bits() {
                     "{backend:?} rows n={n}"
                 );
                 assert_eq!(
+                    kernel(&scan, backend, Cv3Rows(&data), Cv3Rows(&data), n),
+                    (want.clone(), None),
+                    "{backend:?} 3-D CV rows n={n}"
+                );
+                assert_eq!(
                     kernel(&scan, backend, cols, ColumnHeights(&columns[2 * n..]), n),
                     (want.clone(), None),
                     "{backend:?} columns n={n}"
@@ -216,6 +221,7 @@ fn the_first_non_finite_height_is_reported() {
                 mapping: mapping(),
             };
             for backend in backends() {
+                assert_eq!(kernel(&scan, backend, Cv3Rows(&data), Cv3Rows(&data), n).1, Some(bad));
                 assert_eq!(
                     kernel(&scan, backend, rows, heights, n).1,
                     Some(bad),

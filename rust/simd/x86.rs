@@ -99,6 +99,33 @@ impl Lanes for Avx2 {
         }
     }
     #[inline(always)]
+    fn rows4_columns024(rows: &[f64]) -> (Self, Self, Self) {
+        let r = &rows[..24];
+        unsafe {
+            let load = |i: usize| _mm256_loadu_pd(r[i..].as_ptr());
+            // Rows 0–1 are [x0 vx0 y0 vy0] [z0 vz0 x1 vx1] [y1 vy1 z1 vz1] (a, b, c), rows 2–3
+            // the same (d, e, f): halves regrouped, then the even entries interleaved.
+            let (a, b, c, d, e, f) = (load(0), load(4), load(8), load(12), load(16), load(20));
+            let (ad_lo, ad_hi) = (
+                _mm256_permute2f128_pd::<0x20>(a, d),
+                _mm256_permute2f128_pd::<0x31>(a, d),
+            );
+            let (be_lo, be_hi) = (
+                _mm256_permute2f128_pd::<0x20>(b, e),
+                _mm256_permute2f128_pd::<0x31>(b, e),
+            );
+            let (cf_lo, cf_hi) = (
+                _mm256_permute2f128_pd::<0x20>(c, f),
+                _mm256_permute2f128_pd::<0x31>(c, f),
+            );
+            (
+                Avx2(_mm256_unpacklo_pd(ad_lo, be_hi)),
+                Avx2(_mm256_unpacklo_pd(ad_hi, cf_lo)),
+                Avx2(_mm256_unpacklo_pd(be_lo, cf_hi)),
+            )
+        }
+    }
+    #[inline(always)]
     fn pairs(xy: &[f64]) -> (Self, Self) {
         let p = &xy[..8];
         unsafe {

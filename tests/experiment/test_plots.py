@@ -249,6 +249,46 @@ def test_plot_coverage_writes_png(tmp_path):
     assert_png(path)
 
 
+def _air_radar():
+    from ctxmodels import (ClutterDensityModel, DetectionProbabilityModel, ElevationSector,
+                           Mounting, RadarHorizon, RangeBands, SensorModel)
+    return SensorModel(detection=DetectionProbabilityModel(factors=[
+        0.9, RangeBands(edges=(60_000,), values=(1, 0)),
+        ElevationSector(lower=math.radians(-1), upper=math.radians(30)),
+        RadarHorizon(antenna_height=25, target_height=None)]),
+        clutter=ClutterDensityModel(factors=[1e-9]), position_mapping=(0, 2, 4),
+        mounting=Mounting(up=25))
+
+
+def test_a_3d_models_section_is_its_pd_against_range_and_height():
+    """The section along the heading: P_D at (range, height) as the model gives it for a
+    target there (the beam's 30° edge, the slant range, the horizon of a low target)."""
+    ranges, heights, grids = coverage_plots.section_grid({"air": _air_radar()},
+                                                         (0.0, 0.0, 0.0), 70_000.0, 8_000.0, 141)
+    grid = grids["air"]
+    at = lambda r, h: grid[np.argmin(np.abs(heights - h)), np.argmin(np.abs(ranges - r))]  # noqa: E731
+    assert at(20_000, 2_000) == 0.9
+    assert at(2_000, 4_000) == 0.0  # above the beam: elevation 63°
+    assert at(65_000, 4_000) == 0.0  # slant range beyond 60 km
+    assert at(40_000, 0) == 0.0  # a target on the sea beyond the 20.6 km horizon
+    assert at(10_000, 0) == 0.9
+
+
+def test_a_3d_model_adds_its_section_row(tmp_path):
+    from ctxmodels.experiment.sensors import paper_sensor_models
+    models = {"air": _air_radar(), "lidar": paper_sensor_models()["lidar"]}
+    fig = coverage_plots._figure_coverage(models, (0.0, 0.0, 0.0), extents=(70_000.0,),
+                                          resolution=30, height=200.0)
+    maps = [ax for ax in fig.axes if ax.images]
+    assert len(maps) == 6  # (plan, section) × (air, lidar, any sensor)
+    assert [ax.get_ylabel() for ax in maps[3:]] == ["height (m)"] * 3
+    assert "targets 200 m up" in maps[0].get_title()
+    path = tmp_path / "air.png"
+    coverage_plots.plot_coverage(path, models, (0.0, 0.0, 0.0), extents=(70_000.0,),
+                                 resolution=30, ceiling=5_000.0)
+    assert_png(path)
+
+
 # --- plot_summary ----------------------------------------------------------------------
 
 NAN3 = [np.nan] * 3

@@ -29,6 +29,12 @@ def add_coverage_command(commands) -> None:
     cov.add_argument("--extent", nargs="+", type=number(0, MAX_COORDINATE, above=True),
                      default=[1800.0, 100.0],
                      help="half-widths of the maps in metres, one row each (default 1800 100)")
+    cov.add_argument("--height", type=number(-MAX_COORDINATE, MAX_COORDINATE), default=0.0,
+                     help="height of the targets in the maps of 3-D models (those whose "
+                          "position_mapping has a z), metres (default 0)")
+    cov.add_argument("--ceiling", type=number(0, MAX_COORDINATE, above=True), default=None,
+                     help="top of a 3-D model's range–height section, metres (default: a "
+                          "tenth of the first extent)")
     cov.add_argument("--resolution", type=integer(2, MAX_RESOLUTION), default=400,
                      help=f"grid points per side, 2–{MAX_RESOLUTION} (default 400)")
     cov.add_argument("--title", default="", help="figure title")
@@ -55,7 +61,8 @@ def _coverage(args) -> int:
     partial = output.with_name(f".{output.stem}.{os.getpid()}.partial{output.suffix}")
     try:
         plot_coverage(partial, models, pose, extents=args.extent, land=land,
-                      resolution=args.resolution, title=args.title)
+                      resolution=args.resolution, title=args.title, height=args.height,
+                      ceiling=args.ceiling)
         os.replace(partial, output)
     finally:
         partial.unlink(missing_ok=True)

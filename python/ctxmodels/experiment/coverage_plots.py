@@ -13,44 +13,74 @@ import numpy as np
 from .canvas import new_figure
 
 
-def coverage_grid(sensor_models: Mapping, pose, extent: float, resolution: int = 400):
-    """P_D of each sensor model on a square grid around ``pose``: (xs, ys, {name: P_D})."""
-    from ..pose import Pose
-    if not isinstance(pose, Pose):
-        pose = Pose(x=pose[0], y=pose[1], heading=pose[2])
+def _as_pose(pose):
+    from ..pose import Pose, as_pose
+    return pose if isinstance(pose, Pose) else as_pose(pose)
+
+
+def _pd_at(model, pose, x: np.ndarray, y: np.ndarray, z: np.ndarray | float) -> np.ndarray:
+    """P_D of ``model`` at ``pose`` at world points (x, y) and heights z (read only by a
+    model with a height in its ``position_mapping``), in the points' shape."""
+    mapping = tuple(model.position_mapping)
+    states = np.zeros((x.size, max(mapping) + 1))
+    for index, values in zip(mapping, (x, y, z)):
+        states[:, index] = np.broadcast_to(values, x.shape).ravel()
+    return model.context(pose).prob_detection_array(states).reshape(x.shape)
+
+
+def coverage_grid(sensor_models: Mapping, pose, extent: float, resolution: int = 400,
+                  height: float = 0.0):
+    """P_D of each sensor model on a square grid around ``pose``: (xs, ys, {name: P_D}); a
+    3-D model's targets are at ``height`` (metres)."""
+    pose = _as_pose(pose)
     xs = np.linspace(pose.x - extent, pose.x + extent, resolution)
     ys = np.linspace(pose.y - extent, pose.y + extent, resolution)
     gx, gy = np.meshgrid(xs, ys)
-    grids = {}
-    for name, model in sensor_models.items():
-        mapping = tuple(model.position_mapping)
-        states = np.zeros((gx.size, max(mapping) + 1))
-        states[:, mapping[0]] = gx.ravel()
-        states[:, mapping[1]] = gy.ravel()
-        grids[name] = model.context(pose).prob_detection_array(states).reshape(gx.shape)
-    return xs, ys, grids
+    return xs, ys, {name: _pd_at(model, pose, gx, gy, height)
+                    for name, model in sensor_models.items()}
+
+
+def section_grid(sensor_models: Mapping, pose, extent: float, ceiling: float,
+                 resolution: int = 400):
+    """P_D of each sensor model on a vertical section along the pose's heading (the
+    platform's own, before any mounting): ground range 0…``extent`` by height
+    0…``ceiling``, (ranges, heights, {name: P_D}); a planar model ignores the height."""
+    pose = _as_pose(pose)
+    ranges = np.linspace(0.0, extent, resolution)
+    heights = np.linspace(0.0, ceiling, resolution)
+    gr, gz = np.meshgrid(ranges, heights)
+    gx, gy = pose.x + gr * math.cos(pose.heading), pose.y + gr * math.sin(pose.heading)
+    return ranges, heights, {name: _pd_at(model, pose, gx, gy, gz)
+                             for name, model in sensor_models.items()}
+
+
+def _any_sensor(grids: dict) -> np.ndarray:
+    miss = np.ones_like(next(iter(grids.values())))
+    for grid in grids.values():
+        miss *= 1 - grid
+    return 1 - miss
 
 
 HEADING_COLOUR = "#ff2a2a"
 
 
 def _figure_coverage(sensor_models, pose, extents=(1800.0, 100.0), land=(), resolution=400,
-                     title=""):
+                     title="", height=0.0, ceiling=None):
     from matplotlib.lines import Line2D
     names = list(sensor_models)
     panels = names + (["any sensor"] if len(names) > 1 else [])
-    fig = new_figure(figsize=(3.6 * len(panels) + 1.1, 3.45 * len(extents) + 1.0), dpi=100,
+    spatial = any(len(model.position_mapping) == 3 for model in sensor_models.values())
+    rows = len(extents) + spatial
+    fig = new_figure(figsize=(3.6 * len(panels) + 1.5, 3.45 * rows + 1.0), dpi=100,
                   layout="constrained")
-    axes = fig.subplots(len(extents), len(panels), squeeze=False)
-    px, py, heading = (pose.x, pose.y, pose.heading) if hasattr(pose, "x") else pose
+    axes = fig.subplots(rows, len(panels), squeeze=False)
+    pose = _as_pose(pose)
+    px, py, heading = pose.x, pose.y, pose.heading
     image = None
     for row, extent in enumerate(extents):
-        xs, ys, grids = coverage_grid(sensor_models, pose, extent, resolution)
+        xs, ys, grids = coverage_grid(sensor_models, pose, extent, resolution, height)
         if len(names) > 1:
-            miss = np.ones_like(next(iter(grids.values())))
-            for grid in grids.values():
-                miss *= 1 - grid
-            grids["any sensor"] = 1 - miss
+            grids["any sensor"] = _any_sensor(grids)
         for col, name in enumerate(panels):
             ax = axes[row, col]
             image = ax.imshow(grids[name], origin="lower", extent=(xs[0], xs[-1], ys[0], ys[-1]),
@@ -63,11 +93,28 @@ def _figure_coverage(sensor_models, pose, extents=(1800.0, 100.0), land=(), reso
                         xytext=(px, py), arrowprops=dict(arrowstyle="-|>", color=HEADING_COLOUR,
                                                          lw=1.6, mutation_scale=12))
             what = "any sensor detects" if name == "any sensor" else f"{name} P_D"
-            ax.set_title(f"{what}, ±{extent:,.0f} m around the ego", fontsize=9)
+            at = f", targets {height:g} m up" if spatial else ""
+            ax.set_title(f"{what}, ±{extent:,.0f} m around the ego{at}", fontsize=9)
             ax.set_xlim(xs[0], xs[-1])
             ax.set_ylim(ys[0], ys[-1])
             ax.set_xlabel("x (m)", fontsize=8)
             ax.set_ylabel("y (m)", fontsize=8)
+            ax.tick_params(labelsize=7)
+    if spatial:
+        extent = extents[0]
+        top = ceiling if ceiling is not None else extent / 10
+        ranges, heights, grids = section_grid(sensor_models, pose, extent, top, resolution)
+        if len(names) > 1:
+            grids["any sensor"] = _any_sensor(grids)
+        for col, name in enumerate(panels):
+            ax = axes[-1, col]
+            image = ax.imshow(grids[name], origin="lower", aspect="auto",
+                              extent=(ranges[0], ranges[-1], heights[0], heights[-1]),
+                              vmin=0, vmax=1, cmap="viridis", interpolation="nearest")
+            what = "any sensor detects" if name == "any sensor" else f"{name} P_D"
+            ax.set_title(f"{what}: section along the heading", fontsize=9)
+            ax.set_xlabel("ground range along the ego's heading (m)", fontsize=8)
+            ax.set_ylabel("height (m)", fontsize=8)
             ax.tick_params(labelsize=7)
     colourbar = fig.colorbar(image, ax=axes, shrink=0.85, aspect=30)
     colourbar.set_label("P_D (detection probability)")
@@ -84,9 +131,14 @@ def _figure_coverage(sensor_models, pose, extents=(1800.0, 100.0), land=(), reso
 
 
 def plot_coverage(path: str | Path, sensor_models: Mapping, pose, extents=(1800.0, 100.0),
-                  land: Sequence[np.ndarray] = (), resolution: int = 400, title: str = ""):
+                  land: Sequence[np.ndarray] = (), resolution: int = 400, title: str = "",
+                  height: float = 0.0, ceiling: float | None = None):
     """Coverage maps: one row per extent (e.g. the radar's km scale and the lidar's 100 m),
     one column per sensor plus the probability that at least one sensor detects; one
-    shared P_D colour bar, the ego's heading as a red arrow explained in a legend."""
-    fig = _figure_coverage(sensor_models, pose, extents, land, resolution, title)
+    shared P_D colour bar, the ego's heading as a red arrow explained in a legend. With a
+    3-D model among them, the plan views are of targets ``height`` metres up and a last
+    row is the vertical section along the heading: ground range up to the first extent by
+    height up to ``ceiling`` (a tenth of that extent by default)."""
+    fig = _figure_coverage(sensor_models, pose, extents, land, resolution, title, height,
+                           ceiling)
     fig.savefig(path)
