@@ -34,7 +34,8 @@ def _position_indices(model, position_mapping, i) -> list[int]:
 
 
 def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.ndarray:
-    """World (x, y) of each detection, (M, 2), from each detection's *own* measurement
+    """World (x, y) of each detection, (M, 2) — (x, y, z), (M, 3), for a mapping with a
+    height index — from each detection's *own* measurement
     model: through its ``inverse_function`` (bearing–range and other non-linear models) or
     the pseudo-inverse of a linear model's matrix, read at the ``position_mapping`` indices
     of that model's state space. A model that does not map both of those indices (a 6-D
@@ -42,7 +43,7 @@ def detection_positions(detections: Sequence, position_mapping=(0, 2)) -> np.nda
     vector does not have the model's ``ndim_meas`` rows, raises ValueError: the state space
     of the detections must be the one the sensor's ``position_mapping`` describes. Linear
     detections sharing a model are converted in one matrix product."""
-    positions = np.empty((len(detections), 2))
+    positions = np.empty((len(detections), len(position_mapping)))
     for key, model, indices, vectors in _model_groups(detections, "position (needed for λ)"):
         inverse = _group_inverse(key, model, position_mapping, indices[0])
         if inverse is not None and len(indices) == len(detections):

@@ -84,7 +84,8 @@ class MeasurementDrivenBirth(Base):
         default=None, doc="Covariance of each birth component; default Table I, "
                           "diag([10, 15, 10, 15])² for [x, vx, y, vy].")
     position_mapping: Sequence[int] = Property(
-        default=(0, 2), doc="Indices of x and y in the state.")
+        default=(0, 2), doc="Indices of x and y in the state (and of z, for states with a "
+                            "height).")
     velocity_mapping: Sequence[int] = Property(
         default=(1, 3), doc="Indices of the velocity components in the state.")
     velocity_mean: Sequence[float] = Property(
@@ -113,9 +114,9 @@ class MeasurementDrivenBirth(Base):
         self.birth_covar = CovarianceMatrix(covar)
         ndim = covar.shape[0]
         position = _indices(self.position_mapping, "position_mapping")
-        if len(position) != 2:
-            raise ValueError(f"position_mapping: must hold the two indices of x and y, "
-                             f"got {position}")
+        if len(position) not in (2, 3):
+            raise ValueError(f"position_mapping: must hold the two indices of x and y (or "
+                             f"three, with z), got {position}")
         velocity = _indices(self.velocity_mapping or (), "velocity_mapping")
         if set(position) & set(velocity):
             raise ValueError("velocity_mapping: must not share indices with position_mapping")
@@ -170,8 +171,9 @@ class MeasurementDrivenBirth(Base):
 
     def weights(self, detections: Sequence, positions=None, detector_context=None) -> np.ndarray:
         """The (N,) birth weights of ``detections``: ``birth_weight`` each, times the
-        ``birth_density`` at each detection's world position (``positions``, (N, 2), if
-        already computed) for the pose of ``detector_context``'s sensor, in one call."""
+        ``birth_density`` at each detection's world position (``positions``, (N, 2) or
+        (N, 3) as this birth's ``position_mapping``, if already computed; the density reads
+        x and y) for the pose of ``detector_context``'s sensor, in one call."""
         n = len(detections)
         if self.birth_density is None:
             return np.full(n, float(self.birth_weight))
@@ -181,12 +183,13 @@ class MeasurementDrivenBirth(Base):
                                 "sensor's pose (feed the tracker through a ContextFeeder)")
         if positions is None:
             positions = detection_positions(detections, self._position)
-        elif np.shape(positions) != (n, 2):
-            raise ShapeError("positions", f"must be ({n}, 2), one row per detection, got "
-                                          f"shape {np.shape(positions)}")
+        elif np.shape(positions) != (n, len(self._position)):
+            raise ShapeError("positions", f"must be ({n}, {len(self._position)}), one row per "
+                                          f"detection, got shape {np.shape(positions)}")
         metadata = ([d.metadata for d in detections] if self.birth_density.metadata_keys
                     else None)
-        density = self.birth_density.evaluate(pose, positions, metadata)
+        density = self.birth_density.evaluate(pose, np.ascontiguousarray(positions[:, :2]),
+                                              metadata)
         with np.errstate(over="ignore", under="ignore"):  # (refused below, by name)
             weights = float(self.birth_weight) * density
         if not np.all(np.isfinite(weights) & (weights > 0)):
@@ -196,7 +199,7 @@ class MeasurementDrivenBirth(Base):
 
     def means(self, detections: Sequence, positions=None) -> np.ndarray:
         """The (N, D) birth means of ``detections`` (see :meth:`components`); ``positions``:
-        their (N, 2) world positions if already computed (:func:`detection_positions` with
+        their (N, 2) or (N, 3) world positions if already computed (:func:`detection_positions` with
         this birth's ``position_mapping``)."""
         if positions is None:
             positions = detection_positions(detections, self._position)
