@@ -33,6 +33,8 @@ inputs:
   ``ElevationSector`` alone, and a beam (slant-range band × elevation sector ×
   ``RadarHorizon`` at each target's height), against NumPy deciding the elevation as
   r sin(lower) ≤ Δz ≤ r sin(upper) (no arctangent) on preallocated buffers.
+* **The range-rate notch** (``RangeRateNotch``) seen from a moving radar, against NumPy's
+  radial speed on preallocated buffers (the notch squared; the blind speeds on |ṙ|).
 
 Agreement is checked on every run: answers must be identical except for points within 1e-6 m
 of a decision boundary (a range edge, the sector's cone, a coastline; for sight, segments
@@ -68,6 +70,7 @@ from ctxmodels import (
     ClutterDensityModel,
     DetectionProbabilityModel,
     ElevationSector,
+    RangeRateNotch,
     LandMask,
     LineOfSight,
     MetadataThreshold,
@@ -624,6 +627,60 @@ def bench_heights(sizes, repeats, min_sample):
     return rows
 
 
+def bench_range_rate(sizes, repeats, min_sample):
+    """The MTI notch on (N, 4) states [x, vx, y, vy] seen from a moving radar: |ṙ| ≤ w, and
+    the first three blind speeds."""
+    rows = []
+    notch = RangeRateNotch(width=1.5, blind_speed=32.0, multiples=3)
+    pose = ctxmodels.Pose(x=0.0, y=0.0, vx=4.0, vy=-2.0)
+    for n in sizes:
+        rng = np.random.default_rng(n + 3)
+        states = np.column_stack([rng.uniform(-8e3, 8e3, n), rng.uniform(-40, 40, n),
+                                  rng.uniform(-8e3, 8e3, n), rng.uniform(-40, 40, n)])
+        x, vx, y, vy = (np.ascontiguousarray(states[:, c]) for c in range(4))
+        out = np.empty(n)
+        r2, dot, tmp, speed = (np.empty(n) for _ in range(4))
+        notched, m = np.empty(n, bool), np.empty(n, bool)
+
+        def numpy_notch():
+            np.multiply(x, x, out=r2)
+            np.multiply(y, y, out=tmp)
+            np.add(r2, tmp, out=r2)
+            np.subtract(vx, 4.0, out=tmp)
+            np.multiply(x, tmp, out=dot)
+            np.add(vy, 2.0, out=tmp)
+            np.multiply(y, tmp, out=tmp)
+            np.add(dot, tmp, out=dot)
+            np.multiply(dot, dot, out=tmp)
+            np.multiply(r2, 1.5 * 1.5, out=speed)
+            np.less_equal(tmp, speed, out=notched)
+            np.sqrt(r2, out=speed)
+            np.abs(dot, out=tmp)
+            np.divide(tmp, speed, out=speed)
+            for k in (1, 2, 3):
+                np.subtract(speed, 32.0 * k, out=tmp)
+                np.abs(tmp, out=tmp)
+                np.less_equal(tmp, 1.5, out=m)
+                np.logical_or(notched, m, out=notched)
+            np.logical_not(notched, out=notched)
+            return np.multiply(notched, 1.0, out=out)
+
+        context = SensorModel(detection=DetectionProbabilityModel(factors=[notch]),
+                              clutter=ClutterDensityModel(factors=[1e-4]),
+                              velocity_mapping=(1, 3)).context(pose)
+        ours = context.prob_detection_array(states, out=out).copy()
+        ref = np.array(numpy_notch(), copy=True)
+        radial = np.abs((x * (vx - 4.0) + y * (vy + 2.0)) / np.hypot(x, y))
+        near = np.zeros(n, bool)
+        for edge in (1.5, 30.5, 33.5, 62.5, 65.5, 94.5, 97.5):
+            near |= np.abs(radial - edge) < 1e-9
+        check = agreement(ours, ref, near)
+        t_ctx = median_time(lambda: context.prob_detection_array(states, out=out), repeats, min_sample)
+        t_ref = median_time(numpy_notch, repeats, min_sample)
+        rows.append(row("pd_range_rate_notch", n, n, {"ctxmodels": t_ctx, "numpy": t_ref}, check))
+    return rows
+
+
 def row(name, size, per, times, check):
     """`per`: how many states / points / targets one call handles (1 if already per item)."""
     ns = {k: v / per * 1e9 for k, v in times.items()}
@@ -693,6 +750,7 @@ def main(argv=None) -> int:
     out += bench_pd_land_sight(*combo, repeats, min_sample)
     out += bench_radar(radar_sizes, repeats, min_sample)
     out += bench_heights(radar_sizes, repeats, min_sample)
+    out += bench_range_rate(radar_sizes, repeats, min_sample)
     print_table(results)
     bad = [r["benchmark"] for r in out if r["agreement"]["differ_far_from_boundary"]]
     results["agree"] = not bad

@@ -7,20 +7,35 @@ use crate::simd::Lanes;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
-/// Which columns of a state row hold the x and y position, and the height z when the
-/// model is evaluated in 3-D. Stone Soup's constant-velocity state [x, vx, y, vy] maps to
-/// (0, 2); [x, vx, y, vy, z, vz] to (0, 2, 4). Without a height, targets are taken to be
-/// at the sensor's height (ranges are plane distances).
+/// Which columns of a state row hold the x and y position, the height z when the model is
+/// evaluated in 3-D, and the velocity when a factor reads it (a range-rate notch). Stone
+/// Soup's constant-velocity state [x, vx, y, vy] maps to (0, 2) with velocity (1, 3);
+/// [x, vx, y, vy, z, vz] to (0, 2, 4) with velocity (1, 3, 5). Without a height, targets
+/// are taken to be at the sensor's height (ranges are plane distances).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PositionMapping {
     pub x: usize,
     pub y: usize,
     pub z: Option<usize>,
+    pub velocity: Option<VelocityMapping>,
+}
+
+/// The columns of the velocity: vx, vy, and vz exactly when the positions have a height.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VelocityMapping {
+    pub vx: usize,
+    pub vy: usize,
+    pub vz: Option<usize>,
 }
 
 impl Default for PositionMapping {
     fn default() -> Self {
-        PositionMapping { x: 0, y: 2, z: None }
+        PositionMapping {
+            x: 0,
+            y: 2,
+            z: None,
+            velocity: None,
+        }
     }
 }
 
@@ -32,7 +47,12 @@ impl PositionMapping {
                 format!("x and y must be different columns, got ({x}, {y})"),
             ));
         }
-        Ok(PositionMapping { x, y, z: None })
+        Ok(PositionMapping {
+            x,
+            y,
+            z: None,
+            velocity: None,
+        })
     }
 
     /// The mapping (x, y, z): states with a height, evaluated in 3-D.
@@ -43,10 +63,45 @@ impl PositionMapping {
                 format!("x, y and z must be different columns, got ({x}, {y}, {z})"),
             ));
         }
-        Ok(PositionMapping { x, y, z: Some(z) })
+        Ok(PositionMapping {
+            x,
+            y,
+            z: Some(z),
+            velocity: None,
+        })
     }
 
-    /// The largest column the mapping reads.
+    /// This mapping with the velocity in columns `velocity` (vx, vy, and vz exactly when the
+    /// positions have a height), all apart from the position's.
+    pub fn with_velocity(self, velocity: VelocityMapping) -> Result<Self> {
+        if velocity.vz.is_some() != self.z.is_some() {
+            return Err(ModelError::invalid(
+                "velocity_mapping",
+                format!("{velocity} must have as many indices as position_mapping {self}"),
+            ));
+        }
+        let columns = [
+            Some(self.x),
+            Some(self.y),
+            self.z,
+            Some(velocity.vx),
+            Some(velocity.vy),
+            velocity.vz,
+        ];
+        let used: Vec<usize> = columns.into_iter().flatten().collect(); // (≤ 6)
+        if (1..used.len()).any(|i| used[..i].contains(&used[i])) {
+            return Err(ModelError::invalid(
+                "velocity_mapping",
+                format!("{velocity} shares a column with position_mapping {self} or repeats one"),
+            ));
+        }
+        Ok(PositionMapping {
+            velocity: Some(velocity),
+            ..self
+        })
+    }
+
+    /// The largest position column the mapping reads.
     pub fn widest(&self) -> usize {
         self.x.max(self.y).max(self.z.unwrap_or(0))
     }
@@ -59,7 +114,30 @@ impl PositionMapping {
                 format!("position_mapping {self} is out of range for rows of {ncols} columns"),
             ));
         }
+        if let Some(v) = self.velocity {
+            if v.widest() >= ncols {
+                return Err(ModelError::shape(
+                    argument,
+                    format!("velocity_mapping {v} is out of range for rows of {ncols} columns"),
+                ));
+            }
+        }
         Ok(())
+    }
+}
+
+impl VelocityMapping {
+    fn widest(&self) -> usize {
+        self.vx.max(self.vy).max(self.vz.unwrap_or(0))
+    }
+}
+
+impl std::fmt::Display for VelocityMapping {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.vz {
+            None => write!(f, "({}, {})", self.vx, self.vy),
+            Some(vz) => write!(f, "({}, {}, {vz})", self.vx, self.vy),
+        }
     }
 }
 
@@ -276,6 +354,110 @@ impl Heights for ColumnHeights<'_> {
     }
 }
 
+/// Where the states' velocities are read: nowhere (no factor reads them), or columns of
+/// their rows or rows of a particle array. Velocities without a height have vz = 0.
+pub trait Velocities: Copy {
+    /// Whether the states have velocities.
+    const MOVING: bool;
+    /// vx, vy, vz of states `first..first + 4`.
+    fn lanes<L: Lanes>(self, first: usize) -> [L; 3];
+    /// vx, vy, vz of state `i`.
+    fn one(self, i: usize) -> [f64; 3];
+    /// As [`Self::lanes`] for the `count` < 4 states from `first`, zero-padded.
+    #[inline(always)]
+    fn partial<L: Lanes>(self, first: usize, count: usize) -> [L; 3] {
+        let mut v = [[0.0; 4]; 3];
+        for i in 0..count {
+            let one = self.one(first + i);
+            for (axis, value) in v.iter_mut().zip(one) {
+                axis[i] = value;
+            }
+        }
+        [L::from_array(v[0]), L::from_array(v[1]), L::from_array(v[2])]
+    }
+}
+
+/// No velocities: no factor reads them.
+#[derive(Clone, Copy)]
+pub struct Still;
+
+impl Velocities for Still {
+    const MOVING: bool = false;
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, _: usize) -> [L; 3] {
+        [L::splat(0.0); 3]
+    }
+    #[inline(always)]
+    fn one(self, _: usize) -> [f64; 3] {
+        [0.0; 3]
+    }
+}
+
+/// Velocities in columns of (N, ncols) rows.
+#[derive(Clone, Copy)]
+pub struct RowVelocities<'a> {
+    pub data: &'a [f64],
+    pub ncols: usize,
+    pub mapping: VelocityMapping,
+}
+
+impl Velocities for RowVelocities<'_> {
+    const MOVING: bool = true;
+    // (no closures here: they would be compiled apart from the kernel, without its AVX2)
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> [L; 3] {
+        let (a, b, c, d) = (
+            self.one(first),
+            self.one(first + 1),
+            self.one(first + 2),
+            self.one(first + 3),
+        );
+        [
+            L::from_array([a[0], b[0], c[0], d[0]]),
+            L::from_array([a[1], b[1], c[1], d[1]]),
+            L::from_array([a[2], b[2], c[2], d[2]]),
+        ]
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> [f64; 3] {
+        let row = &self.data[i * self.ncols..][..self.ncols];
+        let VelocityMapping { vx, vy, vz } = self.mapping;
+        let z = match vz {
+            Some(vz) => row[vz],
+            None => 0.0,
+        };
+        [row[vx], row[vy], z]
+    }
+}
+
+/// Velocities as contiguous runs (rows of a (D, N) C-ordered particle array).
+#[derive(Clone, Copy)]
+pub struct ColumnVelocities<'a> {
+    pub vx: &'a [f64],
+    pub vy: &'a [f64],
+    pub vz: Option<&'a [f64]>,
+}
+
+impl Velocities for ColumnVelocities<'_> {
+    const MOVING: bool = true;
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> [L; 3] {
+        let vz = match self.vz {
+            Some(vz) => L::load(&vz[first..]),
+            None => L::splat(0.0),
+        };
+        [L::load(&self.vx[first..]), L::load(&self.vy[first..]), vz]
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> [f64; 3] {
+        let z = match self.vz {
+            Some(vz) => vz[i],
+            None => 0.0,
+        };
+        [self.vx[i], self.vy[i], z]
+    }
+}
+
 /// Memory order of a (D, N) particle array.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MemoryOrder {
@@ -351,6 +533,12 @@ pub fn check_columns(
         return Err(ModelError::shape(
             argument,
             format!("has {ndim} rows (state dimensions), but position_mapping {mapping} reads beyond them"),
+        ));
+    }
+    if let Some(v) = mapping.velocity.filter(|v| v.widest() >= ndim) {
+        return Err(ModelError::shape(
+            argument,
+            format!("has {ndim} rows (state dimensions), but velocity_mapping {v} reads beyond them"),
         ));
     }
     if states.len() != ndim * n_out {

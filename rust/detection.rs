@@ -15,8 +15,9 @@
 //! line of sight are read on the plane below the target.
 
 use crate::batch::{
-    check_columns, check_rows, for_each_chunk_from, ColumnHeights, Columns, Cv3Rows, CvRows, Heights, Layout,
-    MemoryOrder, Planar, PositionMapping, Positions, RowHeights, Rows, CHUNK, PARALLEL_THRESHOLD,
+    check_columns, check_rows, for_each_chunk_from, ColumnHeights, ColumnVelocities, Columns, Cv3Rows, CvRows, Heights,
+    Layout, MemoryOrder, Planar, PositionMapping, Positions, RowHeights, RowVelocities, Rows, Still, Velocities, CHUNK,
+    PARALLEL_THRESHOLD,
 };
 use crate::cubature::Rule;
 use crate::detection_estimate::{read_estimate, SharedEstimate};
@@ -27,6 +28,7 @@ use crate::land::LandMask;
 use crate::pose::{Pose, SensorFrame};
 use crate::radar::RadarEquation;
 use crate::range_bands::{RangeBands, SquaredBands};
+use crate::range_rate::RangeRateNotch;
 use crate::sector::{AngularSector, FramedSector};
 use crate::sight::LineOfSight;
 use crate::simd::dispatch;
@@ -45,6 +47,8 @@ pub enum DetectionFactor {
     Elevation(ElevationSector),
     /// 0 beyond the radar horizon of a target at its own height (raised states only).
     Horizon(Horizon),
+    /// A notch around zero radial speed (and blind speeds): states with velocities only.
+    RangeRate(RangeRateNotch),
     /// Land (boundary included) gets `on_land`, water 1.
     Land(Arc<LandMask>),
     /// A target shadowed from the sensor by land gets 0.
@@ -71,6 +75,10 @@ impl DetectionModel {
                 }
                 DetectionFactor::Elevation(e) => {
                     sector = e.values();
+                    &sector
+                }
+                DetectionFactor::RangeRate(n) => {
+                    sector = n.values();
                     &sector
                 }
                 DetectionFactor::Horizon(_)
@@ -121,6 +129,7 @@ impl DetectionModel {
                 DetectionFactor::Radar(radar) => steps.push(Step::Radar(radar.clone())),
                 DetectionFactor::Elevation(e) => steps.push(Step::Elevation(e.clone())),
                 DetectionFactor::Horizon(h) => steps.push(Step::Horizon(h.clone())),
+                DetectionFactor::RangeRate(n) => steps.push(Step::RangeRate(n.clone())),
                 DetectionFactor::Land(land) => indexed.push(Indexed::Land(Arc::clone(land))),
                 DetectionFactor::Sight(sight) => indexed.push(Indexed::Sight(Arc::clone(sight))),
             }
@@ -146,10 +155,11 @@ enum Step {
     Radar(RadarEquation),
     Elevation(ElevationSector),
     Horizon(Horizon),
+    RangeRate(RangeRateNotch),
 }
 
 /// Where a target is from the sensor: what every step reads. Planar states have dz = 0,
-/// r2 = h2 and z the sensor's height.
+/// r2 = h2 and z the sensor's height; states without velocities have dot = 0.
 #[derive(Clone, Copy)]
 pub(crate) struct Offsets<T> {
     /// World-frame plane offsets.
@@ -163,6 +173,9 @@ pub(crate) struct Offsets<T> {
     pub r2: T,
     /// The target's height.
     pub z: T,
+    /// Δp·Δv: the offset from the sensor dotted with the velocity relative to it (the
+    /// radial speed times the slant range).
+    pub dot: T,
 }
 
 impl Step {
@@ -175,6 +188,7 @@ impl Step {
             Step::Radar(radar) => radar.at_squared(g.r2),
             Step::Elevation(e) => e.at(g.dz, g.r2),
             Step::Horizon(h) => h.at(g.h2, g.z),
+            Step::RangeRate(n) => n.at(g.dot, g.r2),
         }
     }
 }
@@ -203,41 +217,44 @@ impl ScanDetection {
     /// P_D at one world point at the sensor's height, one factor after another: the
     /// readable reference the planar lane kernels ([`lanes`]) must match bit for bit.
     pub fn at_point(&self, x: f64, y: f64) -> f64 {
-        let [ox, oy] = self.frame.origin;
-        let (dx, dy) = (x - ox, y - oy);
-        let h2 = dx * dx + dy * dy;
-        let z = self.frame.height;
-        self.at_offsets(
-            x,
-            y,
-            &Offsets {
-                dx,
-                dy,
-                h2,
-                dz: 0.0,
-                r2: h2,
-                z,
-            },
-        )
+        self.at_state(x, y, None, None)
     }
 
     /// P_D at one world point at height `z`: the reference of the raised kernels.
     pub fn at_raised(&self, x: f64, y: f64, z: f64) -> f64 {
+        self.at_state(x, y, Some(z), None)
+    }
+
+    /// P_D of a target at (x, y), at height `z` (None: the sensor's) and moving at
+    /// `velocity` (None: not read; vz ignored without a height): the reference of every
+    /// kernel.
+    pub fn at_state(&self, x: f64, y: f64, z: Option<f64>, velocity: Option<[f64; 3]>) -> f64 {
         let [ox, oy] = self.frame.origin;
-        let (dx, dy, dz) = (x - ox, y - oy, z - self.frame.height);
+        let (dx, dy) = (x - ox, y - oy);
         let h2 = dx * dx + dy * dy;
-        self.at_offsets(
-            x,
-            y,
-            &Offsets {
-                dx,
-                dy,
-                h2,
-                dz,
-                r2: h2 + dz * dz,
-                z,
-            },
-        )
+        let (dz, r2, height) = match z {
+            Some(z) => {
+                let dz = z - self.frame.height;
+                (dz, h2 + dz * dz, z)
+            }
+            None => (0.0, h2, self.frame.height),
+        };
+        let [px, py, pz] = self.frame.velocity;
+        let dot = match (velocity, z) {
+            (None, _) => 0.0,
+            (Some(v), None) => dx * (v[0] - px) + dy * (v[1] - py),
+            (Some(v), Some(_)) => dx * (v[0] - px) + dy * (v[1] - py) + dz * (v[2] - pz),
+        };
+        let g = Offsets {
+            dx,
+            dy,
+            h2,
+            dz,
+            r2,
+            z: height,
+            dot,
+        };
+        self.at_offsets(x, y, &g)
     }
 
     fn at_offsets(&self, x: f64, y: f64, g: &Offsets<f64>) -> f64 {
@@ -248,16 +265,28 @@ impl ScanDetection {
         self.indexed_at(x, y, pd)
     }
 
-    /// Whether the scan reads the targets' heights (a horizon at the target's height):
-    /// planar states are then refused, naming `position_mapping`.
-    fn check_heights(&self, mapping: PositionMapping) -> Result<()> {
+    /// The mapping as the scan reads it: refused, naming `position_mapping`, without the
+    /// heights a horizon at the target's height needs, or, naming `velocity_mapping`,
+    /// without the velocities a range-rate notch needs; its velocity dropped when no
+    /// factor reads it (so the kernels read no more than they need).
+    fn reads(&self, mapping: PositionMapping) -> Result<PositionMapping> {
         if mapping.z.is_none() && self.steps.iter().any(|s| matches!(s, Step::Horizon(_))) {
             return Err(ModelError::invalid(
                 "position_mapping",
                 format!("{mapping} gives no height, but the model's radar horizon is at each target's height; give the (x, y, z) indices of the state"),
             ));
         }
-        Ok(())
+        let moving = self.steps.iter().any(|s| matches!(s, Step::RangeRate(_)));
+        if moving && mapping.velocity.is_none() {
+            return Err(ModelError::invalid(
+                "velocity_mapping",
+                "is not given, but the model's range-rate notch reads each target's velocity; give the state's velocity indices",
+            ));
+        }
+        Ok(PositionMapping {
+            velocity: mapping.velocity.filter(|_| moving),
+            ..mapping
+        })
     }
 
     /// `pd` after the land and sight factors at (x, y): skipped once it is 0.
@@ -280,7 +309,7 @@ impl ScanDetection {
 
     /// P_D at the position of each state row. `states` is (N, ncols) row-major.
     pub fn at_states(&self, states: &[f64], ncols: usize, mapping: PositionMapping, out: &mut [f64]) -> Result<()> {
-        self.check_heights(mapping)?;
+        let mapping = self.reads(mapping)?;
         mapping.check(ncols, "states")?;
         check_rows(states, ncols, out.len(), "states")?;
         match self.at_layout(states, Layout::Rows { ncols }, mapping, out) {
@@ -300,7 +329,7 @@ impl ScanDetection {
         mapping: PositionMapping,
         out: &mut [f64],
     ) -> Result<()> {
-        self.check_heights(mapping)?;
+        let mapping = self.reads(mapping)?;
         check_columns(particles, ndim, out.len(), mapping, "particles")?;
         match self.at_layout(particles, order.layout(ndim, out.len()), mapping, out) {
             Some(i) => Err(ModelError::invalid(
@@ -311,46 +340,70 @@ impl ScanDetection {
         }
     }
 
-    /// P_D of every state of a checked array; the first state whose position is not finite.
+    /// P_D of every state of a checked array; the first state whose position (or velocity,
+    /// where read) is not finite.
     fn at_layout(&self, states: &[f64], layout: Layout, mapping: PositionMapping, out: &mut [f64]) -> Option<usize> {
-        for_each_chunk_from(out, self.parallel_from, |first, chunk| match (layout, mapping.z) {
-            (Layout::Rows { ncols: 4 }, _) if mapping == PositionMapping::default() => {
-                self.run(CvRows(states), Planar, first, chunk)
-            }
-            (Layout::Rows { ncols: 6 }, Some(4)) if (mapping.x, mapping.y) == (0, 2) => {
-                self.run(Cv3Rows(states), Cv3Rows(states), first, chunk)
-            }
-            (Layout::Rows { ncols }, z) => {
+        for_each_chunk_from(out, self.parallel_from, |first, chunk| match layout {
+            Layout::Rows { ncols } => {
                 let rows = Rows {
                     data: states,
                     ncols,
                     mapping,
                 };
-                match z {
-                    None => self.run(rows, Planar, first, chunk),
-                    Some(z) => self.run(rows, RowHeights { data: states, ncols, z }, first, chunk),
+                let heights = mapping.z.map(|z| RowHeights { data: states, ncols, z });
+                let velocities = mapping.velocity.map(|v| RowVelocities {
+                    data: states,
+                    ncols,
+                    mapping: v,
+                });
+                match (heights, velocities) {
+                    (None, None) if ncols == 4 && mapping == PositionMapping::default() => {
+                        self.run(CvRows(states), Planar, Still, first, chunk)
+                    }
+                    (Some(_), None) if ncols == 6 && (mapping.x, mapping.y, mapping.z) == (0, 2, Some(4)) => {
+                        self.run(Cv3Rows(states), Cv3Rows(states), Still, first, chunk)
+                    }
+                    (None, None) => self.run(rows, Planar, Still, first, chunk),
+                    (Some(h), None) => self.run(rows, h, Still, first, chunk),
+                    (None, Some(v)) => self.run(rows, Planar, v, first, chunk),
+                    (Some(h), Some(v)) => self.run(rows, h, v, first, chunk),
                 }
             }
-            (Layout::Columns { nstates }, z) => {
+            Layout::Columns { nstates } => {
                 let row = |i: usize| &states[i * nstates..][..nstates];
                 let columns = Columns {
                     xs: row(mapping.x),
                     ys: row(mapping.y),
                 };
-                match z {
-                    None => self.run(columns, Planar, first, chunk),
-                    Some(z) => self.run(columns, ColumnHeights(row(z)), first, chunk),
+                let velocities = mapping.velocity.map(|v| ColumnVelocities {
+                    vx: row(v.vx),
+                    vy: row(v.vy),
+                    vz: v.vz.map(row),
+                });
+                match (mapping.z, velocities) {
+                    (None, None) => self.run(columns, Planar, Still, first, chunk),
+                    (Some(z), None) => self.run(columns, ColumnHeights(row(z)), Still, first, chunk),
+                    (None, Some(v)) => self.run(columns, Planar, v, first, chunk),
+                    (Some(z), Some(v)) => self.run(columns, ColumnHeights(row(z)), v, first, chunk),
                 }
             }
         })
     }
 
     /// The P_D kernel for this CPU over one chunk.
-    fn run<P: Positions, H: Heights>(&self, positions: P, heights: H, first: usize, out: &mut [f64]) -> Option<usize> {
+    fn run<P: Positions, H: Heights, V: Velocities>(
+        &self,
+        positions: P,
+        heights: H,
+        velocities: V,
+        first: usize,
+        out: &mut [f64],
+    ) -> Option<usize> {
         dispatch(lanes::AtStates {
             scan: self,
             positions,
             heights,
+            velocities,
             first,
             out,
         })
@@ -368,7 +421,7 @@ impl ScanDetection {
         rule: &Rule,
         out: &mut [f64],
     ) -> Result<()> {
-        self.check_heights(mapping)?;
+        let mapping = self.reads(mapping)?;
         mapping.check(ncols, "means")?;
         let n = check_rows(means, ncols, out.len(), "means")?;
         if covars.len() != n * ncols * ncols {
@@ -391,27 +444,47 @@ impl ScanDetection {
         let spatial = mapping.z.map(|z| (z, rule.spatial()));
         // The first bad row of each chunk, with what is wrong with it.
         let problems = std::sync::Mutex::new(Vec::<(usize, lanes::BadGaussian)>::new());
+        // (velocities at each mean: the rule integrates over position only)
+        let velocities = mapping.velocity.map(|v| RowVelocities {
+            data: means,
+            ncols,
+            mapping: v,
+        });
         let bad = for_each_chunk_from(out, self.parallel_from, |first, chunk| {
-            let (i, kind) = match &spatial {
-                None => dispatch(lanes::Expected {
-                    scan: self,
-                    gaussians,
-                    rule,
-                    first,
-                    out: chunk,
-                }),
-                Some((z, rule)) => dispatch(lanes::ExpectedRaised {
-                    scan: self,
-                    gaussians,
-                    heights: RowHeights {
-                        data: means,
-                        ncols,
-                        z: *z,
-                    },
-                    rule,
-                    first,
-                    out: chunk,
-                }),
+            macro_rules! expected {
+                ($velocities:expr) => {
+                    dispatch(lanes::Expected {
+                        scan: self,
+                        gaussians,
+                        velocities: $velocities,
+                        rule,
+                        first,
+                        out: chunk,
+                    })
+                };
+            }
+            macro_rules! raised {
+                ($z:expr, $rule:expr, $velocities:expr) => {
+                    dispatch(lanes::ExpectedRaised {
+                        scan: self,
+                        gaussians,
+                        heights: RowHeights {
+                            data: means,
+                            ncols,
+                            z: $z,
+                        },
+                        velocities: $velocities,
+                        rule: $rule,
+                        first,
+                        out: chunk,
+                    })
+                };
+            }
+            let (i, kind) = match (&spatial, velocities) {
+                (None, None) => expected!(Still),
+                (None, Some(v)) => expected!(v),
+                (Some((z, rule)), None) => raised!(*z, rule, Still),
+                (Some((z, rule)), Some(v)) => raised!(*z, rule, v),
             }?;
             // (one entry per chunk at most, so not user-sized beyond the output; a poisoned
             // lock still holds whole entries: the push is its only use)
@@ -437,6 +510,8 @@ impl ScanDetection {
 mod column_tests;
 #[cfg(test)]
 mod lane_tests;
+#[cfg(test)]
+mod moving_tests;
 #[cfg(test)]
 mod raised_tests;
 

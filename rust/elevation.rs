@@ -6,9 +6,11 @@
 //! r sin(lower) ≤ dz ≤ r sin(upper), r = √(dx²+dy²+dz²) the slant range: sin is increasing
 //! on [−π/2, π/2] and dz = r sin ε, so no arctangent is needed — nor a square root: with
 //! s = sin(limit) and r² the squared slant range, dz ≥ r s ⇔ (dz ≥ 0 and dz² ≥ r² s²) when
-//! s ≥ 0, and (dz ≥ 0 or dz² ≤ r² s²) when s < 0; dz ≤ r s mirrors it. A limit at ±π/2
-//! bounds nothing and is not tested (so a target straight above or below is inside it
-//! whatever the rounding). The sensor's own position (r = 0) is inside.
+//! s ≥ 0, and (dz ≥ 0 or dz² ≤ r² s²) when s < 0; dz ≤ r s mirrors it. A lower limit at
+//! −π/2 or an upper one at +π/2 bounds nothing and is not tested (so a target straight
+//! below or above is inside it whatever the rounding). The sensor's own position (r = 0)
+//! is inside. Offsets beyond about 1e150 m (whose squares overflow) or below 1e-150 m
+//! (whose squares underflow) are decided to no stated accuracy.
 
 use crate::error::{ModelError, Result};
 use crate::range_bands::select;
@@ -37,8 +39,10 @@ enum Limit {
 }
 
 impl Limit {
-    fn of(angle: f64) -> Limit {
-        if angle.abs() >= FRAC_PI_2 {
+    /// The test of a limit at `angle`; `open` when the limit bounds nothing (a lower one at
+    /// −π/2, an upper one at +π/2).
+    fn of(angle: f64, open: bool) -> Limit {
+        if open {
             return Limit::Open;
         }
         let s = angle.sin();
@@ -76,8 +80,8 @@ impl ElevationSector {
             upper,
             inside,
             outside,
-            below: Limit::of(lower),
-            above: Limit::of(upper),
+            below: Limit::of(lower, lower <= -FRAC_PI_2),
+            above: Limit::of(upper, upper >= FRAC_PI_2),
         })
     }
 
@@ -178,6 +182,14 @@ mod tests {
         assert_eq!(s.at(-1.0, 1.0), 0.0);
         let all = ElevationSector::new(-FRAC_PI_2, FRAC_PI_2, 0.5, 0.0).unwrap();
         assert_eq!(all.at(-7.0, 49.0), 0.5);
+        // a lower limit at the zenith bounds: straight up only
+        let zenith = ElevationSector::new(FRAC_PI_2, FRAC_PI_2, 1.0, 0.0).unwrap();
+        assert_eq!(zenith.at(10.0, 100.0), 1.0);
+        assert_eq!(zenith.at(0.0, 100.0), 0.0);
+        assert_eq!(zenith.at(-10.0, 100.0), 0.0);
+        let nadir = ElevationSector::new(-FRAC_PI_2, -FRAC_PI_2, 1.0, 0.0).unwrap();
+        assert_eq!(nadir.at(-10.0, 100.0), 1.0);
+        assert_eq!(nadir.at(1.0, 2.0), 0.0);
     }
 
     #[test]

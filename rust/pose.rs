@@ -39,7 +39,8 @@ impl Mounting {
     }
 }
 
-/// Position, height and heading of a platform (or directly of a sensor) in the world frame.
+/// Position, height, heading and velocity of a platform (or directly of a sensor) in the
+/// world frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pose {
     pub x: f64,
@@ -47,6 +48,8 @@ pub struct Pose {
     pub heading: f64,
     /// Height, metres (0 for a planar pose).
     pub z: f64,
+    /// World-frame velocity (x, y, z), m/s: what range rates are relative to.
+    pub velocity: [f64; 3],
 }
 
 impl Pose {
@@ -61,10 +64,25 @@ impl Pose {
                 return Err(ModelError::invalid(name, format!("must be finite, got {v}")));
             }
         }
-        Ok(Pose { x, y, heading, z })
+        Ok(Pose {
+            x,
+            y,
+            heading,
+            z,
+            velocity: [0.0; 3],
+        })
     }
 
-    /// The pose of a sensor mounted on this platform; an error naming `mounting` when the
+    /// This pose moving at `velocity` (x, y, z; m/s).
+    pub fn moving(self, velocity: [f64; 3]) -> Result<Self> {
+        if let Some(v) = velocity.iter().find(|v| !v.is_finite()) {
+            return Err(ModelError::invalid("pose.velocity", format!("must be finite, got {v}")));
+        }
+        Ok(Pose { velocity, ..self })
+    }
+
+    /// The pose of a sensor mounted on this platform (moving with it: the lever arm's own
+    /// speed while the platform turns is left out); an error naming `mounting` when the
     /// sum overflows (finite inputs near the largest float can make an infinite pose).
     pub fn mount(&self, mounting: &Mounting) -> Result<Pose> {
         let (s, c) = self.heading.sin_cos();
@@ -77,7 +95,13 @@ impl Pose {
         if !(x.is_finite() && y.is_finite() && heading.is_finite() && z.is_finite()) {
             return Err(ModelError::invalid("mounting", format!("the mounted sensor pose ({x}, {y}, {heading}) at height {z} is not finite: the lever arm or yaw overflows the platform's pose")));
         }
-        Ok(Pose { x, y, heading, z })
+        Ok(Pose {
+            x,
+            y,
+            heading,
+            z,
+            velocity: self.velocity,
+        })
     }
 
     /// The precomputed world→sensor transform of this pose.
@@ -86,6 +110,7 @@ impl Pose {
         SensorFrame {
             origin: [self.x, self.y],
             height: self.z,
+            velocity: self.velocity,
             cos,
             sin,
         }
@@ -97,6 +122,7 @@ impl Pose {
 pub struct SensorFrame {
     pub origin: [f64; 2],
     pub height: f64,
+    pub velocity: [f64; 3],
     pub cos: f64,
     pub sin: f64,
 }

@@ -33,6 +33,7 @@ mod kalman;
 mod models;
 mod particles;
 mod radar;
+mod range_rate;
 
 // The exception classes are Python's (`ctxmodels.errors`, documented there): each kind of
 // core error maps to one, built from the error's fields, so callers read attributes, never
@@ -160,16 +161,21 @@ fn first_non_finite(rows: &[f64], width: usize) -> Option<usize> {
         .position(|row| row.iter().any(|v| !v.is_finite()))
 }
 
-/// A pose from Python: (x, y, heading), or (x, y, heading, z) with the sensor's height.
+/// A pose from Python: (x, y, heading), (x, y, heading, z) with the sensor's height, or
+/// (x, y, heading, z, vx, vy, vz) with its velocity too.
 #[derive(FromPyObject)]
 enum PoseTuple {
+    Moving((f64, f64, f64, f64, f64, f64, f64)),
     Raised((f64, f64, f64, f64)),
     Flat((f64, f64, f64)),
 }
 
-/// A position mapping from Python: (x, y) or, for states with a height, (x, y, z).
+/// The state columns a model reads, from Python: (x, y) or, for states with a height,
+/// (x, y, z); followed, when a factor reads velocities, by (vx, vy) or (vx, vy, vz).
 #[derive(FromPyObject)]
 enum MappingTuple {
+    MovingRaised((i64, i64, i64, i64, i64, i64)),
+    Moving((i64, i64, i64, i64)),
     Raised((i64, i64, i64)),
     Flat((i64, i64)),
 }
@@ -178,31 +184,48 @@ fn pose_of(pose: PoseTuple) -> PyResult<Pose> {
     match pose {
         PoseTuple::Flat((x, y, heading)) => Pose::new(x, y, heading),
         PoseTuple::Raised((x, y, heading, z)) => Pose::raised(x, y, heading, z),
+        PoseTuple::Moving((x, y, heading, z, vx, vy, vz)) => {
+            Pose::raised(x, y, heading, z).and_then(|p| p.moving([vx, vy, vz]))
+        }
     }
     .map_err(to_py)
 }
 
 fn mapping_of(mapping: MappingTuple) -> PyResult<PositionMapping> {
-    let (indices, raised): (&[i64], bool) = match &mapping {
-        MappingTuple::Flat((x, y)) => (&[*x, *y], false),
-        MappingTuple::Raised((x, y, z)) => (&[*x, *y, *z], true),
+    let (indices, positions): (&[i64], usize) = match &mapping {
+        MappingTuple::Flat((x, y)) => (&[*x, *y], 2),
+        MappingTuple::Raised((x, y, z)) => (&[*x, *y, *z], 3),
+        MappingTuple::Moving((x, y, vx, vy)) => (&[*x, *y, *vx, *vy], 2),
+        MappingTuple::MovingRaised((x, y, z, vx, vy, vz)) => (&[*x, *y, *z, *vx, *vy, *vz], 3),
     };
-    let mut checked = [0usize; 3];
-    for (c, &i) in checked.iter_mut().zip(indices) {
-        *c = usize::try_from(i).map_err(|_| {
-            value_error(
-                "position_mapping",
-                format_args!("indices must be >= 0, got {indices:?}"),
-            )
-        })?;
+    let mut checked = [0usize; 6];
+    for (k, (c, &i)) in checked.iter_mut().zip(indices).enumerate() {
+        let argument = if k < positions {
+            "position_mapping"
+        } else {
+            "velocity_mapping"
+        };
+        *c = usize::try_from(i)
+            .map_err(|_| value_error(argument, format_args!("indices must be >= 0, got {indices:?}")))?;
     }
-    let [x, y, z] = checked;
-    if raised {
+    let [x, y, z, ..] = checked;
+    let mapping = if positions == 3 {
         PositionMapping::raised(x, y, z)
     } else {
         PositionMapping::new(x, y)
     }
-    .map_err(to_py)
+    .map_err(to_py)?;
+    if indices.len() == positions {
+        return Ok(mapping);
+    }
+    let velocity = &checked[positions..indices.len()];
+    mapping
+        .with_velocity(crate::batch::VelocityMapping {
+            vx: velocity[0],
+            vy: velocity[1],
+            vz: velocity.get(2).copied(),
+        })
+        .map_err(to_py)
 }
 
 /// The output buffer, borrowed for writing: the caller's `out` (checked) or a new array.
@@ -345,6 +368,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyLineOfSight>()?;
     m.add_class::<heights::PyElevationSector>()?;
     m.add_class::<heights::PyHorizon>()?;
+    m.add_class::<range_rate::PyRangeRateNotch>()?;
     m.add_class::<models::PyDetectionModel>()?;
     m.add_class::<at_pose::PyDetectionAtPose>()?;
     m.add_class::<at_pose::PyClutterAtPose>()?;

@@ -44,8 +44,9 @@ def test_example_runs(example, tmp_path):
             stock, context, truth = map(float, re.findall(r"(\d+\.\d+)", text.splitlines()[-1]))
             assert truth == 4.0 and context >= 3.0 and stock <= 1.0, text  # seen: 3.57–4.03, 0–0.17
     if example.stem == "air_surveillance_radar_3d":
-        # Stone Soup's set-ordered noise again: the claim on two processes. Seen: stock 0 %
-        # in the cone, 99 % outside; context-aware 98–100 % in it, 100 % outside.
+        # Stone Soup's set-ordered noise again: the claim on two processes. Seen over seven
+        # processes: stock 0 % in the cone, 99 % outside; context-aware 98–100 % in it, 100 %
+        # outside.
         for text in (output, _run(example, tmp_path, hash_seed="4242")):
             (stock_in, stock_out), (aware_in, aware_out) = (
                 tuple(int(v) for v in re.findall(r"(\d+)%", line)) for line in text.splitlines())

@@ -20,6 +20,7 @@ from .land import LandMask, LineOfSight
 from .pose import ConstantPose, Mounting, NavigationTrack, Pose, PoseSource
 from .radar import RadarEquation
 from .range_bands import RangeBands
+from .range_rate import RangeRateNotch
 from .sector import AngularSector
 from .sensor import SensorModel
 from .zone import Zone
@@ -56,6 +57,7 @@ __all__ = [
     "RadarEquation",
     "RadarHorizon",
     "RangeBands",
+    "RangeRateNotch",
     "SensorModel",
     "ShapeError",
     "Zone",

@@ -231,6 +231,19 @@ def as_position_mapping(mapping: Any, name: str = "position_mapping", *,
     return checked
 
 
+def velocity_indices(velocity_mapping: Any, position_mapping: tuple[int, ...],
+                     name: str = "velocity_mapping") -> tuple[int, ...]:
+    """The velocity's state indices, as many as ``position_mapping``'s and apart from them."""
+    velocity = as_position_mapping(velocity_mapping, name, heights=True)
+    if len(velocity) != len(position_mapping):
+        raise ArgumentError(name, f"must have as many indices as position_mapping "
+                                  f"{tuple(position_mapping)}, got {velocity}")
+    if set(velocity) & set(position_mapping):
+        raise ArgumentError(name, f"{velocity} shares an index with position_mapping "
+                                  f"{tuple(position_mapping)}")
+    return velocity
+
+
 #: NumPy dtype kinds read as real numbers: booleans, integers, floats.
 _REAL_KINDS = "biuf"
 

@@ -25,6 +25,7 @@ __all__ = [
     "ElevationSector",
     "GaussianMixtureArrays",
     "Horizon",
+    "RangeRateNotch",
     "MeasurementModel",
     "LandMask",
     "LineOfSight",
@@ -42,11 +43,21 @@ __all__ = [
     "simd_backend",
 ]
 
-_Pose: TypeAlias = tuple[float, float, float] | tuple[float, float, float, float]
+_Pose: TypeAlias = (
+    tuple[float, float, float]
+    | tuple[float, float, float, float]
+    | tuple[float, float, float, float, float, float, float]
+)
 # `position_mapping` defaults to (0, 2) (Stone Soup's [x, vx, y, vy]). It is written `...`
 # below because PyO3 renders a tuple default as `...` in the runtime signature, and stubtest
 # (run bare by scripts/test.sh) checks stub defaults against that rendering.
-_Mapping: TypeAlias = tuple[int, int] | tuple[int, int, int]
+# (x, y) or (x, y, z), then the velocity's (vx, vy) or (vx, vy, vz) where a factor reads it
+_Mapping: TypeAlias = (
+    tuple[int, int]
+    | tuple[int, int, int]
+    | tuple[int, int, int, int]
+    | tuple[int, int, int, int, int, int]
+)
 _Floats: TypeAlias = NDArray[np.float64]
 _Bools: TypeAlias = NDArray[np.bool_]
 _Rule: TypeAlias = Literal["mean", "cubature", "unscented", "gauss-hermite"]
@@ -99,6 +110,15 @@ class Horizon:
     def __new__(cls, antenna_reach: float, scale: float) -> Horizon: ...
 
 @final
+class RangeRateNotch:
+    """``inside`` where the radial speed is within ``width`` of 0 (or of the first
+    ``multiples`` multiples of ``blind_speed``), else ``outside``."""
+
+    def __new__(
+        cls, width: float, blind_speed: float | None, multiples: int, inside: float, outside: float
+    ) -> RangeRateNotch: ...
+
+@final
 class AngularSector:
     """Body-frame sector: ``inside`` within ``width / 2`` of ``centre`` (radians), else ``outside``."""
 
@@ -138,6 +158,7 @@ class DetectionModel:
             | RadarEquation
             | ElevationSector
             | Horizon
+            | RangeRateNotch
             | LandMask
             | LineOfSight
             | DetectionEstimate

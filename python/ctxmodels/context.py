@@ -192,11 +192,12 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
                 pd = calls.at_pose.evaluate(means, out)
                 if pd is not None:
                     return pd
-                return calls.detection.evaluate(self.pose, means, tuple(model.position_mapping),
-                                                out=out)
+                return calls.detection.evaluate(self.pose, means, model.position_mapping,
+                                                out=out, velocity_mapping=model.velocity_mapping)
             return calls.detection.expected(self.pose, means, covars,
-                                            tuple(model.position_mapping), model.pd_evaluation,
-                                            model.pd_order, out=out)
+                                            model.position_mapping, model.pd_evaluation,
+                                            model.pd_order, out=out,
+                                            velocity_mapping=model.velocity_mapping)
         except (TypeError, ValueError) as err:
             raise _renamed(err, "states", "means") from None
 
@@ -242,9 +243,10 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
             particle's position is NaN or infinite (naming the first such particle).
         """
         calls = self._scan_calls or self._calls()
-        return calls.detection.evaluate_particles(self.pose, particles,
-                                                  tuple(self.sensor_model.position_mapping),
-                                                  log=log, missed=missed)
+        model = self.sensor_model
+        return calls.detection.evaluate_particles(self.pose, particles, model.position_mapping,
+                                                  log=log, missed=missed,
+                                                  velocity_mapping=model.velocity_mapping)
 
     def prob_detection_states(self, states: Sequence) -> np.ndarray:
         """P_D of Stone Soup states, predictions or hypotheses, in one array call."""

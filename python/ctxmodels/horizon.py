@@ -29,13 +29,14 @@ class RadarHorizon(ModelComponent):
     the sum of the two tangent distances to the horizon (to first order in :math:`h/kR`: the
     exact tangent lengths are :math:`\sqrt{2kRh + h^2}`, and arcs over the sphere are
     shorter by :math:`O(d^3/(kR)^2)`; together they differ from :math:`d` by less than
-    0.02 % for heights below 1 km and :math:`k \ge 1/2`). Ranges are the plane distances
-    of ctxmodels' local frame; a target at exactly :math:`d` is visible. With a fixed
+    0.02 % for heights below 1 km and :math:`k \ge 1/2`). A target at exactly :math:`d` is
+    visible. With a fixed
     ``target_height`` the factor is a range band with its edge at :math:`d`: it composes
-    with every other factor and costs what a range band costs. With ``target_height=None``
-    each target's own height :math:`h_t` is read from its state (a sensor model whose
-    ``position_mapping`` has three indices; a target below the sea counts as at it), and
-    the edge moves out with it.
+    with every other factor and costs what a range band costs (and, as every range band,
+    reads the slant range in a model with heights). With ``target_height=None`` each
+    target's own height :math:`h_t` is read from its state (a sensor model whose
+    ``position_mapping`` has three indices; a target below the sea counts as at it), the
+    edge moves out with it, and :math:`d` is compared with the plane distance.
     """
 
     antenna_height: float = Property(doc="Antenna height above the sea, metres (≥ 0).")
@@ -58,6 +59,9 @@ class RadarHorizon(ModelComponent):
         reach = 2.0 * float(self.k) * float(self.earth_radius)
         if not math.isfinite(reach):
             raise ArgumentError("earth_radius", f"2 k R overflows: k {self.k}, R {self.earth_radius}")
+        if not reach >= 1.0:
+            raise ArgumentError("earth_radius", f"2 k R is below a metre: k {self.k}, "
+                                                f"R {self.earth_radius}")
         for name in heights:
             if not math.isfinite(reach * float(getattr(self, name))):
                 raise ArgumentError(name, f"2 k R h overflows: h {getattr(self, name)}")

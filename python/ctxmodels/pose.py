@@ -19,63 +19,71 @@ from stonesoup.base import Property
 from . import _core
 from ._upstream import property_slot
 from ._component import ModelComponent, as_float, as_rows, as_sequence, frozen_copy
-from .errors import ShapeError, argument_error
+from .errors import ArgumentTypeError, ShapeError, argument_error
 
 
 class Pose(ModelComponent):
-    """Position (x, y, metres), heading (radians from +x, counter-clockwise) and height
-    (z, metres: where a sensor model with a height in its ``position_mapping`` measures
-    slant ranges and elevations from)."""
+    """Position (x, y, metres), heading (radians from +x, counter-clockwise), height (z,
+    metres: where a sensor model with a height in its ``position_mapping`` measures slant
+    ranges and elevations from) and velocity (vx, vy, vz, m/s: what a range-rate notch
+    measures radial speeds against)."""
 
     x: float = Property(doc="World x, metres.")
     y: float = Property(doc="World y, metres.")
     heading: float = Property(default=0.0, doc="Heading, radians counter-clockwise from +x.")
     z: float = Property(default=0.0, doc="Height, metres (read only for states with a height).")
+    vx: float = Property(default=0.0, doc="Velocity along x, m/s.")
+    vy: float = Property(default=0.0, doc="Velocity along y, m/s.")
+    vz: float = Property(default=0.0, doc="Vertical velocity, m/s.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        for name in ("x", "y", "heading", "z"):
+        for name in _NAMES:
             as_float(getattr(self, name), name)
 
-    def as_tuple(self) -> tuple[float, float, float, float]:
-        """(x, y, heading, z), the core's form."""
-        return float(self.x), float(self.y), float(self.heading), float(self.z)
+    def as_tuple(self) -> tuple[float, float, float, float, float, float, float]:
+        """(x, y, heading, z, vx, vy, vz), the core's form."""
+        return tuple(float(getattr(self, name)) for name in _NAMES)
 
 
 def as_pose(pose, name: str = "pose") -> Pose:
-    """``pose``, a :class:`Pose` or an (x, y, heading) or (x, y, heading, z) sequence of
-    finite numbers, as a :class:`Pose`; TypeError or ValueError naming ``name`` for
-    anything else."""
+    """``pose``, a :class:`Pose` or an (x, y, heading), (x, y, heading, z) or
+    (x, y, heading, z, vx, vy, vz) sequence of finite numbers, as a :class:`Pose`;
+    TypeError or ValueError naming ``name`` for anything else."""
     if isinstance(pose, Pose):
         return pose
     if isinstance(pose, (str, bytes)) or not isinstance(pose, (Sequence, np.ndarray)):
-        raise TypeError(f"{name}: expected a Pose or an (x, y, heading) sequence, got "
-                        f"{type(pose).__name__}")
+        raise ArgumentTypeError(name, f"expected a Pose or an (x, y, heading) sequence, got "
+                                      f"{type(pose).__name__}")
     values = tuple(np.ravel(pose)) if isinstance(pose, np.ndarray) else tuple(pose)
-    if len(values) not in (3, 4):
-        raise TypeError(f"{name}: expected a Pose or an (x, y, heading) or (x, y, heading, z) "
-                        f"sequence, got {len(values)} values")
+    if len(values) not in (3, 4, 7):
+        raise ArgumentTypeError(name, f"expected a Pose or an (x, y, heading), "
+                                      f"(x, y, heading, z) or (x, y, heading, z, vx, vy, vz) "
+                                      f"sequence, got {len(values)} values")
     try:
-        x, y, heading, *z = (as_float(v, axis) for v, axis in zip(values, ("x", "y", "heading", "z")))
+        x, y, heading, *rest = (as_float(v, axis) for v, axis in zip(values, _NAMES))
     except (TypeError, ValueError) as err:
         raise argument_error(name, str(err), err) from None
-    return _computed_pose(x, y, heading, *z)
+    return _computed_pose(x, y, heading, *rest[:1], *([tuple(rest[1:])] if rest[1:] else []))
 
 
-def pose_tuple(pose, name: str = "pose") -> tuple[float, float, float, float]:
+def pose_tuple(pose, name: str = "pose") -> tuple[float, ...]:
     """``pose`` (a :class:`Pose` or a sequence :func:`as_pose` reads) as the core's tuple."""
     return as_pose(pose, name).as_tuple()
 
 
-_X, _Y, _HEADING, _Z = (property_slot(name) for name in ("x", "y", "heading", "z"))
+_NAMES = ("x", "y", "heading", "z", "vx", "vy", "vz")
+_SLOTS = tuple(property_slot(name) for name in _NAMES)
 
 
-def _computed_pose(x: float, y: float, heading: float, z: float = 0.0) -> Pose:
-    """The :class:`Pose` ``Pose(x=x, y=y, heading=heading, z=z)`` builds, for floats computed
-    from already validated ones (interpolated, mounted): without the per-Property checks,
-    which cost more than the rest of a scan's context."""
+def _computed_pose(x: float, y: float, heading: float, z: float = 0.0,
+                   velocity: tuple = (0.0, 0.0, 0.0)) -> Pose:
+    """The :class:`Pose` ``Pose(x=x, y=y, heading=heading, z=z, vx=..., vy=..., vz=...)``
+    builds, for floats computed from already validated ones (interpolated, mounted): without
+    the per-Property checks, which cost more than the rest of a scan's context."""
     pose = object.__new__(Pose)
-    pose.__dict__.update({"_initialised": True, _X: x, _Y: y, _HEADING: heading, _Z: z})
+    pose.__dict__["_initialised"] = True
+    pose.__dict__.update(zip(_SLOTS, (x, y, heading, z, *velocity)))
     return pose
 
 
@@ -95,10 +103,11 @@ class Mounting(ModelComponent):
             as_float(getattr(self, name), name)
 
     def apply(self, platform: Pose) -> Pose:
-        """The sensor's pose on a platform at ``platform``."""
+        """The sensor's pose on a platform at ``platform``, moving with it (the lever arm's
+        own speed while the platform turns is left out)."""
         x, y, heading, z = _core.mount(platform.as_tuple(), float(self.forward), float(self.left),
                                        float(self.yaw), float(self.up))
-        return _computed_pose(x, y, heading, z)
+        return _computed_pose(x, y, heading, z, platform.as_tuple()[4:])
 
 
 class PoseSource(ModelComponent):
@@ -132,8 +141,10 @@ class NavigationTrack(PoseSource):
     r"""Platform poses interpolated from a navigation log.
 
     Positions are interpolated linearly in time; headings along the shorter arc of the
-    circle (so 179° → -179° passes through 180°, not 0°). A timestamp outside the log raises
-    :class:`ValueError` rather than extrapolating.
+    circle (so 179° → -179° passes through 180°, not 0°); the velocity is that of the
+    interpolation, the log's segment (the next one at a logged time, the last one at the
+    end; 0 for a one-entry log). A timestamp outside the log raises :class:`ValueError`
+    rather than extrapolating.
     """
 
     timestamps: Sequence[datetime.datetime] = Property(
@@ -197,7 +208,8 @@ class NavigationTrack(PoseSource):
                 f"[{self.timestamps[0]}, {self.timestamps[-1]}]")
         k = bisect.bisect_right(seconds, t) - 1
         if k >= len(seconds) - 1:
-            pose = _computed_pose(*log.positions[-1][:2], log.headings[-1], *log.positions[-1][2:])
+            pose = _computed_pose(*log.positions[-1][:2], log.headings[-1],
+                                  *(log.positions[-1][2:] or [0.0]), log.velocity(len(seconds) - 2))
         else:
             # Python floats: the same IEEE operations, one rounding each, as on the arrays
             f = (t - seconds[k]) / (seconds[k + 1] - seconds[k])
@@ -207,7 +219,7 @@ class NavigationTrack(PoseSource):
             turn = math.remainder(h1 - h0, 2 * math.pi)
             heading = math.remainder(h0 + f * turn, 2 * math.pi)
             x, y, *z = ((1 - f) * a + f * b for a, b in zip(p0, p1))
-            pose = _computed_pose(x, y, heading, *z)
+            pose = _computed_pose(x, y, heading, *(z or [0.0]), log.velocity(k))
         if type(timestamp) is datetime.datetime:
             log.last = (timestamp, pose)
         return pose
@@ -227,3 +239,11 @@ class _NavigationLog:
     def __init__(self, seconds: list, positions: list, headings: list, kind):
         self.seconds, self.positions, self.headings, self.kind = seconds, positions, headings, kind
         self.last = None
+
+    def velocity(self, k: int) -> tuple[float, float, float]:
+        """The velocity along segment ``k`` (entries k to k + 1); 0 without one."""
+        if not 0 <= k < len(self.seconds) - 1:
+            return (0.0, 0.0, 0.0)
+        dt = self.seconds[k + 1] - self.seconds[k]
+        v = [(b - a) / dt for a, b in zip(self.positions[k], self.positions[k + 1])]
+        return (v[0], v[1], v[2] if len(v) > 2 else 0.0)

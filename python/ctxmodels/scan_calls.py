@@ -34,7 +34,7 @@ class ScanCalls:
         self.detection = detection
         self.at_pose = _core.DetectionAtPose(self.detection._compiled(),
                                              pose.as_tuple(),
-                                             tuple(sensor_model.position_mapping),
+                                             sensor_model.core_mapping,
                                              sensor_model.pd_evaluation, sensor_model.pd_order)
         self._clutter = (sensor_model.clutter, pose)
         self._clutter_at_pose = None

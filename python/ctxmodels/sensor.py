@@ -6,10 +6,13 @@ from collections.abc import Callable, Sequence
 
 from stonesoup.base import Property
 
-from ._component import ModelComponent, as_int, as_position_mapping
+from ._component import ModelComponent, as_int, as_position_mapping, velocity_indices
 from .errors import ArgumentError, ArgumentTypeError
 from .clutter import ClutterDensityModel
 from .detection import MAX_ORDER, PD_RULES, DetectionProbabilityModel
+from .detection_estimate import DetectionEstimate
+from .horizon import RadarHorizon
+from .range_rate import RangeRateNotch
 from .pose import Mounting, Pose, as_pose
 
 #: What :meth:`SensorModel.context` and :meth:`SensorModel.from_stonesoup` call, registered
@@ -52,6 +55,10 @@ class SensorModel(ModelComponent):
         default=(0, 2), doc="Indices of x and y in the track state (Stone Soup CV: (0, 2)), or "
                             "of x, y and z for a sensor that covers heights (ranges are then "
                             "slant ranges from the pose's z; λ is read on the x/y plane).")
+    velocity_mapping: Sequence[int] = Property(
+        default=None, doc="Indices of the velocity in the track state, as many as "
+                          "position_mapping's (Stone Soup CV: (1, 3), or (1, 3, 5) in 3-D): "
+                          "read by a RangeRateNotch; None: no factor reads velocities.")
     mounting: Mounting = Property(default=None, doc="Sensor mounting on the platform; "
                                                     "default: at the platform's reference point.")
     pd_evaluation: str = Property(default="mean", doc="One of 'mean', 'cubature', "
@@ -69,6 +76,9 @@ class SensorModel(ModelComponent):
                             f"got {type(self.clutter).__name__}")
         # Any integer type (NumPy's too), stored as a tuple of ints.
         self._replace("position_mapping", as_position_mapping(self.position_mapping, heights=True))
+        if self.velocity_mapping is not None:
+            self._replace("velocity_mapping", velocity_indices(self.velocity_mapping,
+                                                                self.position_mapping))
         if self.pd_evaluation not in PD_RULES:
             raise ValueError(f"pd_evaluation: must be one of {PD_RULES}, got {self.pd_evaluation!r}")
         try:
@@ -77,6 +87,31 @@ class SensorModel(ModelComponent):
             raise ArgumentError(err.argument, err.detail) from None
         if self.mounting is not None and not isinstance(self.mounting, Mounting):
             raise TypeError(f"mounting: expected a Mounting, got {type(self.mounting).__name__}")
+        self._check_reads()
+
+    def _check_reads(self) -> None:
+        """The state must hold what the factors read: a height for a horizon at each
+        target's height, a velocity for a range-rate notch; and learned P_D bands, learned
+        per plane range, are not read per slant range."""
+        factors = self.detection.factors
+        spatial = len(self.position_mapping) == 3
+        if not spatial and any(isinstance(f, RadarHorizon) and f.target_height is None
+                               for f in factors):
+            raise ArgumentError("position_mapping", f"{tuple(self.position_mapping)} gives no "
+                                "height, but the radar horizon is at each target's height "
+                                "(target_height=None); give the (x, y, z) indices")
+        if self.velocity_mapping is None and any(isinstance(f, RangeRateNotch) for f in factors):
+            raise ArgumentError("velocity_mapping", "is not given, but the RangeRateNotch reads "
+                                "each target's velocity; give the state's velocity indices")
+        if spatial and any(isinstance(f, DetectionEstimate) for f in factors):
+            raise ArgumentError("position_mapping", "a DetectionEstimate learns P_D per plane "
+                                "range, which a model with heights would read per slant range; "
+                                "give the (x, y) indices")
+
+    @property
+    def core_mapping(self) -> tuple[int, ...]:
+        """The state columns the core reads: ``position_mapping`` then ``velocity_mapping``."""
+        return tuple(self.position_mapping) + tuple(self.velocity_mapping or ())
 
     @property
     def plane_mapping(self) -> tuple[int, int]:

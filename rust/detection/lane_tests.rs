@@ -14,8 +14,8 @@ use std::f64::consts::PI;
 
 /// Every build this CPU runs: the AVX2 one only where the CPU has AVX2 (elsewhere these
 /// tests check the portable build alone; tests/core/test_simd_dispatch.py checks that a CPU
-/// with AVX2 runs the AVX2 build).
-fn backends() -> Vec<Backend> {
+/// with AVX2 runs the AVX2 build). Shared by the detection kernels' test files.
+pub(super) fn backends() -> Vec<Backend> {
     [Backend::Portable, Backend::Avx2]
         .into_iter()
         .filter(|b| b.available())
@@ -145,6 +145,7 @@ fn lanes(
             scan,
             positions,
             heights: crate::batch::Planar,
+            velocities: crate::batch::Still,
             first,
             out: &mut out,
         },
@@ -273,7 +274,7 @@ fn expected_pd_gives_the_reference_bits() {
         // Stone Soup's [x, vx, y, vy] rows (read as vectors) and any other layout.
         for (k, mapping) in [
             (4, PositionMapping::default()),
-            (6, PositionMapping { x: 3, y: 1, z: None }),
+            (6, PositionMapping::new(3, 1).unwrap()),
         ] {
             for n in [1, 3, 4, 9, 130] {
                 let means = rows(n, k, mapping);
@@ -312,6 +313,7 @@ fn expected_pd_gives_the_reference_bits() {
                             Expected {
                                 scan: &scan,
                                 gaussians,
+                                velocities: crate::batch::Still,
                                 rule,
                                 first: 0,
                                 out: &mut out,
@@ -419,6 +421,7 @@ fn the_first_bad_gaussian_is_named_with_its_reason() {
                 Expected {
                     scan: &scan,
                     gaussians,
+                    velocities: crate::batch::Still,
                     rule: &Rule::cubature(),
                     first: 0,
                     out: &mut out,

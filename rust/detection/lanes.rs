@@ -5,7 +5,7 @@
 //! kernel gives the bits of [`ScanDetection::at_point`] (tested for every backend).
 
 use super::{Offsets, ScanDetection, Step};
-use crate::batch::{CvRows, Heights, Planar, PositionMapping, Positions, RowHeights, Rows};
+use crate::batch::{CvRows, Heights, Planar, PositionMapping, Positions, RowHeights, Rows, Velocities};
 use crate::cubature::{cholesky2_lanes, cholesky3, Rule, SpatialRule};
 use crate::elevation::ElevationSector;
 use crate::range_bands::SquaredBands;
@@ -23,6 +23,7 @@ impl Step {
             Step::Radar(radar) => radar.lanes_at_squared(g.r2),
             Step::Elevation(e) => e.lanes_at(g.dz, g.r2),
             Step::Horizon(h) => h.lanes_at(g.h2, g.z),
+            Step::RangeRate(n) => n.lanes_at(g.dot, g.r2),
         }
     }
 }
@@ -150,32 +151,48 @@ impl ScanDetection {
     /// `INDEXED`: whether the scan has land or sight steps (`!self.indexed.is_empty()`),
     /// fixed at compile time so that the common loop carries none of their code.
     #[inline(always)]
-    fn lanes_at<L: Lanes, S: FixedSteps, H: Heights, const INDEXED: bool>(&self, steps: S, x: L, y: L, z: L) -> (L, L) {
+    fn lanes_at<L: Lanes, S: FixedSteps, H: Heights, V: Velocities, const INDEXED: bool>(
+        &self,
+        steps: S,
+        x: L,
+        y: L,
+        z: L,
+        v: [L; 3],
+    ) -> (L, L) {
         let [ox, oy] = self.frame.origin;
         let (dx, dy) = (x - L::splat(ox), y - L::splat(oy));
         let h2 = dx * dx + dy * dy;
         let oz = L::splat(self.frame.height);
-        let g = if H::RAISED {
+        let (dz, r2, z) = if H::RAISED {
             let dz = z - oz;
-            Offsets {
-                dx,
-                dy,
-                h2,
-                dz,
-                r2: h2 + dz * dz,
-                z,
+            (dz, h2 + dz * dz, z)
+        } else {
+            (L::splat(0.0), h2, oz)
+        };
+        let dot = if V::MOVING {
+            let [px, py, pz] = self.frame.velocity;
+            let (px, py, pz) = (L::splat(px), L::splat(py), L::splat(pz));
+            let plane = dx * (v[0] - px) + dy * (v[1] - py);
+            if H::RAISED {
+                plane + dz * (v[2] - pz)
+            } else {
+                plane
             }
         } else {
-            Offsets {
-                dx,
-                dy,
-                h2,
-                dz: L::splat(0.0),
-                r2: h2,
-                z: oz,
-            }
+            L::splat(0.0)
         };
-        let r2 = g.r2;
+        let g = Offsets {
+            dx,
+            dy,
+            h2,
+            dz,
+            r2,
+            z,
+            dot,
+        };
+        // Not finite where a position is (or a velocity read), or, rarely, where a finite one
+        // is very far away (r² + 0·dot: r² itself unless the velocity product is not finite).
+        let r2 = if V::MOVING { r2 + dot * L::splat(0.0) } else { r2 };
         let pd = steps.apply(L::splat(self.constant), &g);
         if !INDEXED {
             return (pd, r2);
@@ -190,15 +207,16 @@ impl ScanDetection {
 
 /// P_D of states `first..first + out.len()`; the index (in `out`) of the first state whose
 /// position is not finite.
-pub(super) struct AtStates<'a, P, H> {
+pub(super) struct AtStates<'a, P, H, V> {
     pub scan: &'a ScanDetection,
     pub positions: P,
     pub heights: H,
+    pub velocities: V,
     pub first: usize,
     pub out: &'a mut [f64],
 }
 
-impl<P: Positions, H: Heights> LaneKernel for AtStates<'_, P, H> {
+impl<P: Positions, H: Heights, V: Velocities> LaneKernel for AtStates<'_, P, H, V> {
     type Output = Option<usize>;
 
     #[inline(always)]
@@ -207,13 +225,14 @@ impl<P: Positions, H: Heights> LaneKernel for AtStates<'_, P, H> {
     }
 }
 
-impl<P: Positions, H: Heights> AtStates<'_, P, H> {
+impl<P: Positions, H: Heights, V: Velocities> AtStates<'_, P, H, V> {
     #[inline(always)]
     fn run_with<L: Lanes, S: FixedSteps, const INDEXED: bool>(self, steps: S) -> Option<usize> {
         let AtStates {
             scan,
             positions,
             heights,
+            velocities,
             first,
             out,
         } = self;
@@ -227,22 +246,28 @@ impl<P: Positions, H: Heights> AtStates<'_, P, H> {
         for (j, o) in out[..full].chunks_exact_mut(4).enumerate() {
             let (x, y) = positions.lanes::<L>(first + 4 * j);
             let z = heights.lanes::<L>(first + 4 * j);
-            let (pd, r2) = scan.lanes_at::<L, S, H, INDEXED>(steps, x, y, z);
+            let v = velocities.lanes::<L>(first + 4 * j);
+            let (pd, r2) = scan.lanes_at::<L, S, H, V, INDEXED>(steps, x, y, z, v);
             bad = L::or(bad, r2.non_finite());
             pd.store(o);
         }
         if full < n {
             let (x, y) = positions.partial::<L>(first + full, n - full);
             let z = heights.partial::<L>(first + full, n - full);
-            let (pd, r2) = scan.lanes_at::<L, S, H, INDEXED>(steps, x, y, z);
+            let v = velocities.partial::<L>(first + full, n - full);
+            let (pd, r2) = scan.lanes_at::<L, S, H, V, INDEXED>(steps, x, y, z, v);
             bad = L::or(bad, r2.non_finite());
             out[full..].copy_from_slice(&pd.to_array()[..n - full]);
         }
         if !L::any(bad) {
             return None;
         }
-        (0..n)
-            .find(|&i| !(positions.one(first + i).iter().all(|v| v.is_finite()) && heights.one(first + i).is_finite()))
+        (0..n).find(|&i| {
+            let finite = |v: &f64| v.is_finite();
+            !(positions.one(first + i).iter().all(finite)
+                && heights.one(first + i).is_finite()
+                && velocities.one(first + i).iter().all(finite))
+        })
     }
 }
 
@@ -327,15 +352,17 @@ impl Gaussians<'_> {
 /// Expected P_D of Gaussians `first..first + out.len()` under `rule`: the points m + L u
 /// are made and evaluated in the same pass, four Gaussians at a time. The first Gaussian
 /// that cannot be evaluated, with the reason (its own entry is then meaningless).
-pub(super) struct Expected<'a> {
+pub(super) struct Expected<'a, V> {
     pub scan: &'a ScanDetection,
     pub gaussians: Gaussians<'a>,
+    /// The velocity at each mean (the rule integrates over position only).
+    pub velocities: V,
     pub rule: &'a Rule,
     pub first: usize,
     pub out: &'a mut [f64],
 }
 
-impl LaneKernel for Expected<'_> {
+impl<V: Velocities> LaneKernel for Expected<'_, V> {
     type Output = Option<(usize, BadGaussian)>;
 
     #[inline(always)]
@@ -344,12 +371,13 @@ impl LaneKernel for Expected<'_> {
     }
 }
 
-impl Expected<'_> {
+impl<V: Velocities> Expected<'_, V> {
     #[inline(always)]
     fn run_with<L: Lanes, S: FixedSteps, const INDEXED: bool>(self, steps: S) -> <Self as LaneKernel>::Output {
         let Expected {
             scan,
             gaussians,
+            velocities,
             rule,
             first,
             out,
@@ -360,12 +388,22 @@ impl Expected<'_> {
         // of two square roots and a division, and a short loop of independent ones lets the
         // CPU overlap them.
         const GROUP: usize = 16;
-        let mut factors = [[zero; 5]; GROUP];
+        let mut factors = [[zero; 8]; GROUP];
         for (g, group) in out.chunks_mut(4 * GROUP).enumerate() {
             let start = 4 * GROUP * g;
             for (j, block) in group.chunks(4).enumerate() {
-                let (mut mx, mut my, mut l, bad_mean, bad_covar) =
+                let (mut mx, mut my, mut l, mut bad_mean, bad_covar) =
                     gaussians.lanes::<L>(first + start + 4 * j, block.len());
+                let mut v = match block.len() {
+                    4 => velocities.lanes::<L>(first + start + 4 * j),
+                    count => velocities.partial::<L>(first + start + 4 * j, count),
+                };
+                if V::MOVING {
+                    bad_mean = L::or(
+                        bad_mean,
+                        L::or(v[0].non_finite(), L::or(v[1].non_finite(), v[2].non_finite())),
+                    );
+                }
                 let unusable = L::or(bad_mean, bad_covar);
                 if L::any(unusable) {
                     // Said for the first such Gaussian; evaluated as a point mass at the
@@ -390,16 +428,22 @@ impl Expected<'_> {
                         L::select(unusable, zero, l[1]),
                         L::select(unusable, zero, l[2]),
                     ];
+                    v = [
+                        L::select(unusable, zero, v[0]),
+                        L::select(unusable, zero, v[1]),
+                        L::select(unusable, zero, v[2]),
+                    ];
                 }
-                factors[j] = [mx, my, l[0], l[1], l[2]];
+                factors[j] = [mx, my, l[0], l[1], l[2], v[0], v[1], v[2]];
             }
             for (j, block) in group.chunks_mut(4).enumerate() {
-                let [mx, my, l11, l21, l22] = factors[j];
+                let [mx, my, l11, l21, l22, vx, vy, vz] = factors[j];
                 let mut expected = zero;
                 for (u, &w) in rule.points().iter().zip(rule.weights()) {
                     let (u0, u1) = (L::splat(u[0]), L::splat(u[1]));
                     let (x, y) = (mx + l11 * u0, my + l21 * u0 + l22 * u1);
-                    expected = expected + L::splat(w) * scan.lanes_at::<L, S, Planar, INDEXED>(steps, x, y, zero).0;
+                    let point = scan.lanes_at::<L, S, Planar, V, INDEXED>(steps, x, y, zero, [vx, vy, vz]);
+                    expected = expected + L::splat(w) * point.0;
                 }
                 // Rounding can push a weighted sum of values in [0, 1] a hair outside.
                 expected = L::select(expected.lt(zero), zero, L::select(expected.gt(one), one, expected));
@@ -418,16 +462,18 @@ impl Expected<'_> {
 /// a rule: each Gaussian's 3×3 position block factored once ([`cholesky3`]), its points
 /// m + L u evaluated four Gaussians at a time. The first Gaussian that cannot be evaluated,
 /// with the reason (its own entry is then meaningless).
-pub(super) struct ExpectedRaised<'a> {
+pub(super) struct ExpectedRaised<'a, V> {
     pub scan: &'a ScanDetection,
     pub gaussians: Gaussians<'a>,
     pub heights: RowHeights<'a>,
+    /// The velocity at each mean (the rule integrates over position only).
+    pub velocities: V,
     pub rule: &'a SpatialRule,
     pub first: usize,
     pub out: &'a mut [f64],
 }
 
-impl LaneKernel for ExpectedRaised<'_> {
+impl<V: Velocities> LaneKernel for ExpectedRaised<'_, V> {
     type Output = Option<(usize, BadGaussian)>;
 
     #[inline(always)]
@@ -436,13 +482,14 @@ impl LaneKernel for ExpectedRaised<'_> {
     }
 }
 
-impl ExpectedRaised<'_> {
+impl<V: Velocities> ExpectedRaised<'_, V> {
     #[inline(always)]
     fn run_with<L: Lanes, S: FixedSteps, const INDEXED: bool>(self, steps: S) -> <Self as LaneKernel>::Output {
         let ExpectedRaised {
             scan,
             gaussians,
             heights,
+            velocities,
             rule,
             first,
             out,
@@ -452,19 +499,21 @@ impl ExpectedRaised<'_> {
         for (j, block) in out.chunks_mut(4).enumerate() {
             // Lane by lane: the mean and the factor, or a point mass at the origin in the
             // place of a Gaussian that cannot be evaluated (said for the first).
-            let (mut m, mut l) = ([[0.0; 4]; 3], [[0.0; 4]; 6]);
+            let (mut m, mut l, mut vs) = ([[0.0; 4]; 3], [[0.0; 4]; 6], [[0.0; 4]; 3]);
             for (i, _) in block.iter().enumerate() {
                 let row = first + 4 * j + i;
                 let [x, y] = gaussians.means.one(row);
                 let z = heights.one(row);
+                let velocity = velocities.one(row);
                 let factor = cholesky3(gaussians.block3(row, heights.z));
-                let problem = if !(x.is_finite() && y.is_finite() && z.is_finite()) {
-                    Some(BadGaussian::Mean)
-                } else if factor.is_none() {
-                    Some(BadGaussian::Covar)
-                } else {
-                    None
-                };
+                let problem =
+                    if !(x.is_finite() && y.is_finite() && z.is_finite() && velocity.iter().all(|v| v.is_finite())) {
+                        Some(BadGaussian::Mean)
+                    } else if factor.is_none() {
+                        Some(BadGaussian::Covar)
+                    } else {
+                        None
+                    };
                 if let Some(kind) = problem {
                     bad = bad.or(Some((4 * j + i, kind)));
                     continue;
@@ -475,16 +524,28 @@ impl ExpectedRaised<'_> {
                 for (k, v) in factor.unwrap_or_default().into_iter().enumerate() {
                     l[k][i] = v;
                 }
+                for (k, v) in velocity.into_iter().enumerate() {
+                    vs[k][i] = v;
+                }
             }
-            let [mx, my, mz] = m.map(L::from_array);
-            let [l11, l21, l22, l31, l32, l33] = l.map(L::from_array);
+            let [mx, my, mz] = [L::from_array(m[0]), L::from_array(m[1]), L::from_array(m[2])];
+            let velocity = [L::from_array(vs[0]), L::from_array(vs[1]), L::from_array(vs[2])];
+            let [l11, l21, l22, l31, l32, l33] = [
+                L::from_array(l[0]),
+                L::from_array(l[1]),
+                L::from_array(l[2]),
+                L::from_array(l[3]),
+                L::from_array(l[4]),
+                L::from_array(l[5]),
+            ];
             let mut expected = zero;
             for (u, &w) in rule.points().iter().zip(rule.weights()) {
                 let (u0, u1, u2) = (L::splat(u[0]), L::splat(u[1]), L::splat(u[2]));
                 let x = mx + l11 * u0;
                 let y = my + l21 * u0 + l22 * u1;
                 let z = mz + l31 * u0 + l32 * u1 + l33 * u2;
-                expected = expected + L::splat(w) * scan.lanes_at::<L, S, RowHeights, INDEXED>(steps, x, y, z).0;
+                let point = scan.lanes_at::<L, S, RowHeights, V, INDEXED>(steps, x, y, z, velocity);
+                expected = expected + L::splat(w) * point.0;
             }
             expected = L::select(expected.lt(zero), zero, L::select(expected.gt(one), one, expected));
             block.copy_from_slice(&expected.to_array()[..block.len()]);

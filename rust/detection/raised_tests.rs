@@ -2,6 +2,7 @@
 //! [`ScanDetection::at_raised`], bit for bit on every backend, and the planar evaluation as
 //! the raised one at the sensor's height.
 
+use super::lane_tests::backends;
 use super::lanes::{expected_raised_reference, AtStates, ExpectedRaised, Gaussians};
 use super::*;
 use crate::batch::{ColumnHeights, Columns, Cv3Rows, Positions, RowHeights, Rows};
@@ -9,13 +10,6 @@ use crate::cubature::cholesky3;
 use crate::land::Polygon;
 use crate::simd::{run_on, Backend};
 use std::f64::consts::PI;
-
-fn backends() -> Vec<Backend> {
-    [Backend::Portable, Backend::Avx2]
-        .into_iter()
-        .filter(|b| b.available())
-        .collect()
-}
 
 fn elevation(lower_deg: f64, upper_deg: f64, inside: f64, outside: f64) -> DetectionFactor {
     DetectionFactor::Elevation(
@@ -110,6 +104,7 @@ fn kernel<P: Positions, H: crate::batch::Heights>(
             scan,
             positions,
             heights,
+            velocities: crate::batch::Still,
             first: 0,
             out: &mut out,
         },
@@ -301,6 +296,7 @@ fn raised_expected_pd_gives_the_reference_bits() {
                             ncols: 6,
                             z: 4,
                         },
+                        velocities: crate::batch::Still,
                         rule: &spatial,
                         first: 0,
                         out: &mut out,

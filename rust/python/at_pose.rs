@@ -87,12 +87,9 @@ impl PyDetectionAtPose {
     /// P_D at one state vector, a float64 (D, 1) column or (D,) array whose position is
     /// finite: the same bits as a row of [`Self::evaluate`]. None for anything else.
     fn at(&self, vector: &Bound<'_, PyAny>) -> Option<f64> {
-        let position = self.position_of(vector)?;
-        let (packed, mapping) = self.packed();
+        let (row, width) = self.read(vector)?;
         let mut pd = [0.0];
-        self.scan
-            .at_states(&position[..packed], packed, mapping, &mut pd)
-            .ok()?;
+        self.scan.at_states(&row[..width], width, self.packed(), &mut pd).ok()?;
         Some(pd[0])
     }
 
@@ -102,28 +99,28 @@ impl PyDetectionAtPose {
     /// model's `expected`. None for anything else, or a position or covariance block the
     /// general path refuses (it then names the fault).
     fn expected_at(&self, vector: &Bound<'_, PyAny>, state: &Bound<'_, PyAny>) -> Option<f64> {
-        let position = self.position_of(vector)?;
+        let (row, width) = self.read(vector)?;
         let covar = state.getattr(pyo3::intern!(state.py(), "covar")).ok()?;
         let covar = covar.cast::<PyArray2<f64>>().ok()?;
         let d = covar.shape()[0];
         if covar.shape()[1] != d || vector.len().ok()? != d {
             return None;
         }
-        let (packed, mapping) = self.packed();
-        let axes = self.axes();
-        let mut block = [0.0; 9];
-        for a in 0..packed {
-            for b in 0..packed {
-                block[a * packed + b] = covar.get_owned([axes[a], axes[b]])?;
+        // The packed row's covariance: the position block read, the rest never is.
+        let ((axes, _), positions) = (self.axes(), 2 + usize::from(self.mapping.z.is_some()));
+        let mut block = [0.0; 36];
+        for a in 0..positions {
+            for b in 0..positions {
+                block[a * width + b] = covar.get_owned([axes[a], axes[b]])?;
             }
         }
         let mut pd = [0.0];
         self.scan
             .expected_at_gaussians(
-                &position[..packed],
-                &block[..packed * packed],
-                packed,
-                mapping,
+                &row[..width],
+                &block[..width * width],
+                width,
+                self.packed(),
                 &self.rule,
                 &mut pd,
             )
@@ -139,42 +136,60 @@ impl PyDetectionAtPose {
         self.scan.at_states(rows, ncols, self.mapping, out)
     }
 
-    /// The state indices the mapping reads: x, y and the height's if it has one (else x
-    /// again, unread).
-    fn axes(&self) -> [usize; 3] {
-        let PositionMapping { x, y, z } = self.mapping;
-        [x, y, z.unwrap_or(x)]
-    }
-
-    /// How many values a packed position holds (2, or 3 with a height) and the mapping of
-    /// such a packed row.
-    fn packed(&self) -> (usize, PositionMapping) {
-        match self.mapping.z {
-            None => (2, PositionMapping { x: 0, y: 1, z: None }),
-            Some(_) => (3, PositionMapping { x: 0, y: 1, z: Some(2) }),
+    /// The state indices the mapping reads, in order: x, y, the height's if mapped, then
+    /// the velocity's if mapped (at most six).
+    fn axes(&self) -> ([usize; 6], usize) {
+        let PositionMapping { x, y, z, velocity } = self.mapping;
+        let v = velocity.map(|v| [Some(v.vx), Some(v.vy), v.vz]).unwrap_or_default();
+        let (mut axes, mut n) = ([0; 6], 0);
+        for i in [Some(x), Some(y), z].into_iter().chain(v).flatten() {
+            axes[n] = i;
+            n += 1;
         }
+        (axes, n)
     }
 
-    /// The mapped position (x, y and the height if mapped) of a float64 (D, 1) column or
-    /// (D,) array; None for anything else.
-    fn position_of(&self, vector: &Bound<'_, PyAny>) -> Option<[f64; 3]> {
-        let axes = self.axes();
-        let mut position = [0.0; 3];
+    /// The mapping of a row packing [`Self::axes`] in that order.
+    fn packed(&self) -> PositionMapping {
+        let positions = if self.mapping.z.is_some() {
+            PositionMapping::raised(0, 1, 2)
+        } else {
+            PositionMapping::new(0, 1)
+        }
+        .unwrap_or_default();
+        let Some(v) = self.mapping.velocity else {
+            return positions;
+        };
+        let first = 2 + usize::from(self.mapping.z.is_some());
+        let velocity = crate::batch::VelocityMapping {
+            vx: first,
+            vy: first + 1,
+            vz: v.vz.map(|_| first + 2),
+        };
+        positions.with_velocity(velocity).unwrap_or(positions)
+    }
+
+    /// The values at [`Self::axes`] of a float64 (D, 1) column or (D,) array, and how
+    /// many there are; None for anything else.
+    fn read(&self, vector: &Bound<'_, PyAny>) -> Option<([f64; 6], usize)> {
+        let (axes, n) = self.axes();
+        let axes = &axes[..n];
+        let mut row = [0.0; 6];
         if let Ok(column) = vector.cast::<PyArray2<f64>>() {
             if column.shape()[1] != 1 {
                 return None;
             }
-            for (p, &i) in position.iter_mut().zip(&axes) {
+            for (p, &i) in row.iter_mut().zip(axes) {
                 *p = column.get_owned([i, 0])?;
             }
         } else if let Ok(flat) = vector.cast::<PyArray1<f64>>() {
-            for (p, &i) in position.iter_mut().zip(&axes) {
+            for (p, &i) in row.iter_mut().zip(axes) {
                 *p = flat.get_owned([i])?;
             }
         } else {
             return None;
         }
-        Some(position)
+        Some((row, n))
     }
 }
 

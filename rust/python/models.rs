@@ -176,6 +176,8 @@ impl PyDetectionModel {
                 DetectionFactor::Elevation(e.get().0.clone())
             } else if let Ok(h) = f.cast::<super::heights::PyHorizon>() {
                 DetectionFactor::Horizon(h.get().0.clone())
+            } else if let Ok(n) = f.cast::<super::range_rate::PyRangeRateNotch>() {
+                DetectionFactor::RangeRate(n.get().0.clone())
             } else if let Ok(l) = f.cast::<PyLandMask>() {
                 DetectionFactor::Land(l.get().0.clone())
             } else if let Ok(l) = f.cast::<PyLineOfSight>() {
@@ -188,7 +190,7 @@ impl PyDetectionModel {
                 return Err(type_error(
                     "factors",
                     format_args!(
-                        "factor {i} is a {}, expected a float, RangeBands, AngularSector, RadarEquation, ElevationSector, Horizon, LandMask, LineOfSight or DetectionEstimate",
+                        "factor {i} is a {}, expected a float, RangeBands, AngularSector, RadarEquation, ElevationSector, Horizon, RangeRateNotch, LandMask, LineOfSight or DetectionEstimate",
                         f.get_type().name()?
                     ),
                 ));

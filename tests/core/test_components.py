@@ -27,7 +27,8 @@ import ctxmodels
 from ctxmodels import (AngularSector, ClutterDensityModel, CoastalClutter, ConstantPose,
                        DetectionProbabilityModel, DetectionSet, DetectorContext, ElevationSector,
                        LandMask, LineOfSight, MetadataThreshold, Mounting, NavigationTrack, Pose,
-                       RadarEquation, RadarHorizon, RangeBands, SensorModel, Zone, _core)
+                       RadarEquation, RadarHorizon, RangeBands, RangeRateNotch, SensorModel, Zone,
+                       _core)
 
 T0 = datetime.datetime(2024, 5, 1, 12, 0, 0)
 RNG = np.random.default_rng(99)
@@ -104,6 +105,7 @@ FACTORIES = {
     "RadarHorizon": lambda: RadarHorizon(antenna_height=20.0, target_height=3.0),
     "RadarHorizon-target-height": lambda: RadarHorizon(antenna_height=20.0, target_height=None, k=1.2),
     "ElevationSector": lambda: ElevationSector(lower=-0.05, upper=0.4, inside=0.8, outside=0.1),
+    "RangeRateNotch": lambda: RangeRateNotch(width=1.5, blind_speed=30.0, multiples=2, inside=0.1),
     "DetectionProbabilityModel": radar_detection,
     "DetectionProbabilityModel-3d": spatial_detection,
     "DetectionProbabilityModel-radar-equation": lambda: DetectionProbabilityModel(factors=[
@@ -125,6 +127,7 @@ FACTORIES = {
         MetadataThreshold(key="area", threshold=10, below=1e-1, at_or_above=1e-3)]),
     "Pose": lambda: Pose(x=10.0, y=-3.5, heading=2.5),
     "Pose-raised": lambda: Pose(x=10.0, y=-3.5, heading=2.5, z=40.0),
+    "Pose-moving": lambda: Pose(x=10.0, y=-3.5, heading=2.5, z=40.0, vx=3.0, vy=-1.0, vz=0.5),
     "Mounting": lambda: Mounting(forward=4.0, left=-1.0, yaw=0.1),
     "Mounting-up": lambda: Mounting(forward=4.0, left=-1.0, yaw=0.1, up=6.5),
     "ConstantPose": lambda: ConstantPose(pose=Pose(x=1.0, y=2.0, heading=-0.5)),
@@ -150,6 +153,9 @@ def behaviour(obj):
         return obj(np.linspace(0, 4000, 4001)), obj.threshold
     if isinstance(obj, AngularSector):
         return DetectionProbabilityModel(factors=[obj]).evaluate(pose, STATES)
+    if isinstance(obj, RangeRateNotch):
+        moving = Pose(x=15.0, y=-20.0, heading=2.2, vx=2.0)
+        return DetectionProbabilityModel(factors=[obj]).evaluate(moving, STATES, velocity_mapping=(1, 3))
     if isinstance(obj, ElevationSector):
         return DetectionProbabilityModel(factors=[obj]).evaluate(raised, STATES_3D, (0, 2, 4))
     if isinstance(obj, DetectionProbabilityModel) and any(
@@ -252,6 +258,10 @@ def test_equal_values_are_equal_and_hash_alike(factory):
     (FACTORIES["ElevationSector"], lambda: ElevationSector(lower=-0.05, upper=0.41, inside=0.8,
                                                            outside=0.1)),
     (FACTORIES["Pose-raised"], lambda: Pose(x=10.0, y=-3.5, heading=2.5, z=40.5)),
+    (FACTORIES["Pose-moving"], lambda: Pose(x=10.0, y=-3.5, heading=2.5, z=40.0, vx=3.5, vy=-1.0,
+                                            vz=0.5)),
+    (FACTORIES["RangeRateNotch"], lambda: RangeRateNotch(width=1.5, blind_speed=31.0, multiples=2,
+                                                         inside=0.1)),
     (FACTORIES["Mounting-up"], lambda: Mounting(forward=4.0, left=-1.0, yaw=0.1, up=6.0)),
     (FACTORIES["Zone"], lambda: Zone(polygons=land_mask(), inside=10.0, outside=0.25)),
     (land_mask, lambda: LandMask(polygons=[ISLAND])),
@@ -543,7 +553,8 @@ def test_poses_a_navigation_track_and_a_mounting_compute_are_ordinary_poses():
     for seconds in (0.0, 0.37, 1.5, 2.0, 4.0):  # (4.0: the last sample)
         pose = track.pose_at(T0 + datetime.timedelta(seconds=seconds))
         for made in (pose, mounting.apply(pose)):
-            built = Pose(x=made.x, y=made.y, heading=made.heading)
+            built = Pose(**{name: getattr(made, name)
+                            for name in ("x", "y", "heading", "z", "vx", "vy", "vz")})
             assert type(made) is Pose
             assert made.__dict__ == built.__dict__ and list(made.__dict__) == list(built.__dict__)
             assert made == built and hash(made) == hash(built) and repr(made) == repr(built)

@@ -224,10 +224,13 @@ def test_bad_states_for_a_3d_model_name_their_argument():
         context.prob_detection_array(np.zeros((2, 4)))  # a 2-D state for a 3-D model
     with pytest.raises(ArgumentError, match="position_mapping"):
         context.prob_detection(GaussianState(np.zeros((4, 1)), np.eye(4)))
-    # the horizon at each target's height needs the height: named when read on the plane
-    planar = SensorModel(detection=model.detection, clutter=model.clutter).context(POSE)
+    # the horizon at each target's height needs the height: named by a planar sensor model,
+    # and by a planar evaluation
     with pytest.raises(ArgumentError) as info:
-        planar.prob_detection_array(np.zeros((2, 4)))
+        SensorModel(detection=model.detection, clutter=model.clutter)
+    assert info.value.argument == "position_mapping"
+    with pytest.raises(ArgumentError) as info:
+        model.detection.evaluate(POSE, np.zeros((2, 4)))
     assert info.value.argument == "position_mapping"
     bad_covar = np.tile(np.eye(6), (10, 1, 1))
     bad_covar[3, 4, 4] = -5.0

@@ -123,17 +123,13 @@ def test_a_tilted_antenna_or_a_2d_state_is_refused_naming_it():
         context.prob_detection(GaussianState(StateVector([0.0, 0, 0, 0]), np.eye(4)))
 
 
-def test_a_planar_model_of_a_3d_radar_still_gets_its_context():
-    """A model built by hand with the x/y indices only reads targets at the sensor's height
-    (the plane), as before 3-D coverage: still the sensor's context."""
+def test_a_planar_model_of_a_3d_radar_is_refused_by_its_context():
+    """A model reading x/y only would put every target at the radar's height, where the
+    radar decides on the slant range: P_D > 0 would no longer be where is_detectable says."""
     sensor = _sensor("RadarElevationBearingRange")
     _mount(sensor, "fixed")
     model = SensorModel.from_stonesoup(sensor, 0.9, 1e-4)
     planar = SensorModel(detection=model.detection, clutter=model.clutter, position_mapping=(0, 2))
-    context = sensor_context(sensor, planar, T0)
-    pose = sensor_pose(sensor)
-    level = np.array([[pose.x + 700.0, 0, pose.y, 0, pose.z, 0],
-                      [pose.x + 700.0, 0, pose.y, 0, pose.z + 500.0, 0]])
-    np.testing.assert_array_equal(context.prob_detection_array(level), [0.9, 0.9])
-    np.testing.assert_array_equal(sensor_context(sensor, model, T0).prob_detection_array(level),
-                                  [0.9, 0.0])
+    with pytest.raises(ValueError, match=r"sensor_model: position_mapping \(0, 2\) is not the "
+                                         r"sensor's \(0, 2, 4\)"):
+        sensor_context(sensor, planar, T0)

@@ -20,12 +20,18 @@ def _as_pose(pose):
 
 def _pd_at(model, pose, x: np.ndarray, y: np.ndarray, z: np.ndarray | float) -> np.ndarray:
     """P_D of ``model`` at ``pose`` at world points (x, y) and heights z (read only by a
-    model with a height in its ``position_mapping``), in the points' shape."""
-    mapping = tuple(model.position_mapping)
-    states = np.zeros((x.size, max(mapping) + 1))
-    for index, values in zip(mapping, (x, y, z)):
+    model with a height in its ``position_mapping``) of targets at rest, in the points'
+    shape. The states hold only what the model reads, packed (whatever its indices)."""
+    from ..sensor import SensorModel
+    axes = len(model.position_mapping)
+    velocity = None if model.velocity_mapping is None else tuple(range(axes, 2 * axes))
+    packed = SensorModel(detection=model.detection, clutter=model.clutter,
+                         position_mapping=tuple(range(axes)), velocity_mapping=velocity,
+                         mounting=model.mounting)
+    states = np.zeros((x.size, 2 * axes if velocity else axes))
+    for index, values in zip(range(axes), (x, y, z)):
         states[:, index] = np.broadcast_to(values, x.shape).ravel()
-    return model.context(pose).prob_detection_array(states).reshape(x.shape)
+    return packed.context(pose).prob_detection_array(states).reshape(x.shape)
 
 
 def coverage_grid(sensor_models: Mapping, pose, extent: float, resolution: int = 400,

@@ -148,7 +148,7 @@ class _RangeEdge:
     bit for bit, for every target in the sliver)."""
 
     # (not the context itself: a context is freed as soon as its scan is done with it)
-    __slots__ = ("sliver", "sliver_core", "pose", "mapping", "_where", "_radar", "_factors",
+    __slots__ = ("sliver", "sliver_core", "pose", "mapping", "velocity", "_where", "_radar", "_factors",
                  "_models")
 
     @classmethod
@@ -180,6 +180,7 @@ class _RangeEdge:
             return None
         edge = cls()
         edge.mapping = tuple(int(i) for i in context.sensor_model.position_mapping)
+        edge.velocity = context.sensor_model.velocity_mapping
         edge.pose = context.pose.as_tuple()
         edge.sliver_core = _sliver_model(limit)._compiled()
         edge.sliver = _core.DetectionAtPose(edge.sliver_core, edge.pose, edge.mapping, "mean", 1)
@@ -210,7 +211,8 @@ class _RangeEdge:
         pd = np.empty(len(rows))
         for model, which in zip(self._sides(), (inside, ~inside)):
             if which.any():
-                pd[which] = model.evaluate(self._where, rows[which], self.mapping)
+                pd[which] = model.evaluate(self._where, rows[which], self.mapping,
+                                           velocity_mapping=self.velocity)
         return pd
 
     def decide(self, near: np.ndarray, rows_at, result, *, log=False, missed=False) -> None:
@@ -227,7 +229,8 @@ class _RangeEdge:
             if not which.any():
                 continue
             values = model.evaluate_particles(self._where, np.ascontiguousarray(rows[which].T),
-                                              self.mapping, log=log, missed=missed)
+                                              self.mapping, log=log, missed=missed,
+                                              velocity_mapping=self.velocity)
             if missed:
                 result[0][near[which]], result[1][near[which]] = values
             else:

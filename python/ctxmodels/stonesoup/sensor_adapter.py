@@ -102,8 +102,8 @@ provide("from_stonesoup", _model_of)
 
 def sensor_pose(sensor) -> Pose:
     """The pose of a Stone Soup sensor now: x/y of its position (and its height z for a 3-D
-    radar) and the heading of its boresight (the antenna's, for a rotating radar),
-    counter-clockwise from +x."""
+    radar), the heading of its boresight (the antenna's, for a rotating radar),
+    counter-clockwise from +x, and its platform's velocity."""
     kind = sensor_kind(sensor)
     if sensor.position is None or sensor.orientation is None:
         raise ValueError("sensor: has no position or orientation; mount it on a platform")
@@ -112,7 +112,14 @@ def sensor_pose(sensor) -> Pose:
     if kind in ROTATING:
         heading += float(np.asarray(sensor.dwell_centre, dtype=float).ravel()[0])
     z = float(position[2]) if kind in SPATIAL and position.size > 2 else 0.0
-    return Pose(x=float(position[0]), y=float(position[1]), heading=heading, z=z)
+    velocity = getattr(sensor, "velocity", None)
+    velocity = [0.0] * 3 if velocity is None else [float(v) for v in np.ravel(velocity)[:3]]
+    vx, vy, vz = (velocity + [0.0, 0.0, 0.0])[:3]
+    try:
+        return Pose(x=float(position[0]), y=float(position[1]), heading=heading, z=z, vx=vx,
+                    vy=vy, vz=vz if kind in SPATIAL else 0.0)
+    except (TypeError, ValueError) as err:
+        raise argument_error("sensor", f"its pose now is not finite ({err})", err) from None
 
 
 class SensorPose(PoseSource):
@@ -178,10 +185,11 @@ def sensor_context(sensor, sensor_model: SensorModel,
 
 
 def _check_mapping(sensor, sensor_model: SensorModel, argument: str) -> None:
-    """The model must read the target's position where the radar measures it (x and y, and
-    z if it reads heights)."""
+    """The model must read the target's position where the radar measures it: x and y, and
+    z for a 3-D radar (whose range is the slant range)."""
     read = tuple(int(i) for i in sensor_model.position_mapping)
-    measured = tuple(int(i) for i in tuple(sensor.position_mapping)[:len(read)])
+    measured = tuple(int(i) for i in tuple(sensor.position_mapping)[:3 if sensor_kind(sensor)
+                                                                    in SPATIAL else 2])
     if read != measured:
         raise ValueError(f"{argument}: position_mapping {read} is not the sensor's "
                          f"{measured}; the model would read another state entry as the "

@@ -53,9 +53,13 @@ def test_a_birth_density_reads_the_plane_below_the_detection():
     birth = MeasurementDrivenBirth(birth_weight=0.01, position_mapping=(0, 2, 4),
                                    velocity_mapping=(1, 3, 5), birth_covar=np.eye(6) * 100.0,
                                    birth_density=density)
-    weights = [c.weight for c in birth.components(DetectionSet(detections, context))]
-    plane = np.hypot(targets[:, 0] - 10.0, targets[:, 1] + 5.0)
-    np.testing.assert_allclose(weights, 0.01 * np.where(plane < 2000.0, 1.0, 0.1))
+    components = birth.components(DetectionSet(detections, context))  # (a set: any order)
+    means = np.array([np.ravel(c.state_vector)[[0, 2, 4]] for c in components])
+    plane = np.hypot(means[:, 0] - 10.0, means[:, 1] + 5.0)
+    np.testing.assert_allclose([c.weight for c in components],
+                               0.01 * np.where(plane < 2000.0, 1.0, 0.1))
+    assert sorted(plane.round(3).tolist()) == sorted(
+        np.hypot(targets[:, 0] - 10.0, targets[:, 1] + 5.0).round(3).tolist())
     with pytest.raises(ValueError, match="position_mapping: must hold the two indices"):
         MeasurementDrivenBirth(position_mapping=(0, 2, 4, 5), velocity_mapping=(),
                                birth_covar=np.eye(6))

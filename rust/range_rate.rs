@@ -1,0 +1,162 @@
+//! Range-rate blind zones: a pulse-Doppler or MTI radar cancels echoes whose radial speed
+//! relative to it is near zero (the clutter notch) — and, for a pulsed MTI, near each
+//! multiple of its blind speed v_b = λ·PRF/2.
+//!
+//! A target at offset Δp from the sensor, moving at Δv relative to it, closes or opens at
+//! ṙ = Δp·Δv / |Δp|. The factor takes `inside` where |ṙ| ≤ w (the notch's half-width),
+//! decided without a square root as (Δp·Δv)² ≤ w² |Δp|², and, with blind speeds, where
+//! ||ṙ| − k v_b| ≤ w for k = 1…K; `outside` elsewhere. A target at the sensor (Δp = 0) has
+//! no radial speed: inside the notch.
+
+use crate::error::{ModelError, Result};
+use crate::range_bands::select;
+use crate::simd::Lanes;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct RangeRateNotch {
+    width: f64,
+    blind_speed: Option<f64>,
+    multiples: u32,
+    inside: f64,
+    outside: f64,
+}
+
+/// The most blind-speed multiples a notch tests (beyond them a radar's PRF staggering or
+/// the targets' speeds make them moot).
+pub const MAX_MULTIPLES: u32 = 64;
+
+impl RangeRateNotch {
+    /// A notch of half-width `width` (m/s) around zero radial speed and, with a
+    /// `blind_speed` v_b (m/s), around its first `multiples` multiples.
+    pub fn new(width: f64, blind_speed: Option<f64>, multiples: u32, inside: f64, outside: f64) -> Result<Self> {
+        if !(width.is_finite() && width >= 0.0) {
+            return Err(ModelError::invalid(
+                "width",
+                format!("must be a finite speed ≥ 0 m/s, got {width}"),
+            ));
+        }
+        if let Some(v) = blind_speed {
+            if !(v.is_finite() && v > 2.0 * width) {
+                return Err(ModelError::invalid(
+                    "blind_speed",
+                    format!(
+                        "must be a finite speed above twice the notch width ({}) m/s, got {v}",
+                        2.0 * width
+                    ),
+                ));
+            }
+        }
+        if !(1..=MAX_MULTIPLES).contains(&multiples) {
+            return Err(ModelError::invalid(
+                "multiples",
+                format!("must be in 1..={MAX_MULTIPLES}, got {multiples}"),
+            ));
+        }
+        for (name, v) in [("inside", inside), ("outside", outside)] {
+            if !v.is_finite() {
+                return Err(ModelError::invalid(name, format!("must be finite, got {v}")));
+            }
+        }
+        Ok(RangeRateNotch {
+            width,
+            blind_speed,
+            multiples,
+            inside,
+            outside,
+        })
+    }
+
+    pub fn values(&self) -> [f64; 2] {
+        [self.inside, self.outside]
+    }
+
+    /// The value for Δp·Δv = `dot` at squared range `r2`.
+    #[inline(always)]
+    pub fn at(&self, dot: f64, r2: f64) -> f64 {
+        let mut notched = dot * dot <= self.width * self.width * r2;
+        if let Some(v) = self.blind_speed {
+            if r2 > 0.0 {
+                let speed = dot.abs() / r2.sqrt();
+                for k in 1..=self.multiples {
+                    notched |= (speed - f64::from(k) * v).abs() <= self.width;
+                }
+            }
+        }
+        select(notched, self.inside, self.outside)
+    }
+
+    /// [`Self::at`] for four targets, the same bits.
+    #[inline(always)]
+    pub(crate) fn lanes_at<L: Lanes>(&self, dot: L, r2: L) -> L {
+        let w = L::splat(self.width);
+        let mut notched = (dot * dot).le(w * w * r2);
+        if let Some(v) = self.blind_speed {
+            let zero = L::splat(0.0);
+            // (r² = 0 lanes: a NaN speed, which no comparison passes, as the scalar skips them)
+            let speed = L::select(r2.gt(zero), dot.abs().div(r2.sqrt()), L::splat(f64::NAN));
+            for k in 1..=self.multiples {
+                notched = L::or(notched, (speed - L::splat(f64::from(k) * v)).abs().le(w));
+            }
+        }
+        L::select(notched, L::splat(self.inside), L::splat(self.outside))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The value for a target 1 km out closing at `speed` m/s along the line of sight.
+    fn at_speed(notch: &RangeRateNotch, speed: f64) -> f64 {
+        notch.at(1000.0 * speed, 1000.0 * 1000.0)
+    }
+
+    #[test]
+    fn the_notch_and_the_blind_speeds() {
+        let mti = RangeRateNotch::new(2.0, Some(30.0), 3, 0.0, 1.0).unwrap();
+        for (speed, want) in [
+            (0.0, 0.0),
+            (1.9, 0.0),
+            (-1.9, 0.0),
+            (2.1, 1.0),
+            (15.0, 1.0),
+            (29.0, 0.0),
+            (-31.5, 0.0),
+            (60.0, 0.0),
+            (90.0, 0.0),
+            (120.0, 1.0), // beyond the three multiples tested
+            (45.0, 1.0),
+        ] {
+            assert_eq!(at_speed(&mti, speed), want, "{speed} m/s");
+        }
+        assert_eq!(mti.at(0.0, 0.0), 0.0, "a target at the sensor is in the notch");
+        // crossing at right angles: no radial speed, notched however fast it moves
+        assert_eq!(mti.at(0.0, 1e6), 0.0);
+    }
+
+    #[test]
+    fn bad_notches_are_named() {
+        assert_eq!(
+            RangeRateNotch::new(-1.0, None, 1, 0.0, 1.0).unwrap_err().argument(),
+            "width"
+        );
+        assert_eq!(
+            RangeRateNotch::new(f64::NAN, None, 1, 0.0, 1.0).unwrap_err().argument(),
+            "width"
+        );
+        assert_eq!(
+            RangeRateNotch::new(2.0, Some(3.0), 1, 0.0, 1.0).unwrap_err().argument(),
+            "blind_speed"
+        );
+        assert_eq!(
+            RangeRateNotch::new(2.0, Some(30.0), 0, 0.0, 1.0)
+                .unwrap_err()
+                .argument(),
+            "multiples"
+        );
+        assert_eq!(
+            RangeRateNotch::new(2.0, None, 1, f64::NAN, 1.0).unwrap_err().argument(),
+            "inside"
+        );
+    }
+}
