@@ -138,14 +138,36 @@ fn lanes(
     first: usize,
     n: usize,
 ) -> (Vec<u64>, Option<usize>) {
+    kernel_bits(
+        scan,
+        backend,
+        positions,
+        crate::batch::Planar,
+        crate::batch::Still,
+        first,
+        n,
+    )
+}
+
+/// The P_D kernel on `backend` over `n` states from `first`: its outputs' bits and the
+/// first bad state it reports. Shared by the detection kernels' test files.
+pub(super) fn kernel_bits<P: Positions, H: crate::batch::Heights, V: crate::batch::Velocities>(
+    scan: &ScanDetection,
+    backend: Backend,
+    positions: P,
+    heights: H,
+    velocities: V,
+    first: usize,
+    n: usize,
+) -> (Vec<u64>, Option<usize>) {
     let mut out = vec![f64::NAN; n];
     let bad = run_on(
         backend,
         AtStates {
             scan,
             positions,
-            heights: crate::batch::Planar,
-            velocities: crate::batch::Still,
+            heights,
+            velocities,
             first,
             out: &mut out,
         },

@@ -1,8 +1,8 @@
 //! States with velocities (a range-rate notch): the kernels against the scalar reference
 //! [`ScanDetection::at_state`], bit for bit on every backend and layout, planar and raised.
 
-use super::lane_tests::backends;
-use super::lanes::{AtStates, Expected, Gaussians};
+use super::lane_tests::{backends, kernel_bits};
+use super::lanes::{Expected, Gaussians};
 use super::*;
 use crate::batch::{ColumnHeights, ColumnVelocities, Columns, RowHeights, RowVelocities, Rows, VelocityMapping};
 use crate::range_rate::RangeRateNotch;
@@ -104,7 +104,6 @@ fn moving_states_give_the_reference_bits_on_every_path() {
                 scan.at_particles(&data, 6, MemoryOrder::F, mapping, &mut out).unwrap();
                 assert_eq!(bits(&out), want, "F particles raised={raised} n={n}");
                 for backend in backends() {
-                    let mut lanes = vec![f64::NAN; n];
                     let rows = Rows {
                         data: &data,
                         ncols: 6,
@@ -115,41 +114,17 @@ fn moving_states_give_the_reference_bits_on_every_path() {
                         ncols: 6,
                         mapping: velocity(raised),
                     };
-                    let bad = if raised {
+                    let got = if raised {
                         let heights = RowHeights {
                             data: &data,
                             ncols: 6,
                             z: 4,
                         };
-                        run_on(
-                            backend,
-                            AtStates {
-                                scan: &scan,
-                                positions: rows,
-                                heights,
-                                velocities,
-                                first: 0,
-                                out: &mut lanes,
-                            },
-                        )
+                        kernel_bits(&scan, backend, rows, heights, velocities, 0, n)
                     } else {
-                        run_on(
-                            backend,
-                            AtStates {
-                                scan: &scan,
-                                positions: rows,
-                                heights: crate::batch::Planar,
-                                velocities,
-                                first: 0,
-                                out: &mut lanes,
-                            },
-                        )
+                        kernel_bits(&scan, backend, rows, crate::batch::Planar, velocities, 0, n)
                     };
-                    assert_eq!(
-                        (bits(&lanes), bad),
-                        (want.clone(), None),
-                        "{backend:?} raised={raised} n={n}"
-                    );
+                    assert_eq!(got, (want.clone(), None), "{backend:?} raised={raised} n={n}");
                     let column = |c: usize| &particles[c * n..(c + 1) * n];
                     let velocities = ColumnVelocities {
                         vx: column(1),
@@ -160,36 +135,12 @@ fn moving_states_give_the_reference_bits_on_every_path() {
                         xs: column(0),
                         ys: column(2),
                     };
-                    let bad = if raised {
-                        run_on(
-                            backend,
-                            AtStates {
-                                scan: &scan,
-                                positions,
-                                heights: ColumnHeights(column(4)),
-                                velocities,
-                                first: 0,
-                                out: &mut lanes,
-                            },
-                        )
+                    let got = if raised {
+                        kernel_bits(&scan, backend, positions, ColumnHeights(column(4)), velocities, 0, n)
                     } else {
-                        run_on(
-                            backend,
-                            AtStates {
-                                scan: &scan,
-                                positions,
-                                heights: crate::batch::Planar,
-                                velocities,
-                                first: 0,
-                                out: &mut lanes,
-                            },
-                        )
+                        kernel_bits(&scan, backend, positions, crate::batch::Planar, velocities, 0, n)
                     };
-                    assert_eq!(
-                        (bits(&lanes), bad),
-                        (want.clone(), None),
-                        "{backend:?} columns raised={raised} n={n}"
-                    );
+                    assert_eq!(got, (want.clone(), None), "{backend:?} columns raised={raised} n={n}");
                 }
             }
         }

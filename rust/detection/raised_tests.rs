@@ -2,8 +2,8 @@
 //! [`ScanDetection::at_raised`], bit for bit on every backend, and the planar evaluation as
 //! the raised one at the sensor's height.
 
-use super::lane_tests::backends;
-use super::lanes::{expected_raised_reference, AtStates, ExpectedRaised, Gaussians};
+use super::lane_tests::{backends, kernel_bits};
+use super::lanes::{expected_raised_reference, ExpectedRaised, Gaussians};
 use super::*;
 use crate::batch::{ColumnHeights, Columns, Cv3Rows, Positions, RowHeights, Rows};
 use crate::cubature::cholesky3;
@@ -97,19 +97,7 @@ fn kernel<P: Positions, H: crate::batch::Heights>(
     heights: H,
     n: usize,
 ) -> (Vec<u64>, Option<usize>) {
-    let mut out = vec![f64::NAN; n];
-    let bad = run_on(
-        backend,
-        AtStates {
-            scan,
-            positions,
-            heights,
-            velocities: crate::batch::Still,
-            first: 0,
-            out: &mut out,
-        },
-    );
-    (out.into_iter().map(f64::to_bits).collect(), bad)
+    kernel_bits(scan, backend, positions, heights, crate::batch::Still, 0, n)
 }
 
 #[test]
