@@ -250,6 +250,50 @@ pub fn cholesky3(m: [f64; 9]) -> Option<[f64; 6]> {
     Some([l11, l21, l22, l31, l32, l33])
 }
 
+/// The velocity of a Gaussian over position and velocity (D = 2 or 3 axes of each) given
+/// its position at the rule's point m + L u: normal with mean μ_v + B u and covariance
+/// V − B Bᵀ, where P = L Lᵀ is the position block, S the cross block (S[i][j] =
+/// cov(v_i, p_j)), V the velocity block and B = S L⁻ᵀ (solved row by row; a zero pivot, a
+/// position known exactly along that axis, gets a zero column). Returned as (B, V − B Bᵀ),
+/// padded to 3 × 3 with zeros.
+pub fn velocity_given_position<const D: usize>(
+    l: [[f64; D]; D],
+    cross: [[f64; D]; D],
+    velocity: [[f64; D]; D],
+) -> ([[f64; 3]; 3], [[f64; 3]; 3]) {
+    let mut b = [[0.0; 3]; 3];
+    for i in 0..D {
+        for j in 0..D {
+            let mut v = cross[i][j];
+            for k in 0..j {
+                v -= b[i][k] * l[j][k];
+            }
+            b[i][j] = if l[j][j] > 0.0 { v / l[j][j] } else { 0.0 };
+        }
+    }
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..D {
+        for j in 0..D {
+            let mut v = velocity[i][j];
+            for (bik, bjk) in b[i].iter().zip(&b[j]).take(D) {
+                v -= bik * bjk;
+            }
+            c[i][j] = v;
+        }
+    }
+    (b, c)
+}
+
+/// μ_v + B u: the mean velocity at a rule's point u ([`velocity_given_position`]).
+#[inline(always)]
+pub fn velocity_at_point(mean: [f64; 3], b: &[[f64; 3]; 3], u: [f64; 3]) -> [f64; 3] {
+    let mut v = mean;
+    for (vi, bi) in v.iter_mut().zip(b) {
+        *vi += bi[0] * u[0] + bi[1] * u[1] + bi[2] * u[2];
+    }
+    v
+}
+
 /// max(v, 0) with +0 for every v ≤ 0 (also −0), as the lanes compute it.
 #[inline(always)]
 fn positive_part(v: f64) -> f64 {

@@ -64,6 +64,19 @@ pub struct DetectionModel {
 
 impl DetectionModel {
     pub fn new(factors: Vec<DetectionFactor>) -> Result<Self> {
+        // The expected P_D integrates one notch over the velocity; two notches of the same
+        // radial speed would not be independent.
+        if factors
+            .iter()
+            .filter(|f| matches!(f, DetectionFactor::RangeRate(_)))
+            .count()
+            > 1
+        {
+            return Err(ModelError::invalid(
+                "factors",
+                "hold more than one RangeRateNotch; give the radar one notch (its blind speeds included)",
+            ));
+        }
         for (i, f) in factors.iter().enumerate() {
             let sector;
             let values: &[f64] = match f {
@@ -229,6 +242,59 @@ impl ScanDetection {
     /// `velocity` (None: not read; vz ignored without a height): the reference of every
     /// kernel.
     pub fn at_state(&self, x: f64, y: f64, z: Option<f64>, velocity: Option<[f64; 3]>) -> f64 {
+        self.at_offsets(x, y, &self.offsets(x, y, z, velocity))
+    }
+
+    /// P_D of a target at (x, y) (at height `z`, None: the sensor's) whose velocity is
+    /// normal, N(`velocity`, `spread`) (vz and its row and column read only with a height):
+    /// every factor at the point, the range-rate notch by its expectation over the
+    /// velocity ([`RangeRateNotch::expected_at`]). The reference of the expected kernels
+    /// with velocities.
+    pub fn at_state_uncertain(
+        &self,
+        x: f64,
+        y: f64,
+        z: Option<f64>,
+        velocity: [f64; 3],
+        spread: &[[f64; 3]; 3],
+    ) -> f64 {
+        let g = self.offsets(x, y, z, Some(velocity));
+        let mut pd = self.constant;
+        for step in self.steps.iter().filter(|s| !matches!(s, Step::RangeRate(_))) {
+            pd *= step.at(&g);
+        }
+        self.indexed_at(x, y, pd) * self.notch_given(&g, spread)
+    }
+
+    /// The expectation of the scan's range-rate notch (a model has one at most) at offsets
+    /// `g`, Δp·Δv having variance Δpᵀ `spread` Δp; 1 without a notch.
+    fn notch_given(&self, g: &Offsets<f64>, spread: &[[f64; 3]; 3]) -> f64 {
+        let Some(notch) = self.notch() else {
+            return 1.0;
+        };
+        let d = [g.dx, g.dy, g.dz];
+        let mut var = 0.0;
+        for (di, row) in d.iter().zip(spread) {
+            var += di * (row[0] * d[0] + row[1] * d[1] + row[2] * d[2]);
+        }
+        notch.expected_at(g.dot, var, g.r2)
+    }
+
+    /// [`Self::notch_given`] at a point: the factor the expected kernels take apart.
+    #[inline]
+    fn notch_at(&self, x: f64, y: f64, z: Option<f64>, velocity: [f64; 3], spread: &[[f64; 3]; 3]) -> f64 {
+        self.notch_given(&self.offsets(x, y, z, Some(velocity)), spread)
+    }
+
+    fn notch(&self) -> Option<&RangeRateNotch> {
+        self.steps.iter().find_map(|s| match s {
+            Step::RangeRate(n) => Some(n),
+            _ => None,
+        })
+    }
+
+    /// Where a target is from the sensor (as the lane kernels compute it, the same bits).
+    fn offsets(&self, x: f64, y: f64, z: Option<f64>, velocity: Option<[f64; 3]>) -> Offsets<f64> {
         let [ox, oy] = self.frame.origin;
         let (dx, dy) = (x - ox, y - oy);
         let h2 = dx * dx + dy * dy;
@@ -245,7 +311,7 @@ impl ScanDetection {
             (Some(v), None) => dx * (v[0] - px) + dy * (v[1] - py),
             (Some(v), Some(_)) => dx * (v[0] - px) + dy * (v[1] - py) + dz * (v[2] - pz),
         };
-        let g = Offsets {
+        Offsets {
             dx,
             dy,
             h2,
@@ -253,8 +319,7 @@ impl ScanDetection {
             r2,
             z: height,
             dot,
-        };
-        self.at_offsets(x, y, &g)
+        }
     }
 
     fn at_offsets(&self, x: f64, y: f64, g: &Offsets<f64>) -> f64 {
@@ -444,7 +509,7 @@ impl ScanDetection {
         let spatial = mapping.z.map(|z| (z, rule.spatial()));
         // The first bad row of each chunk, with what is wrong with it.
         let problems = std::sync::Mutex::new(Vec::<(usize, lanes::BadGaussian)>::new());
-        // (velocities at each mean: the rule integrates over position only)
+        // (velocities at each mean; a notch is integrated over the velocity given each point)
         let velocities = mapping.velocity.map(|v| RowVelocities {
             data: means,
             ncols,

@@ -7,6 +7,11 @@
 //! decided without a square root as (Δp·Δv)² ≤ w² |Δp|², and, with blind speeds, where
 //! ||ṙ| − k v_b| ≤ w for k = 1…K; `outside` elsewhere. A target at the sensor (Δp = 0) has
 //! no radial speed: inside the notch.
+//!
+//! For a target whose velocity is uncertain — normal given its position, Δv ~ N(μ, C) — ṙ
+//! is normal with mean Δp·μ/|Δp| and variance ΔpᵀCΔp/|Δp|², and the factor's expectation
+//! is exact: outside + (inside − outside)·P(ṙ in a notch), the probability summed over the
+//! notch and the blind speeds' intervals (disjoint: v_b > 2w).
 
 use crate::error::{ModelError, Result};
 use crate::range_bands::select;
@@ -85,6 +90,28 @@ impl RangeRateNotch {
         select(notched, self.inside, self.outside)
     }
 
+    /// The expectation of [`Self::at`] when Δp·Δv is normal with mean `dot` and variance
+    /// `dot_var` (at squared range `r2`): [`Self::at`] itself where the variance is 0 (or
+    /// not a number above 0) or the target is at the sensor.
+    pub fn expected_at(&self, dot: f64, dot_var: f64, r2: f64) -> f64 {
+        if !(dot_var > 0.0 && r2 > 0.0 && dot.is_finite() && dot_var.is_finite()) {
+            return self.at(dot, r2);
+        }
+        // In units of Δp·Δv: the notch is |Δp·Δv| ≤ w r, a blind speed k v_b at ±k v_b r.
+        let (s, r) = (dot_var.sqrt(), r2.sqrt());
+        let half = self.width * r;
+        let mut inside = normal_mass((-half - dot) / s, (half - dot) / s);
+        if let Some(v) = self.blind_speed {
+            for k in 1..=self.multiples {
+                let centre = f64::from(k) * v * r;
+                inside += normal_mass((centre - half - dot) / s, (centre + half - dot) / s)
+                    + normal_mass((-centre - half - dot) / s, (-centre + half - dot) / s);
+            }
+        }
+        let inside = inside.clamp(0.0, 1.0);
+        self.outside + (self.inside - self.outside) * inside
+    }
+
     /// [`Self::at`] for four targets, the same bits.
     #[inline(always)]
     pub(crate) fn lanes_at<L: Lanes>(&self, dot: L, r2: L) -> L {
@@ -99,6 +126,20 @@ impl RangeRateNotch {
             }
         }
         L::select(notched, L::splat(self.inside), L::splat(self.outside))
+    }
+}
+
+/// P(a ≤ X ≤ b) for X standard normal, from the tail on the interval's side, so that a
+/// mass far out keeps its digits: Φ(b) − Φ(a) = (erfc(−b/√2) − erfc(−a/√2))/2 below 0,
+/// (erfc(a/√2) − erfc(b/√2))/2 above it.
+fn normal_mass(a: f64, b: f64) -> f64 {
+    use std::f64::consts::FRAC_1_SQRT_2;
+    if a >= 0.0 {
+        0.5 * (libm::erfc(a * FRAC_1_SQRT_2) - libm::erfc(b * FRAC_1_SQRT_2))
+    } else if b <= 0.0 {
+        0.5 * (libm::erfc(-b * FRAC_1_SQRT_2) - libm::erfc(-a * FRAC_1_SQRT_2))
+    } else {
+        1.0 - 0.5 * (libm::erfc(-a * FRAC_1_SQRT_2) + libm::erfc(b * FRAC_1_SQRT_2))
     }
 }
 
@@ -132,6 +173,24 @@ mod tests {
         assert_eq!(mti.at(0.0, 0.0), 0.0, "a target at the sensor is in the notch");
         // crossing at right angles: no radial speed, notched however fast it moves
         assert_eq!(mti.at(0.0, 1e6), 0.0);
+    }
+
+    #[test]
+    fn an_uncertain_radial_speed_gives_the_normal_masses() {
+        let mti = RangeRateNotch::new(1.0, Some(10.0), 2, 0.0, 1.0).unwrap();
+        let r2 = 1e6; // 1 km: Δp·Δv is 1000 ṙ
+                      // no spread: the point value
+        assert_eq!(mti.expected_at(500.0, 0.0, r2), mti.at(500.0, r2));
+        // ṙ ~ N(0, 1): P(|ṙ| ≤ 1) = 0.682689492…, the blind intervals [9, 11] add 2·1.1e-19
+        let e = mti.expected_at(0.0, 1e6, r2);
+        assert!((e - (1.0 - 0.682_689_492_137_085_9)).abs() < 1e-15, "{e}");
+        // ṙ ~ N(10, 0.5²): centred on the first blind speed, P(|ṙ − 10| ≤ 1) = 0.954499736…
+        let e = mti.expected_at(10_000.0, 0.25e6, r2);
+        assert!((e - (1.0 - 0.954_499_736_103_641_6)).abs() < 1e-15, "{e}");
+        // far from every interval: outside, to the last bit
+        assert_eq!(mti.expected_at(5_000.0, 1e-4, r2), 1.0);
+        // at the sensor: in the notch whatever the spread
+        assert_eq!(mti.expected_at(0.0, 1.0, 0.0), 0.0);
     }
 
     #[test]

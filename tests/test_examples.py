@@ -105,10 +105,13 @@ def test_example_runs(example, tmp_path):
         assert lines[0] == "P_D at 3, 6, 9, 12 km: [0.98 0.76 0.27 0.03]; horizon 21.8 km", output
         held = {line.split(":")[0]: tuple(int(v) for v in re.findall(r"(\d+)%", line))
                 for line in lines[1:]}
-        # seen: near 99 % / 99 %, far 29 % / 65 %, behind 28 % / 28 %
+        # seen: near 99 % / 99 %, far 22 % / 51 %, behind 42 % / 44 %, crossing 11 % / 11 %;
+        # P_D at the mean 0 % for every boat
         assert min(held["near"]) >= 90, output
         flat, aware = held["far"]
         assert aware >= 2 * flat and aware >= 50, output  # the claim: the far boat held
+        assert max(held["crossing"]) <= 30, output  # lost by both in the notch (said so)
+        assert held["the radar's P_D read at the mean"] == (0, 0, 0, 0), output  # newborns notched
         assert _run(example, tmp_path, hash_seed="4242") == output
     if example.stem == "coastline_from_geojson":
         lines = output.splitlines()

@@ -125,7 +125,8 @@ class DetectionProbabilityModel(ModelComponent):
     def expected(self, pose: Pose, means, covars, position_mapping=(0, 2), rule="cubature",
                  order=3, *, out=None, velocity_mapping=None) -> np.ndarray:
         """Expected P_D over Gaussians N(means[i], covars[i]) under an integration rule (over
-        the position; a velocity read at the mean)."""
+        the position; a range-rate notch integrated over the velocity given the position,
+        exactly: see :class:`RangeRateNotch`)."""
         if rule not in PD_RULES:
             raise ArgumentError("rule", f"must be one of {PD_RULES}, got {rule!r}")
         means = as_rows(means, "means")

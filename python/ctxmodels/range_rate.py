@@ -25,8 +25,23 @@ class RangeRateNotch(ModelComponent):
     blind at the multiples of :math:`v_b = \lambda\,\mathrm{PRF}/2`:
     :math:`\bigl||\dot r| - k v_b\bigr| \le w`, :math:`k = 1, \dots,` ``multiples``. A
     target at the sensor has no radial speed (inside). The sensor model reads velocities at
-    its ``velocity_mapping``; the expected P_D of a Gaussian reads the velocity at the mean
-    (the rule integrates over position).
+    its ``velocity_mapping``.
+
+    The expected P_D of a Gaussian over position and velocity integrates the notch over the
+    velocity exactly: at each of the rule's position points :math:`p_k = m + L u_k`, the
+    velocity is normal, :math:`N(\mu_v + B u_k,\, \Sigma_{vv} - B B^\top)` with
+    :math:`B = \Sigma_{vp} L^{-\top}`, so :math:`\dot r` is normal with mean
+    :math:`\mu_r` and standard deviation :math:`\sigma_r`, and the notch contributes
+
+    .. math::
+        \text{outside} + (\text{inside} - \text{outside})
+        \sum_{c \in \{0, \pm v_b, \dots\}}
+        \Bigl[\Phi\Bigl(\tfrac{c + w - \mu_r}{\sigma_r}\Bigr)
+              - \Phi\Bigl(\tfrac{c - w - \mu_r}{\sigma_r}\Bigr)\Bigr]
+
+    beside the other factors at :math:`p_k`. A newborn whose velocity is unknown (mean 0,
+    a wide spread) is then rarely in the notch, though its mean is; P_D read at the mean
+    (``pd_evaluation='mean'``) reads the notch at the mean velocity. A model holds one notch.
 
     A coastal radar's notch, 1.5 m/s either side of zero, blind at 32 m/s and its next two
     multiples: ``RangeRateNotch(width=1.5, blind_speed=32.0, multiples=3)``.

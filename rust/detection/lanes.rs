@@ -6,7 +6,7 @@
 
 use super::{Offsets, ScanDetection, Step};
 use crate::batch::{CvRows, Heights, Planar, PositionMapping, Positions, RowHeights, Rows, Velocities};
-use crate::cubature::{cholesky2_lanes, cholesky3, Rule, SpatialRule};
+use crate::cubature::{cholesky2_lanes, cholesky3, velocity_at_point, velocity_given_position, Rule, SpatialRule};
 use crate::elevation::ElevationSector;
 use crate::range_bands::SquaredBands;
 use crate::sector::FramedSector;
@@ -79,6 +79,23 @@ impl<A: FixedSteps, B: FixedSteps> FixedSteps for (A, B) {
     #[inline(always)]
     fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
         self.1.apply(self.0.apply(pd, g), g)
+    }
+}
+
+/// The steps without the range-rate notch: the expected P_D with velocities takes the
+/// notch's expectation apart ([`ScanDetection::at_state_uncertain`]).
+#[derive(Clone, Copy)]
+struct SkipNotch<'a>(&'a [Step]);
+
+impl FixedSteps for SkipNotch<'_> {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, mut pd: L, g: &Offsets<L>) -> L {
+        for step in self.0 {
+            if !matches!(step, Step::RangeRate(_)) {
+                pd = pd * step.lanes_at(g);
+            }
+        }
+        pd
     }
 }
 
@@ -271,6 +288,21 @@ impl<P: Positions, H: Heights, V: Velocities> AtStates<'_, P, H, V> {
     }
 }
 
+/// `$body` with `$steps` the scan's steps without its notch, as [`SkipNotch`], and `$indexed`
+/// as in [`with_fixed_steps`].
+macro_rules! without_notch {
+    ($scan:expr, $steps:ident, $indexed:ident => $body:expr) => {{
+        let $steps = SkipNotch(&$scan.steps);
+        if $scan.indexed.is_empty() {
+            const $indexed: bool = false;
+            $body
+        } else {
+            const $indexed: bool = true;
+            $body
+        }
+    }};
+}
+
 /// What is wrong with a Gaussian that cannot be evaluated.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum BadGaussian {
@@ -322,6 +354,42 @@ impl Gaussians<'_> {
         L::from_array([at(0), at(1), at(2), at(3)])
     }
 
+    /// The velocity of row `row` given its position ([`velocity_given_position`]), the
+    /// position block being `l` (lower triangular) on `positions`, the velocity in columns
+    /// `velocities`: (B, the covariance left), or None where an entry is not finite or the
+    /// covariance left is not positive semi-definite (the covariance is not).
+    #[allow(clippy::type_complexity)]
+    fn velocity_spread<const D: usize>(
+        self,
+        row: usize,
+        l: [[f64; D]; D],
+        positions: [usize; D],
+        velocities: [usize; D],
+    ) -> Option<([[f64; 3]; 3], [[f64; 3]; 3])> {
+        let k = self.means.ncols;
+        let c = &self.covars[row * k * k..][..k * k];
+        let (mut cross, mut block) = ([[0.0; D]; D], [[0.0; D]; D]);
+        for (i, &vi) in velocities.iter().enumerate() {
+            for j in 0..D {
+                cross[i][j] = c[vi * k + positions[j]];
+                block[i][j] = c[vi * k + velocities[j]];
+            }
+        }
+        let scale = (0..D).fold(f64::MIN_POSITIVE, |m, i| m.max(block[i][i].abs()));
+        let (b, left) = velocity_given_position(l, cross, block);
+        let fine = b.iter().chain(&left).flatten().all(|v| v.is_finite())
+            && (0..D).all(|i| left[i][i] >= -1e-9 * scale)
+            && (0..D).all(|i| (0..D).all(|j| (block[i][j] - block[j][i]).abs() <= 1e-9 * scale));
+        fine.then_some((b, left))
+    }
+
+    /// The (x, y) columns and the (vx, vy) columns (the latter zero without velocities).
+    fn planar_axes(self) -> ([usize; 2], [usize; 2]) {
+        let m = self.means.mapping;
+        let v = m.velocity.map_or([0, 0], |v| [v.vx, v.vy]);
+        ([m.x, m.y], v)
+    }
+
     /// Means, the Cholesky factors [l11, l21, l22] of the position blocks and a mask of the
     /// Gaussians that cannot be evaluated, for the `count` ≤ 4 Gaussians from `first`
     /// (padding lanes are point masses at the origin).
@@ -355,7 +423,8 @@ impl Gaussians<'_> {
 pub(super) struct Expected<'a, V> {
     pub scan: &'a ScanDetection,
     pub gaussians: Gaussians<'a>,
-    /// The velocity at each mean (the rule integrates over position only).
+    /// The velocity at each mean (the rule's points are in position; a notch is
+    /// integrated over the velocity given each point).
     pub velocities: V,
     pub rule: &'a Rule,
     pub first: usize,
@@ -367,7 +436,11 @@ impl<V: Velocities> LaneKernel for Expected<'_, V> {
 
     #[inline(always)]
     fn run<L: Lanes>(self) -> Self::Output {
-        with_fixed_steps!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
+        if V::MOVING {
+            without_notch!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
+        } else {
+            with_fixed_steps!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
+        }
     }
 }
 
@@ -389,11 +462,27 @@ impl<V: Velocities> Expected<'_, V> {
         // CPU overlap them.
         const GROUP: usize = 16;
         let mut factors = [[zero; 8]; GROUP];
+        // With velocities (V::MOVING, the steps without the notch): each Gaussian's velocity
+        // given its position, (B, the covariance left), for the notch's expectation.
+        let mut spreads = [[([[0.0; 3]; 3], [[0.0; 3]; 3]); 4]; GROUP];
+        let (axes, speeds) = gaussians.planar_axes();
         for (g, group) in out.chunks_mut(4 * GROUP).enumerate() {
             let start = 4 * GROUP * g;
             for (j, block) in group.chunks(4).enumerate() {
-                let (mut mx, mut my, mut l, mut bad_mean, bad_covar) =
+                let (mut mx, mut my, mut l, mut bad_mean, mut bad_covar) =
                     gaussians.lanes::<L>(first + start + 4 * j, block.len());
+                if V::MOVING {
+                    let [l11, l21, l22] = [l[0].to_array(), l[1].to_array(), l[2].to_array()];
+                    let mut refused = [0.0; 4];
+                    for (i, flag) in refused.iter_mut().enumerate().take(block.len()) {
+                        let factor = [[l11[i], 0.0], [l21[i], l22[i]]];
+                        match gaussians.velocity_spread(first + start + 4 * j + i, factor, axes, speeds) {
+                            Some(spread) => spreads[j][i] = spread,
+                            None => *flag = 1.0,
+                        }
+                    }
+                    bad_covar = L::or(bad_covar, L::from_array(refused).gt(zero));
+                }
                 let mut v = match block.len() {
                     4 => velocities.lanes::<L>(first + start + 4 * j),
                     count => velocities.partial::<L>(first + start + 4 * j, count),
@@ -412,6 +501,11 @@ impl<V: Velocities> Expected<'_, V> {
                         L::select(bad_mean, one, zero).to_array(),
                         L::select(unusable, one, zero).to_array(),
                     );
+                    for (i, spread) in spreads[j].iter_mut().enumerate() {
+                        if either[i] != 0.0 {
+                            *spread = Default::default();
+                        }
+                    }
                     if let Some(i) = (0..block.len()).find(|&i| either[i] != 0.0) {
                         bad = bad.or(Some((
                             start + 4 * j + i,
@@ -442,8 +536,20 @@ impl<V: Velocities> Expected<'_, V> {
                 for (u, &w) in rule.points().iter().zip(rule.weights()) {
                     let (u0, u1) = (L::splat(u[0]), L::splat(u[1]));
                     let (x, y) = (mx + l11 * u0, my + l21 * u0 + l22 * u1);
-                    let point = scan.lanes_at::<L, S, Planar, V, INDEXED>(steps, x, y, zero, [vx, vy, vz]);
-                    expected = expected + L::splat(w) * point.0;
+                    let mut point = scan
+                        .lanes_at::<L, S, Planar, V, INDEXED>(steps, x, y, zero, [vx, vy, vz])
+                        .0;
+                    if V::MOVING {
+                        let (xs, ys, vxs, vys) = (x.to_array(), y.to_array(), vx.to_array(), vy.to_array());
+                        let mut notch = [1.0; 4];
+                        for (i, value) in notch.iter_mut().enumerate() {
+                            let (b, left) = &spreads[j][i];
+                            let v = velocity_at_point([vxs[i], vys[i], 0.0], b, [u[0], u[1], 0.0]);
+                            *value = scan.notch_at(xs[i], ys[i], None, v, left);
+                        }
+                        point = point * L::from_array(notch);
+                    }
+                    expected = expected + L::splat(w) * point;
                 }
                 // Rounding can push a weighted sum of values in [0, 1] a hair outside.
                 expected = L::select(expected.lt(zero), zero, L::select(expected.gt(one), one, expected));
@@ -466,7 +572,8 @@ pub(super) struct ExpectedRaised<'a, V> {
     pub scan: &'a ScanDetection,
     pub gaussians: Gaussians<'a>,
     pub heights: RowHeights<'a>,
-    /// The velocity at each mean (the rule integrates over position only).
+    /// The velocity at each mean (the rule's points are in position; a notch is
+    /// integrated over the velocity given each point).
     pub velocities: V,
     pub rule: &'a SpatialRule,
     pub first: usize,
@@ -478,7 +585,11 @@ impl<V: Velocities> LaneKernel for ExpectedRaised<'_, V> {
 
     #[inline(always)]
     fn run<L: Lanes>(self) -> Self::Output {
-        with_fixed_steps!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
+        if V::MOVING {
+            without_notch!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
+        } else {
+            with_fixed_steps!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
+        }
     }
 }
 
@@ -500,16 +611,27 @@ impl<V: Velocities> ExpectedRaised<'_, V> {
             // Lane by lane: the mean and the factor, or a point mass at the origin in the
             // place of a Gaussian that cannot be evaluated (said for the first).
             let (mut m, mut l, mut vs) = ([[0.0; 4]; 3], [[0.0; 4]; 6], [[0.0; 4]; 3]);
+            let mut spreads = [([[0.0; 3]; 3], [[0.0; 3]; 3]); 4];
             for (i, _) in block.iter().enumerate() {
                 let row = first + 4 * j + i;
                 let [x, y] = gaussians.means.one(row);
                 let z = heights.one(row);
                 let velocity = velocities.one(row);
                 let factor = cholesky3(gaussians.block3(row, heights.z));
+                // the velocity given the position, when a notch reads it
+                let spread = match (V::MOVING, factor, gaussians.means.mapping.velocity) {
+                    (true, Some([l11, l21, l22, l31, l32, l33]), Some(v)) => gaussians.velocity_spread(
+                        row,
+                        [[l11, 0.0, 0.0], [l21, l22, 0.0], [l31, l32, l33]],
+                        [gaussians.means.mapping.x, gaussians.means.mapping.y, heights.z],
+                        [v.vx, v.vy, v.vz.unwrap_or(v.vx)], // (vz is there: a raised mapping's velocity has three)
+                    ),
+                    _ => Some(Default::default()),
+                };
                 let problem =
                     if !(x.is_finite() && y.is_finite() && z.is_finite() && velocity.iter().all(|v| v.is_finite())) {
                         Some(BadGaussian::Mean)
-                    } else if factor.is_none() {
+                    } else if factor.is_none() || spread.is_none() {
                         Some(BadGaussian::Covar)
                     } else {
                         None
@@ -527,6 +649,7 @@ impl<V: Velocities> ExpectedRaised<'_, V> {
                 for (k, v) in velocity.into_iter().enumerate() {
                     vs[k][i] = v;
                 }
+                spreads[i] = spread.unwrap_or_default();
             }
             let [mx, my, mz] = [L::from_array(m[0]), L::from_array(m[1]), L::from_array(m[2])];
             let velocity = [L::from_array(vs[0]), L::from_array(vs[1]), L::from_array(vs[2])];
@@ -544,8 +667,20 @@ impl<V: Velocities> ExpectedRaised<'_, V> {
                 let x = mx + l11 * u0;
                 let y = my + l21 * u0 + l22 * u1;
                 let z = mz + l31 * u0 + l32 * u1 + l33 * u2;
-                let point = scan.lanes_at::<L, S, RowHeights, V, INDEXED>(steps, x, y, z, velocity);
-                expected = expected + L::splat(w) * point.0;
+                let mut point = scan
+                    .lanes_at::<L, S, RowHeights, V, INDEXED>(steps, x, y, z, velocity)
+                    .0;
+                if V::MOVING {
+                    let (xs, ys, zs) = (x.to_array(), y.to_array(), z.to_array());
+                    let mut notch = [1.0; 4];
+                    for (i, value) in notch.iter_mut().enumerate() {
+                        let (b, left) = &spreads[i];
+                        let v = velocity_at_point([vs[0][i], vs[1][i], vs[2][i]], b, *u);
+                        *value = scan.notch_at(xs[i], ys[i], Some(zs[i]), v, left);
+                    }
+                    point = point * L::from_array(notch);
+                }
+                expected = expected + L::splat(w) * point;
             }
             expected = L::select(expected.lt(zero), zero, L::select(expected.gt(one), one, expected));
             block.copy_from_slice(&expected.to_array()[..block.len()]);

@@ -2,9 +2,10 @@
 //! [`ScanDetection::at_state`], bit for bit on every backend and layout, planar and raised.
 
 use super::lane_tests::{backends, kernel_bits};
-use super::lanes::{Expected, Gaussians};
+use super::lanes::{Expected, ExpectedRaised, Gaussians};
 use super::*;
 use crate::batch::{ColumnHeights, ColumnVelocities, Columns, RowHeights, RowVelocities, Rows, VelocityMapping};
+use crate::cubature::{cholesky2, cholesky3, velocity_at_point, velocity_given_position, Rule};
 use crate::range_rate::RangeRateNotch;
 use crate::simd::run_on;
 
@@ -196,64 +197,208 @@ fn a_model_without_a_notch_reads_no_velocities() {
     assert_eq!(out, [0.5; 5]);
 }
 
-#[test]
-fn expected_pd_reads_the_velocity_at_the_mean() {
-    let pose = Pose::new(0.0, 0.0, 0.0).unwrap().moving([0.0, 0.0, 0.0]).unwrap();
-    let scan = models().remove(1).at_pose(&pose);
-    let n = 17;
-    let data = rows(n);
+/// (n, 6, 6) covariances A Aᵀ over [x, vx, y, vy, z, vz], A lower triangular with entries
+/// drawn per row: positions and velocities correlated; every fifth row has a velocity
+/// known exactly (zero velocity rows and columns), which reads the notch at the point.
+fn joint_covariances(n: usize) -> Vec<f64> {
     let mut covars = vec![0.0; 36 * n];
     for i in 0..n {
-        covars[36 * i] = 400.0;
-        covars[36 * i + 14] = 900.0;
+        let mut a = [[0.0; 6]; 6];
+        for (r, row) in a.iter_mut().enumerate() {
+            for (c, v) in row.iter_mut().enumerate().take(r + 1) {
+                let scale = if r % 2 == 0 { 40.0 } else { 2.0 }; // metres, m/s
+                let k = (i * 31 + r * 7 + c * 3) % 11;
+                *v = scale
+                    * if r == c {
+                        0.3 + k as f64 / 11.0
+                    } else {
+                        (k as f64 - 5.0) / 15.0
+                    };
+            }
+        }
+        if i % 5 == 0 {
+            for r in [1, 3, 5] {
+                a[r] = [0.0; 6];
+            }
+        }
+        for r in 0..6 {
+            for c in 0..6 {
+                covars[36 * i + 6 * r + c] = (0..6).map(|k| a[r][k] * a[c][k]).sum();
+            }
+        }
     }
+    covars
+}
+
+#[test]
+fn expected_pd_integrates_the_notch_over_the_velocity_given_the_position() {
+    let pose = Pose::raised(10.0, -20.0, 0.7, 15.0)
+        .unwrap()
+        .moving([3.0, -1.5, 0.5])
+        .unwrap();
+    let n = 23;
+    let (data, covars) = (rows(n), joint_covariances(n));
+    for model in models() {
+        let scan = model.at_pose(&pose);
+        for raised in [false, true] {
+            let positions: &[usize] = if raised { &[0, 2, 4] } else { &[0, 2] };
+            let mapping = if raised {
+                PositionMapping::raised(0, 2, 4).unwrap()
+            } else {
+                PositionMapping::new(0, 2).unwrap()
+            }
+            .with_velocity(velocity(raised))
+            .unwrap();
+            for rule in [
+                Rule::mean(),
+                Rule::cubature(),
+                Rule::unscented(),
+                Rule::gauss_hermite(3).unwrap(),
+            ] {
+                let spatial = rule.spatial();
+                // the reference: each point's P_D with the notch's expectation over the
+                // velocity given that point
+                let want: Vec<u64> = (0..n)
+                    .map(|i| {
+                        let (r, c) = (&data[6 * i..6 * i + 6], &covars[36 * i..36 * i + 36]);
+                        let at = |a: usize, b: usize| c[6 * a + b];
+                        let mut expected = 0.0;
+                        if raised {
+                            let f = cholesky3([
+                                at(0, 0),
+                                at(0, 2),
+                                at(0, 4),
+                                at(2, 0),
+                                at(2, 2),
+                                at(2, 4),
+                                at(4, 0),
+                                at(4, 2),
+                                at(4, 4),
+                            ])
+                            .unwrap();
+                            let l = [[f[0], 0.0, 0.0], [f[1], f[2], 0.0], [f[3], f[4], f[5]]];
+                            let cross = [1, 3, 5].map(|v| [0, 2, 4].map(|p| at(v, p)));
+                            let block = [1, 3, 5].map(|v| [1, 3, 5].map(|w| at(v, w)));
+                            let (b, left) = velocity_given_position(l, cross, block);
+                            for (u, &w) in spatial.points().iter().zip(spatial.weights()) {
+                                let x = r[0] + l[0][0] * u[0];
+                                let y = r[2] + l[1][0] * u[0] + l[1][1] * u[1];
+                                let z = r[4] + l[2][0] * u[0] + l[2][1] * u[1] + l[2][2] * u[2];
+                                let v = velocity_at_point([r[1], r[3], r[5]], &b, *u);
+                                expected += w * scan.at_state_uncertain(x, y, Some(z), v, &left);
+                            }
+                        } else {
+                            let f = cholesky2(at(0, 0), at(0, 2), at(2, 0), at(2, 2)).unwrap();
+                            let l = [[f[0], 0.0], [f[1], f[2]]];
+                            let cross = [1, 3].map(|v| [0, 2].map(|p| at(v, p)));
+                            let block = [1, 3].map(|v| [1, 3].map(|w| at(v, w)));
+                            let (b, left) = velocity_given_position(l, cross, block);
+                            for (u, &w) in rule.points().iter().zip(rule.weights()) {
+                                let x = r[0] + l[0][0] * u[0];
+                                let y = r[2] + l[1][0] * u[0] + l[1][1] * u[1];
+                                let v = velocity_at_point([r[1], r[3], 0.0], &b, [u[0], u[1], 0.0]);
+                                expected += w * scan.at_state_uncertain(x, y, None, v, &left);
+                            }
+                        }
+                        expected.clamp(0.0, 1.0).to_bits()
+                    })
+                    .collect();
+                // the spread matters: some rows (those near the notch) differ from the same
+                // rule with the velocity read at the mean
+                let at_mean = {
+                    let mut still = covars.clone();
+                    for (i, v) in still.iter_mut().enumerate() {
+                        if [1, 3, 5].contains(&(i % 6)) || [1, 3, 5].contains(&(i / 6 % 6)) {
+                            *v = 0.0;
+                        }
+                    }
+                    let mut out = vec![f64::NAN; n];
+                    scan.expected_at_gaussians(&data, &still, 6, mapping, &rule, &mut out)
+                        .unwrap();
+                    out
+                };
+                let differ = want.iter().zip(&at_mean).filter(|(a, b)| **a != b.to_bits()).count();
+                assert!(differ >= 2, "{differ} rows differ");
+                let mut out = vec![f64::NAN; n];
+                scan.expected_at_gaussians(&data, &covars, 6, mapping, &rule, &mut out)
+                    .unwrap();
+                let bits: Vec<u64> = out.iter().map(|v| v.to_bits()).collect();
+                assert_eq!(bits, want, "dispatched, raised={raised} {positions:?}");
+                let gaussians = Gaussians {
+                    means: Rows {
+                        data: &data,
+                        ncols: 6,
+                        mapping,
+                    },
+                    covars: &covars,
+                };
+                let velocities = RowVelocities {
+                    data: &data,
+                    ncols: 6,
+                    mapping: velocity(raised),
+                };
+                for backend in backends() {
+                    let mut lanes = vec![f64::NAN; n];
+                    let bad = if raised {
+                        run_on(
+                            backend,
+                            ExpectedRaised {
+                                scan: &scan,
+                                gaussians,
+                                heights: RowHeights {
+                                    data: &data,
+                                    ncols: 6,
+                                    z: 4,
+                                },
+                                velocities,
+                                rule: &spatial,
+                                first: 0,
+                                out: &mut lanes,
+                            },
+                        )
+                    } else {
+                        run_on(
+                            backend,
+                            Expected {
+                                scan: &scan,
+                                gaussians,
+                                velocities,
+                                rule: &rule,
+                                first: 0,
+                                out: &mut lanes,
+                            },
+                        )
+                    };
+                    assert_eq!(bad, None);
+                    let bits: Vec<u64> = lanes.iter().map(|v| v.to_bits()).collect();
+                    assert_eq!(bits, want, "{backend:?} raised={raised}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_velocity_covariance_that_is_not_one_is_named() {
+    let scan = models().remove(0).at_pose(&Pose::new(0.0, 0.0, 0.0).unwrap());
     let mapping = PositionMapping::new(0, 2)
         .unwrap()
         .with_velocity(velocity(false))
         .unwrap();
-    let rule = Rule::cubature();
-    let mut out = vec![0.0; n];
-    scan.expected_at_gaussians(&data, &covars, 6, mapping, &rule, &mut out)
-        .unwrap();
-    for i in 0..n {
-        let r = &data[6 * i..];
-        let (sx, sy) = (20.0, 30.0);
-        let want: f64 = rule
-            .points()
-            .iter()
-            .zip(rule.weights())
-            .map(|(u, w)| w * scan.at_state(r[0] + sx * u[0], r[2] + sy * u[1], None, Some([r[1], r[3], r[5]])))
-            .sum::<f64>()
-            .clamp(0.0, 1.0);
-        assert_eq!(out[i].to_bits(), want.to_bits(), "row {i}");
+    let (data, good) = (rows(9), joint_covariances(9));
+    for (entry, value) in [(6 + 1, -1.0), (6 + 3, f64::NAN), (6 * 3 + 1, 1e9)] {
+        let mut covars = good.clone();
+        covars[36 * 4 + entry] = value; // row 4: var(vx) < 0, cov(vx, vy) NaN, asymmetric
+        let err = scan
+            .expected_at_gaussians(&data, &covars, 6, mapping, &Rule::cubature(), &mut [0.0; 9])
+            .unwrap_err();
+        assert_eq!(err.argument(), "covars", "{entry}");
+        assert!(err.to_string().contains("row 4"), "{err}");
     }
-    for backend in backends() {
-        let mut lanes = vec![f64::NAN; n];
-        let gaussians = Gaussians {
-            means: Rows {
-                data: &data,
-                ncols: 6,
-                mapping,
-            },
-            covars: &covars,
-        };
-        let velocities = RowVelocities {
-            data: &data,
-            ncols: 6,
-            mapping: velocity(false),
-        };
-        let bad = run_on(
-            backend,
-            Expected {
-                scan: &scan,
-                gaussians,
-                velocities,
-                rule: &rule,
-                first: 0,
-                out: &mut lanes,
-            },
-        );
-        assert_eq!(bad, None);
-        assert_eq!(lanes, out, "{backend:?}");
-    }
+}
+
+#[test]
+fn a_model_holds_one_notch() {
+    let err = DetectionModel::new(vec![notch(1.0, None), notch(2.0, None)]).unwrap_err();
+    assert_eq!(err.argument(), "factors");
 }

@@ -106,11 +106,12 @@ impl PyDetectionAtPose {
         if covar.shape()[1] != d || vector.len().ok()? != d {
             return None;
         }
-        // The packed row's covariance: the position block read, the rest never is.
-        let ((axes, _), positions) = (self.axes(), 2 + usize::from(self.mapping.z.is_some()));
+        // The packed row's covariance: the blocks of the positions and of the velocity a
+        // notch reads (integrated given the position); the rest never is read.
+        let (axes, _) = self.axes();
         let mut block = [0.0; 36];
-        for a in 0..positions {
-            for b in 0..positions {
+        for a in 0..width {
+            for b in 0..width {
                 block[a * width + b] = covar.get_owned([axes[a], axes[b]])?;
             }
         }

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.stats import norm
 from stonesoup.types.numeric import Probability
 from stonesoup.types.state import GaussianState, State
 
@@ -105,15 +106,121 @@ def test_a_crossing_boat_is_notched_and_a_moving_platform_counts():
     assert notch.evaluate(sailing, boat, velocity_mapping=(1, 3)).tolist() == [1.0]
 
 
-def test_expected_pd_reads_the_velocity_at_the_mean():
+def test_a_newborns_unknown_velocity_is_integrated_exactly():
+    """A Gaussian known in position, with a velocity spread: ṙ is normal, and the expected
+    P_D is 1 − P(|ṙ| ≤ w), here from scipy's normal CDF (a birth at zero velocity with a
+    20 m/s spread is rarely in the notch, though its mean is)."""
     model = SensorModel(detection=DetectionProbabilityModel(factors=[RangeRateNotch(width=1.0)]),
                         clutter=ClutterDensityModel(factors=[1e-6]), velocity_mapping=(1, 3),
                         pd_evaluation="cubature")
     context = model.context(Pose(x=0.0, y=0.0), T0)
     mean = np.array([[1000.0, 0.5, 0.0, 0.0]])
-    covar = np.diag([100.0, 400.0, 100.0, 400.0])  # a wide velocity spread, not integrated
-    assert context.prob_detection_array(mean, covar[None]).tolist() == [0.0]
-    assert float(context.prob_detection(GaussianState(mean.T, covar))) == 0.0
+    covar = np.diag([0.0, 400.0, 0.0, 400.0])  # ṙ = vx ~ N(0.5, 20²)
+    want = 1 - (norm.cdf((1 - 0.5) / 20) - norm.cdf((-1 - 0.5) / 20))
+    got = context.prob_detection_array(mean, covar[None])
+    assert got[0] == pytest.approx(want, rel=0, abs=1e-15)
+    assert float(context.prob_detection(GaussianState(mean.T, covar))) == got[0]
+    # a velocity known exactly: the notch read at the mean, as P_D at the mean reads it
+    assert context.prob_detection_array(mean, np.diag([100.0, 0, 100.0, 0])[None]).tolist() == [0.0]
+
+
+def _joint_covariances(rng, n, raised):
+    d = 6 if raised else 4
+    scale = np.where(np.arange(d) % 2 == 0, 60.0, 3.0)  # metres, m/s
+    a = np.tril(rng.normal(0, 1, (n, d, d))) * scale[:, None]
+    return a @ np.swapaxes(a, 1, 2)
+
+
+def _rao_blackwell(model, pose, means, covars, raised, points, weights):
+    """Σ_k w_k P_D(p_k, v̄_k) with the notch replaced by 1 − (1 − inside)·P(ṙ in a notch),
+    ṙ normal given p_k: NumPy's conditional Gaussian and scipy's normal CDF."""
+    notch = next(f for f in model.factors if isinstance(f, RangeRateNotch))
+    rest = DetectionProbabilityModel(factors=[f for f in model.factors if f is not notch])
+    pos, vel = ([0, 2, 4], [1, 3, 5]) if raised else ([0, 2], [1, 3])
+    origin = np.array([pose.x, pose.y, pose.z][:len(pos)])
+    platform = np.array([pose.vx, pose.vy, pose.vz][:len(pos)])
+    out = np.zeros(len(means))
+    for i, (m, c) in enumerate(zip(means, covars)):
+        chol = np.linalg.cholesky(c[np.ix_(pos, pos)])
+        gain = c[np.ix_(vel, pos)] @ np.linalg.inv(c[np.ix_(pos, pos)])
+        left = c[np.ix_(vel, vel)] - gain @ c[np.ix_(pos, vel)]
+        for u, w in zip(points, weights):
+            p = m[pos] + chol @ u
+            v = m[vel] + gain @ (p - m[pos])
+            state = np.zeros(len(m))
+            state[pos], state[vel] = p, v
+            value = rest.evaluate(pose, state[None], pos, velocity_mapping=vel)[0]
+            dp = p - origin
+            r = np.linalg.norm(dp)
+            mu, sd = dp @ (v - platform) / r, np.sqrt(dp @ left @ dp) / r
+            centres = [0.0]
+            if notch.blind_speed is not None:
+                centres += [s * k * notch.blind_speed for k in range(1, notch.multiples + 1)
+                            for s in (1, -1)]
+            inside = sum(norm.cdf((c0 + notch.width - mu) / sd) - norm.cdf((c0 - notch.width - mu) / sd)
+                         for c0 in centres)
+            out[i] += w * value * (notch.outside + (notch.inside - notch.outside) * inside)
+    return np.clip(out, 0, 1)
+
+
+@pytest.mark.parametrize("raised", [False, True])
+def test_the_expected_notch_is_numpys_conditional_gaussian(raised):
+    rng = np.random.default_rng(31 + raised)
+    model = DetectionProbabilityModel(factors=[
+        0.9, RangeBands(edges=(1500.0,), values=(1.0, 0.4)),
+        RangeRateNotch(width=1.5, blind_speed=12.0, multiples=2, inside=0.1)])
+    pose = Pose(x=30.0, y=-10.0, z=12.0, vx=2.0, vy=-1.0, vz=0.3)
+    n = 300
+    means = _states(rng, n, raised)
+    means[:, [0, 2]] *= 0.5
+    means[:, [1, 3]] *= 0.1  # slow: near the notch and the blind speeds
+    covars = _joint_covariances(rng, n, raised)
+    mapping, velocity = ((0, 2, 4), (1, 3, 5)) if raised else ((0, 2), (1, 3))
+    got = model.expected(pose, means, covars, mapping, "cubature", velocity_mapping=velocity)
+    d = len(mapping)
+    points = np.vstack([np.sqrt(d) * np.eye(d), -np.sqrt(d) * np.eye(d)])
+    want = _rao_blackwell(model, pose, means, covars, raised, points, np.full(2 * d, 1 / (2 * d)))
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    at_mean = model.expected(pose, means, covars * _position_block(d), mapping, "cubature",
+                             velocity_mapping=velocity)
+    assert np.mean(np.abs(got - at_mean) > 0.01) > 0.2  # the spread matters for these
+
+
+def _position_block(d):
+    """A mask keeping the position rows and columns of a [x, vx, y, vy(, z, vz)] covariance."""
+    keep = np.arange(2 * d) % 2 == 0
+    return np.outer(keep, keep).astype(float)
+
+
+@pytest.mark.parametrize("raised", [False, True])
+def test_the_expected_notch_is_monte_carlos(raised):
+    """The joint Gaussian sampled (position and velocity together, 400 000 draws) against a
+    Gauss–Hermite rule of order 8 over the position: the notch alone, so that what the rule
+    integrates is smooth (a covariance with velocity of its own: one that ties the velocity
+    to the position makes the notch a step in position, which a rule meets slowly)."""
+    rng = np.random.default_rng(5 + raised)
+    model = DetectionProbabilityModel(factors=[
+        RangeRateNotch(width=1.5, blind_speed=9.0, multiples=2, inside=0.1)])
+    pose = Pose(x=0.0, y=0.0, z=10.0, vx=1.0, vy=0.5)
+    mapping, velocity = ((0, 2, 4), (1, 3, 5)) if raised else ((0, 2), (1, 3))
+    mean = np.array([800.0, 1.0, 300.0, 0.5, 200.0, 0.2][:2 * len(mapping)])
+    sd = np.array([50.0, 2.0, 40.0, 1.5, 30.0, 1.0])[:len(mean)]
+    correlation = np.full((len(mean), len(mean)), 0.3) + 0.7 * np.eye(len(mean))
+    correlation[0, 2] = correlation[2, 0] = -0.2
+    covar = correlation * np.outer(sd, sd)
+    got = model.expected(pose, mean[None], covar[None], mapping, "gauss-hermite", 8,
+                         velocity_mapping=velocity)[0]
+    draws = rng.multivariate_normal(mean, covar, 400_000)
+    pd = model.evaluate(pose, draws, mapping, velocity_mapping=velocity)
+    sd = pd.std() / np.sqrt(len(pd))
+    assert abs(got - pd.mean()) <= 4 * sd + 1e-4, (got, pd.mean(), sd)
+    assert 0.2 < got < 0.95  # a case where the notch is in play
+
+
+def test_a_model_holds_one_notch():
+    with pytest.raises(ArgumentError) as info:
+        DetectionProbabilityModel(factors=[RangeRateNotch(width=1.0), RangeRateNotch(width=2.0)])
+    assert info.value.argument == "factors"
 
 
 def test_the_platforms_velocity_comes_from_its_navigation_log():
