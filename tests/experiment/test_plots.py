@@ -249,6 +249,46 @@ def test_plot_coverage_writes_png(tmp_path):
     assert_png(path)
 
 
+def _coastal_radar():
+    from ctxmodels import (ClutterDensityModel, DetectionProbabilityModel, RadarEquation,
+                           RadarHorizon, SensorModel)
+    return SensorModel(detection=DetectionProbabilityModel(factors=[
+        RadarEquation(reference_snr=20.0, reference_range=5000.0, false_alarm_probability=1e-6,
+                      swerling=3, pulses=2),
+        RadarHorizon(antenna_height=15.0, target_height=5.0)]),
+        clutter=ClutterDensityModel(factors=[1e-8]))
+
+
+def test_coverage_draws_the_radar_curves_and_the_horizon():
+    radar = _coastal_radar()
+    fig = coverage_plots._figure_coverage({"coast": radar}, (0.0, 0.0, 0.0), extents=(20_000.0,),
+                                          resolution=60, height=5.0)
+    curves = [ax for ax in fig.axes if ax.get_xlabel() == "range (m)"]
+    assert len(curves) == 1
+    lines = {line.get_label(): line for line in curves[0].get_lines()}
+    assert {f"Swerling {c}" for c in (0, 1, 2, 4)} | {"Swerling 3 (the model's)"} <= set(lines)
+    own = lines["Swerling 3 (the model's)"]
+    assert own.get_linewidth() > lines["Swerling 1"].get_linewidth()
+    ranges = np.asarray(own.get_xdata())
+    np.testing.assert_array_equal(own.get_ydata(), radar.detection.factors[0](ranges))
+    # the horizon of a 5 m target from a 15 m antenna (2kR = 2 · 4/3 · 6 371 km), drawn and named
+    reach = 2 * 4 / 3 * 6_371_000.0
+    horizon = math.sqrt(reach * 15) + math.sqrt(reach * 5)
+    assert coverage_plots.horizon_range(radar, 5.0) == pytest.approx(horizon, rel=1e-3)
+    assert f"{horizon / 1000:,.1f} km" in legend_texts(fig)
+    # a horizon at each target's height reads the drawn height
+    assert coverage_plots.horizon_range(_air_radar(), 200.0) == pytest.approx(
+        math.sqrt(reach * 25) + math.sqrt(reach * 200), rel=1e-12)
+    (plan,) = [ax for ax in fig.axes if ax.images]
+    rings = [c for c in plan.collections if hasattr(c, "get_paths")]
+    radii = [np.hypot(*path.vertices.T) for c in rings for path in c.get_paths() if len(path.vertices)]
+    assert radii and all(abs(r.mean() - horizon) < 2 * 40_000 / 60 for r in radii)
+    # without a radar equation or a horizon: neither
+    fig = coverage_plots._figure_coverage({"lidar": _air_radar()}, (0.0, 0.0, 0.0),
+                                          extents=(1000.0,), resolution=20)
+    assert not [ax for ax in fig.axes if ax.get_xlabel() == "range (m)"]
+
+
 def _air_radar():
     from ctxmodels import (ClutterDensityModel, DetectionProbabilityModel, ElevationSector,
                            Mounting, RadarHorizon, RangeBands, SensorModel)

@@ -15,7 +15,8 @@ def add_coverage_command(commands) -> None:
         "coverage", help="draw a sensor model's P_D coverage map",
         description="Draws P_D around a sensor pose for the paper's radar and lidar models "
                     "(optionally with a scenario's islands: land mask and radar shadow), or for "
-                    "sensor models saved as Stone Soup YAML (--model).")
+                    "sensor models saved as Stone Soup YAML (--model); a radar horizon is drawn "
+                    "as a ring, a radar equation's P_D against range per Swerling case.")
     cov.add_argument("--sensors", nargs="+", default=["radar", "lidar"], choices=["radar", "lidar"])
     cov.add_argument("--model", nargs="+", metavar="YAML",
                      help="SensorModel files (Stone Soup YAML) instead of the paper's models")
