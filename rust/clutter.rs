@@ -2,13 +2,19 @@
 //!
 //! Factors: constants, range bands over the detection's range from the sensor, threshold
 //! rules on one column of detection metadata (the paper's lidar: segment `area < 10` →
-//! 1e-1, otherwise 1e-3), and learned clutter maps ([`ClutterMap`], shared with the
-//! estimator that updates them between scans). λ is a density in the detection's measurement
+//! 1e-1, otherwise 1e-3), learned clutter maps ([`ClutterMap`], shared with the
+//! estimator that updates them between scans), coastal bands, zones and, for detections
+//! with a height, elevation sectors. λ is a density in the detection's measurement
 //! space, so it must be strictly positive: trackers divide by it.
+//!
+//! Detections with a height (a 3-D radar's) have range bands read on the slant range from
+//! the sensor's height and elevation sectors on their elevation above it; maps, coastal
+//! bands and zones read the plane below them.
 
 use crate::batch::for_each_chunk;
 use crate::clutter_map::ClutterMap;
 use crate::coast::CoastalBand;
+use crate::elevation::ElevationSector;
 use crate::error::{ModelError, Result};
 use crate::pose::Pose;
 use crate::range_bands::RangeBands;
@@ -50,6 +56,9 @@ pub enum ClutterFactor {
     Coast(Arc<CoastalBand>),
     /// One value inside a set of polygons, another outside.
     Zone(Arc<Zone>),
+    /// One value between two elevations above the sensor, another outside (detections
+    /// with a height only).
+    Elevation(ElevationSector),
 }
 
 impl ClutterFactor {
@@ -74,6 +83,7 @@ impl PartialEq for ClutterFactor {
             (ClutterFactor::Map(a), ClutterFactor::Map(b)) => Arc::ptr_eq(a, b),
             (ClutterFactor::Coast(a), ClutterFactor::Coast(b)) => Arc::ptr_eq(a, b),
             (ClutterFactor::Zone(a), ClutterFactor::Zone(b)) => Arc::ptr_eq(a, b),
+            (ClutterFactor::Elevation(a), ClutterFactor::Elevation(b)) => a == b,
             _ => false,
         }
     }
@@ -84,6 +94,7 @@ pub struct ClutterModel {
     factors: Vec<ClutterFactor>,
     metadata_columns: usize,
     uses_position: bool,
+    uses_height: bool,
 }
 
 /// Whether `v` can be a clutter density: finite and at least the smallest normal double
@@ -106,7 +117,7 @@ fn check_density(i: usize, v: f64) -> Result<()> {
 impl ClutterModel {
     pub fn new(factors: Vec<ClutterFactor>) -> Result<Self> {
         let mut metadata_columns = 0;
-        let mut uses_position = false;
+        let (mut uses_position, mut uses_height) = (false, false);
         for (i, f) in factors.iter().enumerate() {
             match f {
                 ClutterFactor::Constant(v) => check_density(i, *v)?,
@@ -120,6 +131,12 @@ impl ClutterModel {
                 ClutterFactor::Range(b) => {
                     uses_position = true;
                     for &v in b.values() {
+                        check_density(i, v)?;
+                    }
+                }
+                ClutterFactor::Elevation(e) => {
+                    (uses_position, uses_height) = (true, true);
+                    for v in e.values() {
                         check_density(i, v)?;
                     }
                 }
@@ -144,6 +161,7 @@ impl ClutterModel {
             factors,
             metadata_columns,
             uses_position,
+            uses_height,
         })
     }
 
@@ -155,6 +173,11 @@ impl ClutterModel {
     /// Whether λ depends on where the detection is (so positions must be finite).
     pub fn uses_position(&self) -> bool {
         self.uses_position
+    }
+
+    /// Whether λ reads the detections' heights (an elevation sector among the factors).
+    pub fn uses_height(&self) -> bool {
+        self.uses_height
     }
 
     /// λ for M detections: world `positions` (M, 2) row-major and `metadata`
@@ -174,7 +197,36 @@ impl ClutterModel {
         ranges: Option<&[f64]>,
         out: &mut [f64],
     ) -> Result<()> {
+        self.evaluate_raised(pose, positions, None, metadata, ranges, out)
+    }
+
+    /// As [`evaluate_with_ranges`](Self::evaluate_with_ranges), for detections at world
+    /// heights `heights` (M,) when given: range bands read the slant range from the
+    /// sensor's height (`pose.z`) and elevation sectors the elevation above it. A model
+    /// with an elevation sector needs the heights.
+    pub fn evaluate_raised(
+        &self,
+        pose: &Pose,
+        positions: &[f64],
+        heights: Option<&[f64]>,
+        metadata: &[f64],
+        ranges: Option<&[f64]>,
+        out: &mut [f64],
+    ) -> Result<()> {
         let m = out.len();
+        match heights {
+            None if self.uses_height => return Err(ModelError::shape(
+                "positions",
+                "the clutter model's elevation sector reads each detection's height: give (M, 3) positions (x, y, z)",
+            )),
+            Some(h) if h.len() != m => {
+                return Err(ModelError::shape(
+                    "positions",
+                    format!("must have {m} heights, got {}", h.len()),
+                ))
+            }
+            _ => {}
+        }
         if positions.len() != 2 * m {
             return Err(ModelError::shape(
                 "positions",
@@ -210,6 +262,7 @@ impl ClutterModel {
                 model: self,
                 pose,
                 positions,
+                heights,
                 metadata,
                 ranges,
                 first,
@@ -217,32 +270,30 @@ impl ClutterModel {
             })
         });
         if let Some(row) = bad {
-            let (argument, message) = self.problem(positions, metadata, row, out[row]);
+            let z = heights.map(|h| h[row]);
+            let (argument, message) = self.problem(positions, z, metadata, row, out[row]);
             return Err(ModelError::non_finite(argument, row, message));
         }
         Ok(())
     }
 
-    /// λ of one detection at (x, y) with its metadata row and measured range (NaN: none),
-    /// one factor after another: the readable reference the lane kernel must match bit for
-    /// bit. NaN when the detection cannot be evaluated.
-    pub fn at_one(&self, pose: &Pose, [x, y]: [f64; 2], metadata: &[f64], measured: f64) -> f64 {
-        let range = if measured.is_nan() {
-            ((x - pose.x).powi(2) + (y - pose.y).powi(2)).sqrt()
-        } else {
-            measured
-        };
-        let mut density = if self.uses_position && !(x.is_finite() && y.is_finite()) {
-            f64::NAN
-        } else {
-            1.0
-        };
+    /// λ of one detection at (x, y) (at height `z`, None: planar) with its metadata row
+    /// and measured range (NaN: none), one factor after another: the readable reference the
+    /// lane kernel must match bit for bit. NaN when the detection cannot be evaluated.
+    pub fn at_one(&self, pose: &Pose, [x, y]: [f64; 2], z: Option<f64>, metadata: &[f64], measured: f64) -> f64 {
+        let (dx, dy) = (x - pose.x, y - pose.y);
+        let dz = z.map_or(0.0, |z| z - pose.z);
+        let squared = dx * dx + dy * dy + dz * dz;
+        let range = if measured.is_nan() { squared.sqrt() } else { measured };
+        let finite = x.is_finite() && y.is_finite() && dz.is_finite();
+        let mut density = if self.uses_position && !finite { f64::NAN } else { 1.0 };
         for f in &self.factors {
             density *= match f {
                 ClutterFactor::Constant(v) => *v,
                 ClutterFactor::Range(bands) => bands.at(range),
                 ClutterFactor::Map(map) => read_map(map).value_at(pose, x, y, measured),
                 ClutterFactor::Coast(_) | ClutterFactor::Zone(_) => f.point_value(pose, x, y),
+                ClutterFactor::Elevation(e) => e.at(dz, squared),
                 ClutterFactor::Metadata(rule) => {
                     let value = metadata[rule.column];
                     if value.is_nan() {
@@ -263,9 +314,16 @@ impl ClutterModel {
 
     /// Why row `row` has no finite density > 0 (every factor value is one, so it could not
     /// be evaluated, or the product under/overflowed).
-    fn problem(&self, positions: &[f64], metadata: &[f64], row: usize, density: f64) -> (&'static str, String) {
+    fn problem(
+        &self,
+        positions: &[f64],
+        z: Option<f64>,
+        metadata: &[f64],
+        row: usize,
+        density: f64,
+    ) -> (&'static str, String) {
         let (x, y) = (positions[2 * row], positions[2 * row + 1]);
-        if self.uses_position && !(x.is_finite() && y.is_finite()) {
+        if self.uses_position && !(x.is_finite() && y.is_finite() && z.is_none_or(f64::is_finite)) {
             return ("positions", "position is NaN or infinite".to_string());
         }
         let k = self.metadata_columns;

@@ -181,6 +181,8 @@ fn clutter_factor() -> impl Strategy<Value = Option<ClutterFactor>> {
             .prop_map(|(l, w, v, seen)| crate::coast::CoastalBand::new(l, w, v, seen).ok().map(|b| ClutterFactor::Coast(Arc::new(b)))),
         1 => (land(), density(), density())
             .prop_map(|(l, i, o)| crate::zone::Zone::new(l, i, o).ok().map(|z| ClutterFactor::Zone(Arc::new(z)))),
+        1 => (-2.0..2.0f64, -2.0..2.0f64, density(), density())
+            .prop_map(|(lo, hi, i, o)| crate::elevation::ElevationSector::new(lo, hi, i, o).ok().map(ClutterFactor::Elevation)),
     ]
 }
 
@@ -388,6 +390,7 @@ proptest! {
                 }
                 ClutterFactor::Coast(band) => vec![band.inside(), 1.0],
                 ClutterFactor::Zone(zone) => vec![zone.inside(), zone.outside()],
+                ClutterFactor::Elevation(e) => e.values().to_vec(),
             };
             lo *= values.iter().fold(f64::INFINITY, |a, v| a.min(v.abs()));
             hi *= values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -399,8 +402,10 @@ proptest! {
         let take = |len: usize, offset: usize| -> Vec<f64> { (0..len).map(|i| values.get(i + offset).copied().unwrap_or(1.0)).collect() };
         let positions = take(2 * m + usize::from(ragged), 0);
         let metadata = take(k * m, 2 * m);
+        let heights = take(m, 2 * m + k * m);
         let mut out = vec![-7.0; m];
-        if model.evaluate(&pose, &positions, &metadata, &mut out).is_ok() {
+        let heights = (model.uses_height() || ragged).then_some(&heights[..]);
+        if model.evaluate_raised(&pose, &positions, heights, &metadata, None, &mut out).is_ok() {
             for (i, v) in out.iter().enumerate() {
                 prop_assert!(v.is_finite() && (*v > 0.0 || extreme), "row {}: λ = {} is not finite and > 0", i, v);
             }

@@ -270,15 +270,20 @@ class ClutterModel:
     """λ as the product of its factors (each finite and > 0)."""
 
     def __new__(
-        cls, factors: Sequence[float | RangeBands | MetadataThreshold | ClutterMap | CoastalBand]
+        cls,
+        factors: Sequence[
+            float | RangeBands | MetadataThreshold | ClutterMap | CoastalBand | Zone | ElevationSector
+        ],
     ) -> ClutterModel:
         """`factors`: floats (constants), RangeBands (over range from the sensor),
-        MetadataThreshold rules and ClutterMaps (shared, read as they stand). λ is their
-        product."""
+        MetadataThreshold rules, clutter maps, coastal bands, zones and elevation sectors.
+        λ is their product."""
     @property
     def metadata_columns(self) -> int: ...
     @property
     def uses_position(self) -> bool: ...
+    @property
+    def uses_height(self) -> bool: ...
     def evaluate(
         self,
         pose: _Pose,
@@ -286,9 +291,11 @@ class ClutterModel:
         metadata: _Floats,
         out: _Floats | None = None,
         ranges: _Floats | None = None,
+        heights: _Floats | None = None,
     ) -> _Floats:
         """λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing;
-        range bands read `ranges[i]` (a measured range) where given and not NaN."""
+        range bands read `ranges[i]` (a measured range) where given and not NaN; with
+        `heights` (M,), detections at those world heights (slant ranges, elevations)."""
 
 @final
 class ClutterMap:

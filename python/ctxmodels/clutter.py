@@ -8,8 +8,10 @@ from stonesoup.base import Property
 
 from . import _core
 from ._component import ModelComponent, as_array, as_float, as_rows, as_sequence, check_out
+from .errors import ShapeError
 from .clutter_map import ClutterMap
 from .coast import CoastalClutter
+from .elevation import ElevationSector
 from .zone import Zone
 from .pose import Pose, pose_tuple
 from .range_bands import RangeBands
@@ -46,7 +48,8 @@ class MetadataThreshold(ModelComponent):
                                        as_float(self.at_or_above, "at_or_above"), missing)
 
 
-ClutterFactor = float | RangeBands | MetadataThreshold | ClutterMap | CoastalClutter | Zone
+ClutterFactor = (float | RangeBands | MetadataThreshold | ClutterMap | CoastalClutter | Zone
+                 | ElevationSector)
 
 
 class ClutterDensityModel(ModelComponent):
@@ -57,12 +60,23 @@ class ClutterDensityModel(ModelComponent):
 
     in the units of the detection's *measurement space* — what Stone Soup's
     ``clutter_spatial_density`` means: per m² for a Cartesian (x, y) sensor, per rad·m for
-    a bearing–range radar. Factors: constants, :class:`RangeBands` over the detection's
-    range from the sensor, :class:`MetadataThreshold` rules, learned
-    :class:`~ctxmodels.ClutterMap` s (read as they stand when λ is evaluated), coastal
-    bands (:class:`~ctxmodels.CoastalClutter`) and zones (:class:`~ctxmodels.Zone`: one value
-    inside polygons, another outside). Every value
-    must be finite and strictly positive (trackers divide by λ).
+    a bearing–range radar, per rad²·m for an elevation–bearing–range radar. Factors:
+    constants, :class:`RangeBands` over the detection's range from the sensor,
+    :class:`MetadataThreshold` rules, learned :class:`~ctxmodels.ClutterMap` s (read as they
+    stand when λ is evaluated), coastal bands (:class:`~ctxmodels.CoastalClutter`), zones
+    (:class:`~ctxmodels.Zone`: one value inside polygons, another outside) and, for
+    detections with a height, :class:`~ctxmodels.ElevationSector` s (one value between two
+    elevations above the sensor, another outside: sea clutter in the lowest degree). Every
+    value must be finite and strictly positive (trackers divide by λ).
+
+    Detections with a height (positions (M, 3), from a sensor model whose
+    ``position_mapping`` has three indices) have range bands read on the slant range from
+    the sensor's height; maps, coastal bands and zones read the plane below them. A 3-D
+    radar's false alarms spread uniformly over its field of view — :math:`\bar n` per scan
+    over elevations :math:`[\varepsilon_0, \varepsilon_1]`, bearings of width
+    :math:`\Delta\theta` and ranges :math:`[r_0, r_1]` — have
+    :math:`\lambda = \bar n / ((\varepsilon_1 - \varepsilon_0)\,\Delta\theta\,(r_1 - r_0))`
+    per rad²·m.
 
     The paper's radar (eq. lambda-radar): ``ClutterDensityModel(factors=[
     RangeBands(edges=(1000,), values=(1e-3, 1e-2))])``.
@@ -90,7 +104,14 @@ class ClutterDensityModel(ModelComponent):
     @property
     def uses_position(self) -> bool:
         return self._cached("uses_position", lambda: any(
-            isinstance(f, (RangeBands, ClutterMap, CoastalClutter, Zone)) for f in self.factors))
+            isinstance(f, (RangeBands, ClutterMap, CoastalClutter, Zone, ElevationSector))
+            for f in self.factors))
+
+    @property
+    def uses_height(self) -> bool:
+        """Whether λ reads the detections' heights (an :class:`ElevationSector`)."""
+        return self._cached("uses_height", lambda: any(
+            isinstance(f, ElevationSector) for f in self.factors))
 
     def _required_keys(self) -> frozenset[str]:
         """The metadata keys whose rule has no ``missing`` density."""
@@ -102,7 +123,7 @@ class ClutterDensityModel(ModelComponent):
             keys = self.metadata_keys
             parts = []
             for i, f in enumerate(self.factors):
-                if isinstance(f, (RangeBands, CoastalClutter, Zone)):
+                if isinstance(f, (RangeBands, CoastalClutter, Zone, ElevationSector)):
                     parts.append(f._compiled())
                 elif isinstance(f, MetadataThreshold):
                     parts.append(f._compiled(keys.index(f.key)))
@@ -112,8 +133,8 @@ class ClutterDensityModel(ModelComponent):
                     parts.append(as_float(f, f"factors[{i}]"))
                 else:
                     raise TypeError(f"factors[{i}]: expected a float, RangeBands, "
-                                    "MetadataThreshold, ClutterMap, CoastalClutter or Zone, got "
-                                    f"{type(f).__name__}")
+                                    "MetadataThreshold, ClutterMap, CoastalClutter, Zone or "
+                                    f"ElevationSector, got {type(f).__name__}")
             return _core.ClutterModel(parts)
         return self._cached("core", build)
 
@@ -166,13 +187,14 @@ class ClutterDensityModel(ModelComponent):
 
     def evaluate(self, pose: Pose, positions, metadata=None, *, ranges=None,
                  out=None) -> np.ndarray:
-        """λ at world ``positions`` (M, 2) with ``metadata`` (array, rows or mappings).
+        """λ at world ``positions`` (M, 2), or (M, 3) with heights, with ``metadata`` (array,
+        rows or mappings).
 
         ``ranges`` (M,), optional: the range from the sensor that range bands read for each
         detection instead of the range of its position, NaN where there is none — a
         bearing–range sensor's *measured* range, so a detection measured exactly on a band
         edge falls in the band that owns the edge."""
-        positions = as_rows(positions, "positions", ncols=2)
+        positions, heights = self._plane_and_heights(positions)
         n = positions.shape[0]
         metadata = self.metadata_array(metadata, n)
         inputs = dict(positions=positions, metadata=metadata)
@@ -181,5 +203,22 @@ class ClutterDensityModel(ModelComponent):
             if ranges.shape != (n,):
                 raise ValueError(f"ranges: must have {n} entries, got shape {ranges.shape}")
             inputs["ranges"] = ranges
+        if heights is not None:
+            inputs["heights"] = heights
         return self._compiled().evaluate(pose_tuple(pose), positions, metadata,
-                                         check_out(out, n, **inputs), ranges)
+                                         check_out(out, n, **inputs), ranges, heights)
+
+    def _plane_and_heights(self, positions) -> tuple[np.ndarray, np.ndarray | None]:
+        """(M, 2) positions and their (M,) heights (None for (M, 2) positions)."""
+        if isinstance(positions, (list, tuple)) and len(positions) == 0:
+            return np.empty((0, 2)), (np.empty(0) if self.uses_height else None)
+        rows = as_rows(positions, "positions")
+        if rows.shape[1] == 3:
+            return np.ascontiguousarray(rows[:, :2]), np.ascontiguousarray(rows[:, 2])
+        if rows.shape[1] != 2:
+            raise ShapeError("positions", f"must have 2 columns (x, y) or 3 (x, y, z), got "
+                                          f"shape {rows.shape}")
+        if self.uses_height:
+            raise ShapeError("positions", "the clutter model's ElevationSector reads each "
+                                          "detection's height: give (M, 3) positions (x, y, z)")
+        return rows, None

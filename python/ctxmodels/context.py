@@ -295,7 +295,8 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
     # --- clutter ---------------------------------------------------------------------------
     def clutter_spatial_density_array(self, positions, metadata=None, *, ranges=None,
                                       out=None) -> np.ndarray:
-        """λ for M detections at world ``positions`` (M, 2); ``metadata`` an (M, K) array in
+        """λ for M detections at world ``positions`` (M, 2) — (M, 3) with heights, read as
+        slant ranges and elevations from the sensor's height; ``metadata`` an (M, K) array in
         the clutter model's ``metadata_keys`` order or a sequence of metadata mappings;
         ``ranges`` (M,) measured ranges that range bands read instead (NaN: none)."""
         if ranges is None:
@@ -310,15 +311,15 @@ class DetectorContext(Base, *_UPSTREAM_CONTEXT):
     def clutter_spatial_density_detections(self, detections: Sequence,
                                            positions=None) -> np.ndarray:
         """λ of Stone Soup detections, in one array call. ``positions``: their (M, 2) world
-        positions if already computed (:func:`detection_positions` with the sensor model's
-        ``position_mapping``)."""
+        positions — (M, 3) for a model with heights — if already computed
+        (:func:`detection_positions` with the sensor model's ``position_mapping``)."""
         if not isinstance(detections, Sequence):
             detections = list(detections)
         clutter = self.sensor_model.clutter
         ranges = None
         if clutter.uses_position:
             if positions is None:
-                positions = detection_positions(detections, self.sensor_model.plane_mapping)
+                positions = detection_positions(detections, self.sensor_model.position_mapping)
             ranges = ranges_for_bands(detections, positions, self.pose)
         else:
             positions = np.zeros((len(detections), 2))

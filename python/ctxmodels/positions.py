@@ -14,7 +14,8 @@ from collections.abc import Sequence
 
 import numpy as np
 from stonesoup.models.measurement.linear import LinearGaussian
-from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
+from stonesoup.models.measurement.nonlinear import (CartesianToBearingRange,
+                                                    CartesianToElevationBearingRange)
 
 from .model_key import scan_model_groups
 from .pose import Pose
@@ -217,25 +218,33 @@ def _inverse_rotation(rotation) -> np.ndarray:
 
 def measured_ranges(detections: Sequence) -> np.ndarray:
     """Each detection's measured range from its sensor, (M,): the range element of a 2-D
-    bearing–range measurement (Stone Soup's :class:`CartesianToBearingRange`, measured from
-    its ``translation_offset``), NaN for any other detection."""
+    bearing–range measurement (Stone Soup's :class:`CartesianToBearingRange`) or of a 3-D
+    elevation–bearing–range one (:class:`CartesianToElevationBearingRange`, a slant
+    range), measured from the model's ``translation_offset``; NaN for any other detection."""
     n = len(detections)
     groups = scan_model_groups(detections)
     stacked = getattr(detections, "vectors", None)
-    if stacked is not None and stacked.shape == (n, 2) and len(groups) == 1 \
-            and _measures_range(next(iter(groups.values()))[0]):
-        return stacked[:, 1].copy()  # one bearing–range model (value) per scan: the usual case
+    if stacked is not None and len(groups) == 1:
+        row = _range_row(next(iter(groups.values()))[0])
+        if row is not None and stacked.shape == (n, row + 1):
+            return stacked[:, row].copy()  # one polar model (value) per scan: the usual case
     ranges = np.full(n, np.nan)
     for model, indices in groups.values():
-        if _measures_range(model):
+        row = _range_row(model)
+        if row is not None:
             for i in indices:
                 ranges[i] = float(np.asarray(detections[i].state_vector,
-                                             dtype=np.float64).ravel()[1])
+                                             dtype=np.float64).ravel()[row])
     return ranges
 
 
-def _measures_range(model) -> bool:
-    return isinstance(model, CartesianToBearingRange) and len(model.mapping) == 2
+def _range_row(model) -> int | None:
+    """The row of a polar measurement that holds the range; None for other models."""
+    if isinstance(model, CartesianToBearingRange) and len(model.mapping) == 2:
+        return 1
+    if isinstance(model, CartesianToElevationBearingRange) and len(model.mapping) == 3:
+        return 2
+    return None
 
 
 #: How far (relative) a measured range may lie from the range of the detection's position
@@ -254,6 +263,8 @@ def ranges_for_bands(detections: Sequence, positions: np.ndarray, pose: Pose) ->
     from the context's pose."""
     measured = measured_ranges(detections)
     from_pose = np.hypot(positions[:, 0] - pose.x, positions[:, 1] - pose.y)
+    if positions.shape[1] == 3:  # detections with a height: the slant range
+        from_pose = np.hypot(from_pose, positions[:, 2] - pose.z)
     with np.errstate(invalid="ignore"):
         agree = (measured >= 0) & (np.abs(measured - from_pose)
                                    <= _RANGE_AGREEMENT * np.maximum(1.0, from_pose))

@@ -103,6 +103,10 @@ class SensorModel(ModelComponent):
         if self.velocity_mapping is None and any(isinstance(f, RangeRateNotch) for f in factors):
             raise ArgumentError("velocity_mapping", "is not given, but the RangeRateNotch reads "
                                 "each target's velocity; give the state's velocity indices")
+        if not spatial and self.clutter.uses_height:
+            raise ArgumentError("position_mapping", f"{tuple(self.position_mapping)} gives no "
+                                "height, but the clutter model's ElevationSector reads each "
+                                "detection's height; give the (x, y, z) indices")
         if spatial and any(isinstance(f, DetectionEstimate) for f in factors):
             raise ArgumentError("position_mapping", "a DetectionEstimate learns P_D per plane "
                                 "range, which a model with heights would read per slant range; "
@@ -115,8 +119,8 @@ class SensorModel(ModelComponent):
 
     @property
     def plane_mapping(self) -> tuple[int, int]:
-        """The state indices of x and y: where λ, the detections' positions and what is
-        learned from them are read (the plane below a target with a height)."""
+        """The state indices of x and y: the plane below a target with a height, where
+        births and what is learned from detections are read (λ reads the heights too)."""
         return tuple(self.position_mapping[:2])
 
     def sensor_pose(self, platform_pose: Pose) -> Pose:

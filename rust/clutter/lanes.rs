@@ -14,6 +14,8 @@ pub(super) struct Densities<'a> {
     pub model: &'a ClutterModel,
     pub pose: &'a Pose,
     pub positions: &'a [f64],
+    /// World heights (M,) of detections with a height: slant ranges and elevations.
+    pub heights: Option<&'a [f64]>,
     pub metadata: &'a [f64],
     pub ranges: Option<&'a [f64]>,
     pub first: usize,
@@ -29,6 +31,7 @@ impl LaneKernel for Densities<'_> {
             model,
             pose,
             positions,
+            heights,
             metadata,
             ranges,
             first,
@@ -38,7 +41,10 @@ impl LaneKernel for Densities<'_> {
         let full = out.len() / 4 * 4;
         // (a λ below the smallest normal double is refused: 1/λ would overflow)
         let (one, nan, normal) = (L::splat(1.0), L::splat(f64::NAN), L::splat(f64::MIN_POSITIVE));
-        let (ox, oy) = (L::splat(pose.x), L::splat(pose.y));
+        let (ox, oy, oz) = (L::splat(pose.x), L::splat(pose.y), L::splat(pose.z));
+        // Heights above the sensor of the chunk's detections (zeros for planar ones: the
+        // same bits, as the scalar reference adds dz² = 0).
+        let zs = heights.map(|h| &h[first..first + full]);
         // Exact-size chunks, so the loads need no bounds checks. (No closure returns lanes
         // here: it would be compiled outside the AVX2 function.)
         let xy = &positions[2 * first..2 * (first + full)];
@@ -48,9 +54,11 @@ impl LaneKernel for Densities<'_> {
         let fused_start = matches!(model.factors.first(), Some(ClutterFactor::Range(_)));
         if !fused_start {
             if model.uses_position {
-                for (o, p) in out[..full].chunks_exact_mut(4).zip(xy.chunks_exact(8)) {
+                for (j, (o, p)) in out[..full].chunks_exact_mut(4).zip(xy.chunks_exact(8)).enumerate() {
                     let (x, y) = L::pairs(p);
-                    L::select(L::or(x.non_finite(), y.non_finite()), nan, one).store(o);
+                    let dz = height_above::<L>(zs, j, oz);
+                    let bad_position = L::or(L::or(x.non_finite(), y.non_finite()), dz.non_finite());
+                    L::select(bad_position, nan, one).store(o);
                 }
             } else {
                 out[..full].fill(1.0);
@@ -77,8 +85,8 @@ impl LaneKernel for Densities<'_> {
                     let fresh = i == 0 && fused_start;
                     for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(8)) {
                         let (x, y) = L::pairs(p);
-                        let (dx, dy) = (x - ox, y - oy);
-                        let squared = dx * dx + dy * dy;
+                        let (dx, dy, dz) = (x - ox, y - oy, height_above::<L>(zs, j, oz));
+                        let squared = dx * dx + dy * dy + dz * dz;
                         // With measured ranges the bands read a range; without, the squared
                         // range through their root thresholds: the same bits, no square root.
                         let value = match ranges {
@@ -89,7 +97,7 @@ impl LaneKernel for Densities<'_> {
                             None => bands.lanes_at_root(squared),
                         };
                         let before = if fresh {
-                            L::select(L::or(x.non_finite(), y.non_finite()), nan, one)
+                            L::select(L::or(L::or(x.non_finite(), y.non_finite()), dz.non_finite()), nan, one)
                         } else {
                             L::load(o)
                         };
@@ -109,6 +117,17 @@ impl LaneKernel for Densities<'_> {
                             map.value_at(pose, p[2 * i], p[2 * i + 1], measured)
                         };
                         let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);
+                        if checks {
+                            bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
+                        }
+                        density.store(o);
+                    }
+                }
+                ClutterFactor::Elevation(sector) => {
+                    for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(8)) {
+                        let (x, y) = L::pairs(p);
+                        let (dx, dy, dz) = (x - ox, y - oy, height_above::<L>(zs, j, oz));
+                        let density = L::load(o) * sector.lanes_at(dz, dx * dx + dy * dy + dz * dz);
                         if checks {
                             bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
                         }
@@ -162,6 +181,7 @@ impl LaneKernel for Densities<'_> {
             *density = model.at_one(
                 pose,
                 [positions[2 * row], positions[2 * row + 1]],
+                heights.map(|h| h[row]),
                 &metadata[row * k..(row + 1) * k],
                 measured,
             );
@@ -170,5 +190,14 @@ impl LaneKernel for Densities<'_> {
             return None;
         }
         out.iter().position(|v| !is_density(*v))
+    }
+}
+
+/// z − z_sensor of block `j`'s four detections (0 without heights).
+#[inline(always)]
+fn height_above<L: Lanes>(zs: Option<&[f64]>, j: usize, oz: L) -> L {
+    match zs {
+        Some(z) => L::load(&z[4 * j..]) - oz,
+        None => L::splat(0.0),
     }
 }

@@ -1,6 +1,7 @@
 //! Unit tests of the clutter model: the paper's rules, measured ranges, learned maps, backends, errors.
 
 use super::*;
+use crate::elevation::ElevationSector;
 
 #[test]
 fn a_metadata_column_beyond_usize_is_an_error_not_an_overflow() {
@@ -232,9 +233,19 @@ fn every_backend_gives_the_reference_bits() {
             rule(0, 10.0, Some(1e-2)),
         ],
         vec![learned_map()],
+        // detections with a height: an elevation sector first (it reads heights), and after
+        // slant-range bands
+        vec![
+            ClutterFactor::Elevation(ElevationSector::new(-0.1, 0.05, 8.0, 1e-4).unwrap()),
+            bands(vec![1000.0], vec![1e-3, 1e-2], vec![true]),
+        ],
+        vec![
+            bands(vec![500.0, 1000.0], vec![1e-3, 1e-2, 3e-2], vec![true, false]),
+            ClutterFactor::Elevation(ElevationSector::new(0.0, 1.2, 2.0, 0.5).unwrap()),
+        ],
     ];
     let origin = [3.0, -4.0];
-    let pose = Pose::new(origin[0], origin[1], 0.7).unwrap();
+    let pose = Pose::raised(origin[0], origin[1], 0.7, 30.0).unwrap();
     for model in models.map(|factors| ClutterModel::new(factors).unwrap()) {
         let k = model.metadata_columns();
         for m in [1, 3, 4, 5, 9, 130] {
@@ -262,13 +273,28 @@ fn every_backend_gives_the_reference_bits() {
                 })
                 .collect();
             let ranges: Vec<f64> = (0..m).map(|i| if i % 3 == 0 { 1000.0 } else { f64::NAN }).collect();
-            for ranges in [None, Some(&ranges[..])] {
+            // heights around the sensor's (30 m): some on it, some far above, one not finite
+            let mut heights: Vec<f64> = (0..m).map(|i| ((i as f64) * 0.37).cos() * 200.0 + 30.0).collect();
+            heights[0] = 30.0;
+            if m > 100 {
+                heights[101] = f64::NAN;
+            }
+            let height_options: &[Option<&[f64]>] = if model.uses_height() {
+                &[Some(&heights)]
+            } else {
+                &[None, Some(&heights)]
+            };
+            for (ranges, &heights) in [None, Some(&ranges[..])]
+                .into_iter()
+                .flat_map(|r| height_options.iter().map(move |h| (r, h)))
+            {
                 let reference: Vec<u64> = (0..m)
                     .map(|i| {
                         model
                             .at_one(
                                 &pose,
                                 [positions[2 * i], positions[2 * i + 1]],
+                                heights.map(|h| h[i]),
                                 &metadata[k * i..k * (i + 1)],
                                 ranges.map_or(f64::NAN, |r| r[i]),
                             )
@@ -284,6 +310,7 @@ fn every_backend_gives_the_reference_bits() {
                             model: &model,
                             pose: &pose,
                             positions: &positions,
+                            heights,
                             metadata: &metadata,
                             ranges,
                             first: 0,
@@ -300,4 +327,37 @@ fn every_backend_gives_the_reference_bits() {
             }
         }
     }
+}
+
+#[test]
+fn a_model_reading_heights_needs_them_and_names_a_bad_one() {
+    let sector = ElevationSector::new(-0.1, 0.05, 8.0, 1.0).unwrap();
+    let model = ClutterModel::new(vec![ClutterFactor::Elevation(sector)]).unwrap();
+    assert!(model.uses_height());
+    let pose = Pose::raised(0.0, 0.0, 0.0, 20.0).unwrap();
+    let mut out = [0.0; 2];
+    let positions = [1000.0, 0.0, 1000.0, 0.0];
+    let err = model.evaluate(&pose, &positions, &[], &mut out).unwrap_err();
+    assert_eq!(err.argument(), "positions");
+    // 1 km out: at the sea (elevation −1.1°, inside) and 500 m up (+26°, outside)
+    model
+        .evaluate_raised(&pose, &positions, Some(&[0.0, 500.0]), &[], None, &mut out)
+        .unwrap();
+    assert_eq!(out, [8.0, 1.0]);
+    let err = model
+        .evaluate_raised(&pose, &positions, Some(&[0.0, f64::NAN]), &[], None, &mut out)
+        .unwrap_err();
+    assert_eq!(err.argument(), "positions");
+    assert!(err.to_string().contains("row 1"), "{err}");
+    let err = model
+        .evaluate_raised(&pose, &positions, Some(&[0.0]), &[], None, &mut out)
+        .unwrap_err();
+    assert_eq!(err.argument(), "positions");
+    // slant range bands: 1 km out and 1 km up is 1.41 km away
+    let bands = RangeBands::new(vec![1200.0], vec![1.0, 2.0], vec![true]).unwrap();
+    let model = ClutterModel::new(vec![ClutterFactor::Range(bands)]).unwrap();
+    model
+        .evaluate_raised(&pose, &positions, Some(&[20.0, 1020.0]), &[], None, &mut out)
+        .unwrap();
+    assert_eq!(out, [1.0, 2.0]);
 }

@@ -358,8 +358,9 @@ pub struct PyClutterModel(pub(super) ClutterModel);
 
 #[pymethods]
 impl PyClutterModel {
-    /// `factors`: floats (constants), RangeBands (over range from the sensor) and
-    /// MetadataThreshold rules. λ is their product.
+    /// `factors`: floats (constants), RangeBands (over range from the sensor),
+    /// MetadataThreshold rules, clutter maps, coastal bands, zones and elevation sectors.
+    /// λ is their product.
     #[new]
     fn new(factors: Vec<Bound<'_, PyAny>>) -> PyResult<Self> {
         // (one entry per factor of the Python list, which exists)
@@ -375,13 +376,15 @@ impl PyClutterModel {
                 ClutterFactor::Coast(band.get().0.clone())
             } else if let Ok(zone) = f.cast::<PyZone>() {
                 ClutterFactor::Zone(zone.get().0.clone())
+            } else if let Ok(e) = f.cast::<super::heights::PyElevationSector>() {
+                ClutterFactor::Elevation(e.get().0.clone())
             } else if let Ok(v) = f.extract::<f64>() {
                 ClutterFactor::Constant(v)
             } else {
                 return Err(type_error(
                     "factors",
                     format_args!(
-                        "factor {i} is a {}, expected a float, RangeBands, MetadataThreshold, ClutterMap, CoastalBand or Zone",
+                        "factor {i} is a {}, expected a float, RangeBands, MetadataThreshold, ClutterMap, CoastalBand, Zone or ElevationSector",
                         f.get_type().name()?
                     ),
                 ));
@@ -400,9 +403,16 @@ impl PyClutterModel {
         self.0.uses_position()
     }
 
+    #[getter]
+    fn uses_height(&self) -> bool {
+        self.0.uses_height()
+    }
+
     /// λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing;
-    /// range bands read `ranges[i]` (a measured range) where given and not NaN.
-    #[pyo3(signature = (pose, positions, metadata, out = None, ranges = None))]
+    /// range bands read `ranges[i]` (a measured range) where given and not NaN; with
+    /// `heights` (M,), detections at those world heights (slant ranges, elevations).
+    #[pyo3(signature = (pose, positions, metadata, out = None, ranges = None, heights = None))]
+    #[allow(clippy::too_many_arguments)]
     fn evaluate<'py>(
         &self,
         py: Python<'py>,
@@ -411,6 +421,7 @@ impl PyClutterModel {
         metadata: Bound<'py, PyArray2<f64>>,
         out: Option<Bound<'py, PyArray1<f64>>>,
         ranges: Option<Bound<'py, PyArray1<f64>>>,
+        heights: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
         let n = positions.shape()[0];
@@ -420,15 +431,18 @@ impl PyClutterModel {
         let m = slice(&metadata, "metadata")?;
         let ranges = ranges.map(|r| borrow(&r, "ranges")).transpose()?;
         let r = ranges.as_ref().map(|r| slice(r, "ranges")).transpose()?;
+        let heights = heights.map(|h| borrow(&h, "heights")).transpose()?;
+        let h = heights.as_ref().map(|h| slice(h, "heights")).transpose()?;
         let mut inputs = vec![("positions", p), ("metadata", m)];
         inputs.extend(r.map(|r| ("ranges", r)));
+        inputs.extend(h.map(|h| ("heights", h)));
         let mut out = output(py, out, n, &inputs)?;
         let result = Bound::clone(&out);
         let buffer = out
             .as_slice_mut()
             .map_err(|_| value_error("out", "must be C-contiguous"))?;
         let model = &self.0;
-        detached(py, || model.evaluate_with_ranges(&pose, p, m, r, buffer))?;
+        detached(py, || model.evaluate_raised(&pose, p, h, m, r, buffer))?;
         Ok(result)
     }
 }

@@ -65,7 +65,8 @@ def test_covariances_of_the_wrong_shape(covars, argument):
 
 
 def test_clutter_positions_and_metadata_of_the_wrong_shape():
-    raises(ValueError, "positions", CLUTTER.evaluate, POSE, np.zeros((3, 3)), np.zeros((3, 1)))
+    raises(ValueError, "positions", CLUTTER.evaluate, POSE, np.zeros((3, 4)), np.zeros((3, 1)))
+    # (3 columns: positions with heights, read as slant ranges)
     raises(ValueError, "positions", CLUTTER.evaluate, POSE, np.zeros(2), np.zeros((1, 1)))
     raises(ValueError, "metadata", CLUTTER.evaluate, POSE, np.zeros((3, 2)), np.zeros((3, 2)))
     raises(ValueError, "metadata", CLUTTER.evaluate, POSE, np.zeros((3, 2)), [{"area": 1.0}] * 2)

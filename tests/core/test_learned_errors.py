@@ -33,6 +33,10 @@ NOT_POSITIONS = [None, "ab", 5.0, [1.0, 2.0], [[1.0, 2.0, 3.0]], [[[1.0, 2.0]]],
                  [[1.0, 1.0], [0.5, INF]], [[-INF, 0.0], [1.0, 1.0]],
                  np.array([[1, 2]], dtype="timedelta64[s]"), np.array([[1 + 1j, 2]]),
                  np.array([[1.0, 2.0]], dtype=object), np.zeros((2, 2, 1))]
+#: Values no clutter evaluation accepts: (M, 3) positions are detections with heights there.
+NOT_DETECTION_POSITIONS = ([v for v in NOT_POSITIONS if not isinstance(v, list)
+                            or v != [[1.0, 2.0, 3.0]]]
+                           + [[[1.0, 2.0, 3.0, 4.0]], [[1.0, 2.0, NAN]]])
 #: Values no pose accepts.
 NOT_POSES = [None, "abc", 5.0, (0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0), (0.0, NAN, 0.0),
              (0.0, 0.0, 0.0, NAN),
@@ -203,7 +207,7 @@ def learned_calls():
     yield coast_evaluate, "pose", NOT_POSES
     yield coast_evaluate, "positions", NOT_POSITIONS
     yield clutter_model, "pose", NOT_POSES
-    yield clutter_model, "positions", NOT_POSITIONS
+    yield clutter_model, "positions", NOT_DETECTION_POSITIONS
     yield detection_model, "pose", NOT_POSES
     yield detection_model, "states", [
         None, "ab", [[[50.0, 0.0, 0.0, 0.0]]], [[NAN, 0.0, 0.0, 0.0]],
@@ -218,7 +222,7 @@ def learned_calls():
     yield pd_particles, "particles", [
         None, "ab", np.array([[50.0]]), np.array([[NAN], [0.0], [0.0], [0.0]]),
         np.array([[1], [2], [3], [4]], dtype="timedelta64[s]")]
-    yield lam_array, "positions", NOT_POSITIONS
+    yield lam_array, "positions", NOT_DETECTION_POSITIONS
     yield lam_array, "ranges", ranges
     yield pd_one, "hypothesis_or_state", [
         None, "abcd", np.array([1, 2, 3, 4], dtype="timedelta64[s]"), [NAN, 0.0, 0.0, 0.0],

@@ -356,7 +356,7 @@ class ArrayPointProcessTracker(PathCounts, PointProcessMultiTargetTracker):
             model = getattr(context, "sensor_model", None)
             positions = None
             if detections and getattr(getattr(model, "clutter", None), "uses_position", False):
-                positions = self._positions(detections, model.plane_mapping)
+                positions = self._positions(detections, model.position_mapping)
             clutter = (np.asarray(context.clutter_spatial_density_detections(
                 detections, positions=positions), dtype=np.float64)
                 if detections else np.empty(0))

@@ -172,8 +172,9 @@ class MeasurementDrivenBirth(Base):
     def weights(self, detections: Sequence, positions=None, detector_context=None) -> np.ndarray:
         """The (N,) birth weights of ``detections``: ``birth_weight`` each, times the
         ``birth_density`` at each detection's world position (``positions``, (N, 2) or
-        (N, 3) as this birth's ``position_mapping``, if already computed; the density reads
-        x and y) for the pose of ``detector_context``'s sensor, in one call."""
+        (N, 3) as this birth's ``position_mapping``, if already computed; with heights the
+        density reads them as λ does: slant ranges, elevations) for the pose of
+        ``detector_context``'s sensor, in one call."""
         n = len(detections)
         if self.birth_density is None:
             return np.full(n, float(self.birth_weight))
@@ -188,8 +189,7 @@ class MeasurementDrivenBirth(Base):
                                           f"detection, got shape {np.shape(positions)}")
         metadata = ([d.metadata for d in detections] if self.birth_density.metadata_keys
                     else None)
-        density = self.birth_density.evaluate(pose, np.ascontiguousarray(positions[:, :2]),
-                                              metadata)
+        density = self.birth_density.evaluate(pose, np.ascontiguousarray(positions), metadata)
         with np.errstate(over="ignore", under="ignore"):  # (refused below, by name)
             weights = float(self.birth_weight) * density
         if not np.all(np.isfinite(weights) & (weights > 0)):
