@@ -8,8 +8,9 @@
 //! space, so it must be strictly positive: trackers divide by it.
 //!
 //! Detections with a height (a 3-D radar's) have range bands read on the slant range from
-//! the sensor's height and elevation sectors on their elevation above it; maps, coastal
-//! bands and zones read the plane below them.
+//! the sensor's height and elevation sectors on their world elevation above it (whatever a
+//! pose's pitch and roll: the sea is level); maps, coastal bands and zones read the plane
+//! below them.
 
 use crate::batch::for_each_chunk;
 use crate::clutter_map::ClutterMap;

@@ -138,9 +138,21 @@ impl DetectionModel {
                         None => Step::Bands(bands),
                     })
                 }
-                DetectionFactor::Sector(s) => steps.push(Step::Sector(s.in_frame(&frame))),
+                DetectionFactor::Sector(s) => steps.push(match frame.tilt {
+                    None => Step::Sector(s.in_frame(&frame)),
+                    Some(rows) => Step::TiltedSector(Tilted {
+                        rows,
+                        factor: s.in_sensor_frame(),
+                    }),
+                }),
                 DetectionFactor::Radar(radar) => steps.push(Step::Radar(radar.clone())),
-                DetectionFactor::Elevation(e) => steps.push(Step::Elevation(e.clone())),
+                DetectionFactor::Elevation(e) => steps.push(match frame.tilt {
+                    None => Step::Elevation(e.clone()),
+                    Some(rows) => Step::TiltedElevation(Tilted {
+                        rows,
+                        factor: e.clone(),
+                    }),
+                }),
                 DetectionFactor::Horizon(h) => steps.push(Step::Horizon(h.clone())),
                 DetectionFactor::RangeRate(n) => steps.push(Step::RangeRate(n.clone())),
                 DetectionFactor::Land(land) => indexed.push(Indexed::Land(Arc::clone(land))),
@@ -169,6 +181,35 @@ enum Step {
     Elevation(ElevationSector),
     Horizon(Horizon),
     RangeRate(RangeRateNotch),
+    /// A sector of a pitched or rolled sensor: read on the first two rows of M d.
+    TiltedSector(Tilted<FramedSector>),
+    /// An elevation sector of a pitched or rolled sensor: read on M d's third row.
+    TiltedElevation(Tilted<ElevationSector>),
+}
+
+/// A bearing or elevation factor of a pitched or rolled sensor, with the rows of the
+/// world → sensor rotation M ([`crate::pose::Pose::rotation`]) it reads the offset through.
+#[derive(Debug, Clone)]
+struct Tilted<T> {
+    rows: [[f64; 3]; 3],
+    factor: T,
+}
+
+/// (Its lanes in [`lanes`], the same bits.)
+impl Tilted<FramedSector> {
+    fn at(&self, g: &Offsets<f64>) -> f64 {
+        let [a, b, _] = self.rows;
+        let sx = a[0] * g.dx + a[1] * g.dy + a[2] * g.dz;
+        let sy = b[0] * g.dx + b[1] * g.dy + b[2] * g.dz;
+        self.factor.at_squared(sx, sy, sx * sx + sy * sy)
+    }
+}
+
+impl Tilted<ElevationSector> {
+    fn at(&self, g: &Offsets<f64>) -> f64 {
+        let c = self.rows[2];
+        self.factor.at(c[0] * g.dx + c[1] * g.dy + c[2] * g.dz, g.r2)
+    }
 }
 
 /// Where a target is from the sensor: what every step reads. Planar states have dz = 0,
@@ -202,6 +243,8 @@ impl Step {
             Step::Elevation(e) => e.at(g.dz, g.r2),
             Step::Horizon(h) => h.at(g.h2, g.z),
             Step::RangeRate(n) => n.at(g.dot, g.r2),
+            Step::TiltedSector(t) => t.at(g),
+            Step::TiltedElevation(t) => t.at(g),
         }
     }
 }

@@ -310,11 +310,12 @@ proptest! {
         (states, ncols, n) in states(),
         m in mapping(),
         height in prop_oneof![3 => Just(0.0), 1 => coord()],
+        tilt in prop_oneof![3 => Just((0.0, 0.0)), 2 => (angle(), angle()), 1 => (wild(), wild())],
         out_len_delta in prop_oneof![8 => Just(0i64), 1 => Just(-1i64), 1 => Just(1i64)],
     ) {
         let factors: Vec<DetectionFactor> = factors.into_iter().flatten().collect();
         let Ok(model) = DetectionModel::new(factors) else { return Ok(()); };
-        let Ok(pose) = Pose::raised(p.0, p.1, p.2, height) else { return Ok(()); };
+        let Ok(pose) = Pose::raised(p.0, p.1, p.2, height).and_then(|p| p.tilted(tilt.0, tilt.1)) else { return Ok(()); };
         let Some(mapping) = mapping_of(m) else { return Ok(()); };
         let scan = model.at_pose(&pose);
         let mut out = vec![-7.0; (n as i64 + out_len_delta).max(0) as usize];

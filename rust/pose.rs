@@ -3,8 +3,12 @@
 //! Angle convention (the whole crate): Stone Soup's. World coordinates are x/y Cartesian
 //! metres; headings and bearings are radians measured counter-clockwise from +x. A sensor's
 //! body frame has its x axis along the sensor heading (boresight), y to its left, so a
-//! body-frame bearing of π is straight astern. Heights (z) are metres up; a pose's frame
-//! turns about the vertical only (no pitch or roll), so elevations are the world's.
+//! body-frame bearing of π is straight astern. Heights (z) are metres up. A pose may also
+//! be pitched and rolled, as Stone Soup orients a sensor by [roll, pitch, yaw]: a world
+//! offset d is then d_s = M d in the sensor's frame, with
+//! M = R_x(−roll) · R_y(pitch) · R_z(−heading) (Stone Soup's `build_rotation_matrix`; a
+//! positive pitch tilts the boresight up), and bearings and elevations are d_s's. Without
+//! pitch and roll the frame turns about the vertical only and elevations are the world's.
 
 use crate::error::{ModelError, Result};
 
@@ -50,6 +54,9 @@ pub struct Pose {
     pub z: f64,
     /// World-frame velocity (x, y, z), m/s: what range rates are relative to.
     pub velocity: [f64; 3],
+    /// Pitch (a positive one tilts the boresight up) and roll, radians, Stone Soup's.
+    pub pitch: f64,
+    pub roll: f64,
 }
 
 impl Pose {
@@ -70,7 +77,19 @@ impl Pose {
             heading,
             z,
             velocity: [0.0; 3],
+            pitch: 0.0,
+            roll: 0.0,
         })
+    }
+
+    /// This pose pitched and rolled (radians; see the module docs).
+    pub fn tilted(self, pitch: f64, roll: f64) -> Result<Self> {
+        for (name, v) in [("pose.pitch", pitch), ("pose.roll", roll)] {
+            if !v.is_finite() {
+                return Err(ModelError::invalid(name, format!("must be finite, got {v}")));
+            }
+        }
+        Ok(Pose { pitch, roll, ..self })
     }
 
     /// This pose moving at `velocity` (x, y, z; m/s).
@@ -100,7 +119,7 @@ impl Pose {
             y,
             heading,
             z,
-            velocity: self.velocity,
+            ..*self
         })
     }
 
@@ -113,7 +132,21 @@ impl Pose {
             velocity: self.velocity,
             cos,
             sin,
+            tilt: (self.pitch != 0.0 || self.roll != 0.0).then(|| self.rotation()),
         }
+    }
+
+    /// M = R_x(−roll) · R_y(pitch) · R_z(−heading), world offset → sensor frame.
+    pub fn rotation(&self) -> [[f64; 3]; 3] {
+        let (sr, cr) = self.roll.sin_cos();
+        let (sp, cp) = self.pitch.sin_cos();
+        let (sh, ch) = self.heading.sin_cos();
+        // R_z(−h) = [[ch, sh, 0], [−sh, ch, 0], [0, 0, 1]]; R_y(p) = [[cp, 0, sp], [0, 1, 0],
+        // [−sp, 0, cp]]; R_x(−r) = [[1, 0, 0], [0, cr, sr], [0, −sr, cr]]
+        let ry_rz = [[cp * ch, cp * sh, sp], [-sh, ch, 0.0], [-sp * ch, -sp * sh, cp]];
+        let [a, b, c] = ry_rz;
+        let mix = |u: f64, v: f64| -> [f64; 3] { [u * b[0] + v * c[0], u * b[1] + v * c[1], u * b[2] + v * c[2]] };
+        [a, mix(cr, sr), mix(-sr, cr)]
     }
 }
 
@@ -125,6 +158,8 @@ pub struct SensorFrame {
     pub velocity: [f64; 3],
     pub cos: f64,
     pub sin: f64,
+    /// World offset → sensor frame when the pose is pitched or rolled ([`Pose::rotation`]).
+    pub tilt: Option<[[f64; 3]; 3]>,
 }
 
 impl SensorFrame {

@@ -161,10 +161,11 @@ fn first_non_finite(rows: &[f64], width: usize) -> Option<usize> {
         .position(|row| row.iter().any(|v| !v.is_finite()))
 }
 
-/// A pose from Python: (x, y, heading), (x, y, heading, z) with the sensor's height, or
-/// (x, y, heading, z, vx, vy, vz) with its velocity too.
+/// A pose from Python: (x, y, heading), (x, y, heading, z) with the sensor's height,
+/// (x, y, heading, z, vx, vy, vz) with its velocity too, or (…, pitch, roll) tilted.
 #[derive(FromPyObject)]
 enum PoseTuple {
+    Tilted((f64, f64, f64, f64, f64, f64, f64, f64, f64)),
     Moving((f64, f64, f64, f64, f64, f64, f64)),
     Raised((f64, f64, f64, f64)),
     Flat((f64, f64, f64)),
@@ -187,6 +188,9 @@ fn pose_of(pose: PoseTuple) -> PyResult<Pose> {
         PoseTuple::Moving((x, y, heading, z, vx, vy, vz)) => {
             Pose::raised(x, y, heading, z).and_then(|p| p.moving([vx, vy, vz]))
         }
+        PoseTuple::Tilted((x, y, heading, z, vx, vy, vz, pitch, roll)) => Pose::raised(x, y, heading, z)
+            .and_then(|p| p.moving([vx, vy, vz]))
+            .and_then(|p| p.tilted(pitch, roll)),
     }
     .map_err(to_py)
 }

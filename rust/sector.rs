@@ -62,6 +62,18 @@ impl AngularSector {
     }
 
     /// The per-scan form: the sector's centre direction turned into the world frame.
+    /// The sector in the sensor's own frame (bearings from its boresight): for offsets
+    /// already turned into that frame (a pitched or rolled pose's).
+    pub fn in_sensor_frame(&self) -> FramedSector {
+        let (sin, cos) = self.centre.sin_cos();
+        FramedSector {
+            centre: [cos, sin],
+            cos_half: self.cos_half,
+            inside: self.inside,
+            outside: self.outside,
+        }
+    }
+
     pub fn in_frame(&self, frame: &SensorFrame) -> FramedSector {
         FramedSector {
             centre: frame.world_direction(self.centre),

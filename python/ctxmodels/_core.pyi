@@ -47,6 +47,7 @@ _Pose: TypeAlias = (
     tuple[float, float, float]
     | tuple[float, float, float, float]
     | tuple[float, float, float, float, float, float, float]
+    | tuple[float, float, float, float, float, float, float, float, float]
 )
 # `position_mapping` defaults to (0, 2) (Stone Soup's [x, vx, y, vy]). It is written `...`
 # below because PyO3 renders a tuple default as `...` in the runtime signature, and stubtest

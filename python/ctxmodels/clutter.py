@@ -71,7 +71,9 @@ class ClutterDensityModel(ModelComponent):
 
     Detections with a height (positions (M, 3), from a sensor model whose
     ``position_mapping`` has three indices) have range bands read on the slant range from
-    the sensor's height; maps, coastal bands and zones read the plane below them. A 3-D
+    the sensor's height, elevation sectors the world elevation above it (the sea is level
+    whatever a pitched or rolled antenna's tilt); maps, coastal bands and zones read the
+    plane below them. A 3-D
     radar's false alarms spread uniformly over its field of view — :math:`\bar n` per scan
     over elevations :math:`[\varepsilon_0, \varepsilon_1]`, bearings of width
     :math:`\Delta\theta` and ranges :math:`[r_0, r_1]` — have

@@ -15,7 +15,8 @@ class ElevationSector(ModelComponent):
 
     A target at offset :math:`(\Delta x, \Delta y, \Delta z)` from the sensor has elevation
     :math:`\varepsilon = \operatorname{atan2}(\Delta z, \sqrt{\Delta x^2 + \Delta y^2})`,
-    radians above the sensor's horizontal plane (its pose turns about the vertical only).
+    radians above the sensor's horizontal plane — for a pitched or rolled pose, of the
+    offset in the sensor's own frame (:class:`~ctxmodels.Pose`).
     It is inside when ``lower`` :math:`\le \varepsilon \le` ``upper`` (boundaries inside),
     decided without an arctangent as :math:`r \sin(\text{lower}) \le \Delta z \le
     r \sin(\text{upper})`, :math:`r` the slant range; a limit at :math:`\pm\pi/2` bounds

@@ -3,8 +3,10 @@
 Angle convention, once for the whole library: Stone Soup's. World coordinates are x/y
 Cartesian metres; headings and bearings are radians counter-clockwise from +x (not compass
 bearings). A sensor's body frame has x along its heading and y to its left, so a body
-bearing of π is astern. Heights z are metres up; a pose turns about the vertical only
-(heading), so a sensor's elevations are measured from its horizontal plane.
+bearing of π is astern. Heights z are metres up. A level pose turns about the vertical
+only (heading), so a sensor's elevations are measured from its horizontal plane; a pitched
+or rolled one reads bearings and elevations in its own frame, by Stone Soup's rotation of
+[roll, pitch, heading] (:class:`Pose`).
 """
 from __future__ import annotations
 
@@ -19,14 +21,25 @@ from stonesoup.base import Property
 from . import _core
 from ._upstream import property_slot
 from ._component import ModelComponent, as_float, as_rows, as_sequence, frozen_copy
-from .errors import ArgumentTypeError, ShapeError, argument_error
+from .errors import ArgumentError, ArgumentTypeError, ShapeError, argument_error
 
 
 class Pose(ModelComponent):
-    """Position (x, y, metres), heading (radians from +x, counter-clockwise), height (z,
+    r"""Position (x, y, metres), heading (radians from +x, counter-clockwise), height (z,
     metres: where a sensor model with a height in its ``position_mapping`` measures slant
-    ranges and elevations from) and velocity (vx, vy, vz, m/s: what a range-rate notch
-    measures radial speeds against)."""
+    ranges and elevations from), velocity (vx, vy, vz, m/s: what a range-rate notch
+    measures radial speeds against) and pitch and roll (radians).
+
+    A pitched or rolled sensor reads bearings and elevations in its own frame, as Stone Soup
+    orients a sensor by [roll, pitch, yaw]: a world offset :math:`d` is
+    :math:`M d` there, with
+
+    .. math::
+        M = R_x(-\text{roll})\, R_y(\text{pitch})\, R_z(-\text{heading}),
+
+    so a positive pitch tilts the boresight up; :class:`AngularSector` and
+    :class:`ElevationSector` read :math:`M d`, everything else (ranges, the horizon, land,
+    radial speeds) is the world's."""
 
     x: float = Property(doc="World x, metres.")
     y: float = Property(doc="World y, metres.")
@@ -35,36 +48,41 @@ class Pose(ModelComponent):
     vx: float = Property(default=0.0, doc="Velocity along x, m/s.")
     vy: float = Property(default=0.0, doc="Velocity along y, m/s.")
     vz: float = Property(default=0.0, doc="Vertical velocity, m/s.")
+    pitch: float = Property(default=0.0, doc="Pitch, radians (positive: boresight up).")
+    roll: float = Property(default=0.0, doc="Roll, radians (Stone Soup's sense).")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         for name in _NAMES:
             as_float(getattr(self, name), name)
 
-    def as_tuple(self) -> tuple[float, float, float, float, float, float, float]:
-        """(x, y, heading, z, vx, vy, vz), the core's form."""
+    def as_tuple(self) -> tuple[float, ...]:
+        """(x, y, heading, z, vx, vy, vz, pitch, roll), the core's form."""
         return tuple(float(getattr(self, name)) for name in _NAMES)
 
 
 def as_pose(pose, name: str = "pose") -> Pose:
-    """``pose``, a :class:`Pose` or an (x, y, heading), (x, y, heading, z) or
-    (x, y, heading, z, vx, vy, vz) sequence of finite numbers, as a :class:`Pose`;
-    TypeError or ValueError naming ``name`` for anything else."""
+    """``pose``, a :class:`Pose` or an (x, y, heading), (x, y, heading, z),
+    (x, y, heading, z, vx, vy, vz) or (x, y, heading, z, vx, vy, vz, pitch, roll) sequence of
+    finite numbers, as a :class:`Pose`; TypeError or ValueError naming ``name`` for anything
+    else."""
     if isinstance(pose, Pose):
         return pose
     if isinstance(pose, (str, bytes)) or not isinstance(pose, (Sequence, np.ndarray)):
         raise ArgumentTypeError(name, f"expected a Pose or an (x, y, heading) sequence, got "
                                       f"{type(pose).__name__}")
     values = tuple(np.ravel(pose)) if isinstance(pose, np.ndarray) else tuple(pose)
-    if len(values) not in (3, 4, 7):
+    if len(values) not in (3, 4, 7, 9):
         raise ArgumentTypeError(name, f"expected a Pose or an (x, y, heading), "
-                                      f"(x, y, heading, z) or (x, y, heading, z, vx, vy, vz) "
-                                      f"sequence, got {len(values)} values")
+                                      f"(x, y, heading, z), (x, y, heading, z, vx, vy, vz) or "
+                                      f"(x, y, heading, z, vx, vy, vz, pitch, roll) sequence, "
+                                      f"got {len(values)} values")
     try:
         x, y, heading, *rest = (as_float(v, axis) for v, axis in zip(values, _NAMES))
     except (TypeError, ValueError) as err:
         raise argument_error(name, str(err), err) from None
-    return _computed_pose(x, y, heading, *rest[:1], *([tuple(rest[1:])] if rest[1:] else []))
+    return _computed_pose(x, y, heading, *rest[:1], *([tuple(rest[1:4])] if rest[1:] else []),
+                          *([tuple(rest[4:])] if rest[4:] else []))
 
 
 def pose_tuple(pose, name: str = "pose") -> tuple[float, ...]:
@@ -72,34 +90,39 @@ def pose_tuple(pose, name: str = "pose") -> tuple[float, ...]:
     return as_pose(pose, name).as_tuple()
 
 
-_NAMES = ("x", "y", "heading", "z", "vx", "vy", "vz")
+_NAMES = ("x", "y", "heading", "z", "vx", "vy", "vz", "pitch", "roll")
 _SLOTS = tuple(property_slot(name) for name in _NAMES)
 
 
 def _computed_pose(x: float, y: float, heading: float, z: float = 0.0,
-                   velocity: tuple = (0.0, 0.0, 0.0)) -> Pose:
-    """The :class:`Pose` ``Pose(x=x, y=y, heading=heading, z=z, vx=..., vy=..., vz=...)``
-    builds, for floats computed from already validated ones (interpolated, mounted): without
-    the per-Property checks, which cost more than the rest of a scan's context."""
+                   velocity: tuple = (0.0, 0.0, 0.0), tilt: tuple = (0.0, 0.0)) -> Pose:
+    """The :class:`Pose` ``Pose(x=x, y=y, heading=heading, z=z, vx=..., vy=..., vz=...,
+    pitch=..., roll=...)`` builds, for floats computed from already validated ones
+    (interpolated, mounted): without the per-Property checks, which cost more than the rest
+    of a scan's context."""
     pose = object.__new__(Pose)
     pose.__dict__["_initialised"] = True
-    pose.__dict__.update(zip(_SLOTS, (x, y, heading, z, *velocity)))
+    pose.__dict__.update(zip(_SLOTS, (x, y, heading, z, *velocity, *tilt)))
     return pose
 
 
 class Mounting(ModelComponent):
     """Where a sensor sits on its platform: lever arm in the platform's body frame (and
-    height above it) and the yaw of the sensor's boresight relative to the platform
-    heading."""
+    height above it) and the yaw, pitch and roll of the sensor relative to the platform.
+    The sensor's angles are the platform's plus these, as Stone Soup adds a sensor's
+    ``rotation_offset`` to its platform's orientation; the lever arm turns with the
+    platform's heading only."""
 
     forward: float = Property(default=0.0, doc="Lever arm along the platform heading, metres.")
     left: float = Property(default=0.0, doc="Lever arm to the platform's left, metres.")
     yaw: float = Property(default=0.0, doc="Boresight yaw relative to the platform, radians.")
     up: float = Property(default=0.0, doc="Height of the sensor above the platform's z, metres.")
+    pitch: float = Property(default=0.0, doc="Pitch relative to the platform, radians (up > 0).")
+    roll: float = Property(default=0.0, doc="Roll relative to the platform, radians.")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        for name in ("forward", "left", "yaw", "up"):
+        for name in ("forward", "left", "yaw", "up", "pitch", "roll"):
             as_float(getattr(self, name), name)
 
     def apply(self, platform: Pose) -> Pose:
@@ -107,7 +130,12 @@ class Mounting(ModelComponent):
         own speed while the platform turns is left out)."""
         x, y, heading, z = _core.mount(platform.as_tuple(), float(self.forward), float(self.left),
                                        float(self.yaw), float(self.up))
-        return _computed_pose(x, y, heading, z, platform.as_tuple()[4:])
+        pitch, roll = (float(platform.pitch) + float(self.pitch),
+                       float(platform.roll) + float(self.roll))
+        if not (math.isfinite(pitch) and math.isfinite(roll)):
+            raise ArgumentError("mounting", f"the mounted sensor's pitch {pitch} or roll {roll} "
+                                            "is not finite")
+        return _computed_pose(x, y, heading, z, platform.as_tuple()[4:7], (pitch, roll))
 
 
 class PoseSource(ModelComponent):

@@ -4,7 +4,7 @@
 //! Written once over [`Lanes`]; [`crate::simd::dispatch`] picks the CPU's build. Each
 //! kernel gives the bits of [`ScanDetection::at_point`] (tested for every backend).
 
-use super::{Offsets, ScanDetection, Step};
+use super::{Offsets, ScanDetection, Step, Tilted};
 use crate::batch::{CvRows, Heights, Planar, PositionMapping, Positions, RowHeights, Rows, Velocities};
 use crate::cubature::{cholesky2_lanes, cholesky3, velocity_at_point, velocity_given_position, Rule, SpatialRule};
 use crate::elevation::ElevationSector;
@@ -24,7 +24,28 @@ impl Step {
             Step::Elevation(e) => e.lanes_at(g.dz, g.r2),
             Step::Horizon(h) => h.lanes_at(g.h2, g.z),
             Step::RangeRate(n) => n.lanes_at(g.dot, g.r2),
+            Step::TiltedSector(t) => t.lanes_at(g),
+            Step::TiltedElevation(t) => t.lanes_at(g),
         }
+    }
+}
+
+impl Tilted<FramedSector> {
+    #[inline(always)]
+    fn lanes_at<L: Lanes>(&self, g: &Offsets<L>) -> L {
+        let [a, b, _] = self.rows;
+        let sx = L::splat(a[0]) * g.dx + L::splat(a[1]) * g.dy + L::splat(a[2]) * g.dz;
+        let sy = L::splat(b[0]) * g.dx + L::splat(b[1]) * g.dy + L::splat(b[2]) * g.dz;
+        self.factor.lanes_at_squared(sx, sy, sx * sx + sy * sy)
+    }
+}
+
+impl Tilted<ElevationSector> {
+    #[inline(always)]
+    fn lanes_at<L: Lanes>(&self, g: &Offsets<L>) -> L {
+        let c = self.rows[2];
+        let sz = L::splat(c[0]) * g.dx + L::splat(c[1]) * g.dy + L::splat(c[2]) * g.dz;
+        self.factor.lanes_at(sz, g.r2)
     }
 }
 

@@ -102,8 +102,13 @@ fn kernel<P: Positions, H: crate::batch::Heights>(
 
 #[test]
 fn raised_rows_and_columns_give_the_reference_bits() {
-    let pose = Pose::raised(-30.0, 12.0, 0.4, 25.0).unwrap();
-    for model in models() {
+    let level = Pose::raised(-30.0, 12.0, 0.4, 25.0).unwrap();
+    // pitched up 0.2 rad and rolled −0.3 rad: sectors and elevations read in its frame
+    let tilted = level.tilted(0.2, -0.3).unwrap();
+    for (pose, model) in [level, tilted]
+        .into_iter()
+        .flat_map(|p| models().into_iter().map(move |m| (p, m)))
+    {
         let scan = model.at_pose(&pose);
         for n in [1, 3, 4, 5, 9, 130] {
             let data = rows(n);

@@ -34,9 +34,11 @@ A 3-D sensor (``RadarElevationBearingRange``, ``RadarRotatingElevationBearingRan
 ``RadarElevationBearingRangeRate``) is read in 3-D: the model's ``position_mapping`` is
 the sensor's (x, y, z), the pose has the sensor's height, ``max_range`` bounds the slant
 range and a rotating one's ``vertical_extent`` is an
-:class:`~ctxmodels.ElevationSector` of :math:`\pm` ``vertical_extent``/2. Frames turn
-about the vertical only: a roll or pitch of the sensor, or a rotating radar's
-``tilt_centre``, would tilt the coverage and raise. The clutter density is the caller's:
+:class:`~ctxmodels.ElevationSector` of :math:`\pm` ``vertical_extent``/2. Its pose
+carries the sensor's roll and pitch (a rotating radar's ``tilt_centre`` added to the pitch,
+as Stone Soup adds it), so bearings and elevations are read in the tilted antenna's frame
+(:class:`~ctxmodels.Pose`). A 2-D radar's frame turns about the vertical only: a roll or
+pitch of it raises. The clutter density is the caller's:
 Stone Soup's clutter models are generators, not densities in the detections' measurement
 space.
 """
@@ -103,12 +105,19 @@ provide("from_stonesoup", _model_of)
 def sensor_pose(sensor) -> Pose:
     """The pose of a Stone Soup sensor now: x/y of its position (and its height z for a 3-D
     radar), the heading of its boresight (the antenna's, for a rotating radar),
-    counter-clockwise from +x, and its platform's velocity."""
+    counter-clockwise from +x, its platform's velocity, and for a 3-D radar its pitch
+    (a rotating one's ``tilt_centre`` included) and roll."""
     kind = sensor_kind(sensor)
     if sensor.position is None or sensor.orientation is None:
         raise ValueError("sensor: has no position or orientation; mount it on a platform")
     position = np.asarray(sensor.position, dtype=float).ravel()
-    heading = planar_yaw(sensor.orientation, "sensor orientation")
+    if kind in SPATIAL:
+        roll, pitch, heading = (float(v) for v in
+                                np.asarray(sensor.orientation, dtype=float).ravel()[:3])
+        if kind in ROTATING:
+            pitch += float(np.asarray(sensor.tilt_centre, dtype=float).ravel()[0])
+    else:
+        roll, pitch, heading = 0.0, 0.0, planar_yaw(sensor.orientation, "sensor orientation")
     if kind in ROTATING:
         heading += float(np.asarray(sensor.dwell_centre, dtype=float).ravel()[0])
     z = float(position[2]) if kind in SPATIAL and position.size > 2 else 0.0
@@ -117,7 +126,7 @@ def sensor_pose(sensor) -> Pose:
     vx, vy, vz = (velocity + [0.0, 0.0, 0.0])[:3]
     try:
         return Pose(x=float(position[0]), y=float(position[1]), heading=heading, z=z, vx=vx,
-                    vy=vy, vz=vz if kind in SPATIAL else 0.0)
+                    vy=vy, vz=vz if kind in SPATIAL else 0.0, pitch=pitch, roll=roll)
     except (TypeError, ValueError) as err:
         raise argument_error("sensor", f"its pose now is not finite ({err})", err) from None
 

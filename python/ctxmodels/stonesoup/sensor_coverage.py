@@ -71,10 +71,7 @@ def coverage_factors(sensor) -> tuple[list, tuple[int, ...]]:
         if fov < 2 * math.pi:
             factors.append(AngularSector.field_of_view(0.0, fov))
     if kind == "RadarRotatingElevationBearingRange":
-        tilt = float(np.asarray(sensor.tilt_centre, dtype=float).ravel()[0])
-        if tilt != 0.0:
-            raise ValueError(f"sensor: tilt_centre {tilt} rad tilts the coverage out of the "
-                             f"horizontal; only an untilted antenna is read")
+        # (its tilt_centre is in the sensor's pose: the sector is the antenna's own)
         extent = sensor_number(sensor, "vertical_extent")
         if not extent > 0:
             raise ValueError(f"sensor: vertical_extent must be > 0, got {sensor.vertical_extent!r}")
