@@ -206,6 +206,19 @@ impl Positions for CvRows<'_> {
     }
 }
 
+impl Velocities for CvRows<'_> {
+    const MOVING: bool = true;
+    #[inline(always)]
+    fn lanes<L: Lanes>(self, first: usize) -> [L; 3] {
+        let (vx, vy) = L::rows4_columns13(&self.0[first * 4..]);
+        [vx, vy, L::splat(0.0)]
+    }
+    #[inline(always)]
+    fn one(self, i: usize) -> [f64; 3] {
+        [self.0[i * 4 + 1], self.0[i * 4 + 3], 0.0]
+    }
+}
+
 /// Stone Soup's 3-D constant-velocity rows [x, vx, y, vy, z, vz]: the positions and the
 /// heights of four rows from six vector loads.
 #[derive(Clone, Copy)]

@@ -471,6 +471,12 @@ impl ScanDetection {
                     (Some(_), None) if ncols == 6 && (mapping.x, mapping.y, mapping.z) == (0, 2, Some(4)) => {
                         self.run(Cv3Rows(states), Cv3Rows(states), Still, first, chunk)
                     }
+                    // [x, vx, y, vy] read by a notch: the velocities with vector loads too
+                    (None, Some(v))
+                        if ncols == 4 && (mapping.x, mapping.y) == (0, 2) && (v.mapping.vx, v.mapping.vy) == (1, 3) =>
+                    {
+                        self.run(CvRows(states), Planar, CvRows(states), first, chunk)
+                    }
                     (None, None) => self.run(rows, Planar, Still, first, chunk),
                     (Some(h), None) => self.run(rows, h, Still, first, chunk),
                     (None, Some(v)) => self.run(rows, Planar, v, first, chunk),

@@ -28,6 +28,8 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     /// Columns 0 and 2 of four consecutive rows of four values: the positions of four
     /// Stone Soup constant-velocity states [x, vx, y, vy], read straight from the rows.
     fn rows4_columns02(rows: &[f64]) -> (Self, Self);
+    /// Columns 1 and 3 of the same four rows: their velocities (vx, vy).
+    fn rows4_columns13(rows: &[f64]) -> (Self, Self);
     /// Columns 0, 2 and 4 of four consecutive rows of six values: the positions of four
     /// Stone Soup 3-D constant-velocity states [x, vx, y, vy, z, vz].
     fn rows4_columns024(rows: &[f64]) -> (Self, Self, Self);
@@ -200,6 +202,14 @@ impl Lanes for Portable {
         (
             Portable([r[0], r[4], r[8], r[12]]),
             Portable([r[2], r[6], r[10], r[14]]),
+        )
+    }
+    #[inline(always)]
+    fn rows4_columns13(rows: &[f64]) -> (Self, Self) {
+        let r = &rows[..16];
+        (
+            Portable([r[1], r[5], r[9], r[13]]),
+            Portable([r[3], r[7], r[11], r[15]]),
         )
     }
     #[inline(always)]

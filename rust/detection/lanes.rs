@@ -420,7 +420,7 @@ impl Gaussians<'_> {
         let (ix, iy) = (self.means.mapping.x, self.means.mapping.y);
         let (mx, my) = match count {
             4 if k == 4 && self.means.mapping == PositionMapping::default() => {
-                CvRows(self.means.data).lanes::<L>(first)
+                Positions::lanes::<L>(CvRows(self.means.data), first)
             }
             4 => self.means.lanes::<L>(first),
             _ => self.means.partial::<L>(first, count),

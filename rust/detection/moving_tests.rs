@@ -4,7 +4,9 @@
 use super::lane_tests::{backends, kernel_bits};
 use super::lanes::{Expected, ExpectedRaised, Gaussians};
 use super::*;
-use crate::batch::{ColumnHeights, ColumnVelocities, Columns, RowHeights, RowVelocities, Rows, VelocityMapping};
+use crate::batch::{
+    ColumnHeights, ColumnVelocities, Columns, CvRows, RowHeights, RowVelocities, Rows, VelocityMapping,
+};
 use crate::cubature::{cholesky2, cholesky3, velocity_at_point, velocity_given_position, Rule};
 use crate::range_rate::RangeRateNotch;
 use crate::simd::run_on;
@@ -401,4 +403,34 @@ fn a_velocity_covariance_that_is_not_one_is_named() {
 fn a_model_holds_one_notch() {
     let err = DetectionModel::new(vec![notch(1.0, None), notch(2.0, None)]).unwrap_err();
     assert_eq!(err.argument(), "factors");
+}
+
+#[test]
+fn stone_soups_cv_rows_give_the_reference_bits_with_velocities() {
+    // [x, vx, y, vy] rows: positions and velocities both read with vector loads
+    let pose = Pose::new(10.0, -20.0, 0.7).unwrap().moving([3.0, -1.5, 0.0]).unwrap();
+    for model in models() {
+        let scan = model.at_pose(&pose);
+        for n in [1, 3, 4, 5, 9, 130] {
+            let wide = rows(n);
+            let data: Vec<f64> = (0..n).flat_map(|i| wide[6 * i..6 * i + 4].to_vec()).collect();
+            let want: Vec<u64> = (0..n)
+                .map(|i| {
+                    let r = &data[4 * i..];
+                    scan.at_state(r[0], r[2], None, Some([r[1], r[3], 0.0])).to_bits()
+                })
+                .collect();
+            for backend in backends() {
+                let got = kernel_bits(&scan, backend, CvRows(&data), crate::batch::Planar, CvRows(&data), 0, n);
+                assert_eq!(got, (want.clone(), None), "{backend:?} n={n}");
+            }
+            let mapping = PositionMapping::new(0, 2)
+                .unwrap()
+                .with_velocity(velocity(false))
+                .unwrap();
+            let mut out = vec![0.0; n];
+            scan.at_states(&data, 4, mapping, &mut out).unwrap();
+            assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), want);
+        }
+    }
 }

@@ -99,6 +99,20 @@ impl Lanes for Avx2 {
         }
     }
     #[inline(always)]
+    fn rows4_columns13(rows: &[f64]) -> (Self, Self) {
+        let r = &rows[..16];
+        unsafe {
+            let (a, b) = (_mm256_loadu_pd(r.as_ptr()), _mm256_loadu_pd(r[4..].as_ptr()));
+            let (c, d) = (_mm256_loadu_pd(r[8..].as_ptr()), _mm256_loadu_pd(r[12..].as_ptr()));
+            // [vx0, vx1, vy0, vy1] and [vx2, vx3, vy2, vy3], then the halves regrouped.
+            let (ab, cd) = (_mm256_unpackhi_pd(a, b), _mm256_unpackhi_pd(c, d));
+            (
+                Avx2(_mm256_permute2f128_pd::<0x20>(ab, cd)),
+                Avx2(_mm256_permute2f128_pd::<0x31>(ab, cd)),
+            )
+        }
+    }
+    #[inline(always)]
     fn rows4_columns024(rows: &[f64]) -> (Self, Self, Self) {
         let r = &rows[..24];
         unsafe {
