@@ -292,7 +292,10 @@ impl ClutterModel {
             density *= match f {
                 ClutterFactor::Constant(v) => *v,
                 ClutterFactor::Range(bands) => bands.at(range),
-                ClutterFactor::Map(map) => read_map(map).value_at(pose, x, y, measured),
+                // (a map is of the plane: a 3-D detection's measured range is a slant one)
+                ClutterFactor::Map(map) => {
+                    read_map(map).value_at(pose, x, y, if z.is_some() { f64::NAN } else { measured })
+                }
                 ClutterFactor::Coast(_) | ClutterFactor::Zone(_) => f.point_value(pose, x, y),
                 ClutterFactor::Elevation(e) => e.at(dz, squared),
                 ClutterFactor::Metadata(rule) => {

@@ -284,6 +284,45 @@ pub fn velocity_given_position<const D: usize>(
     (b, c)
 }
 
+/// Whether the symmetric `n`×`n` matrix `m` (row-major, n ≤ 6) is finite, symmetric and
+/// positive semi-definite to rounding: a Cholesky factorisation that accepts a pivot down to
+/// −1e-9 of its diagonal's scale as 0, and then only a column whose entries are 0 to the
+/// same relative tolerance (a zero variance has no covariance with anything).
+pub fn is_positive_semidefinite(m: &[f64], n: usize) -> bool {
+    if n > 6 || m.len() != n * n || m.iter().any(|v| !v.is_finite()) {
+        return false;
+    }
+    let scale = |i: usize, j: usize| (m[i * n + i].abs() * m[j * n + j].abs()).sqrt().max(f64::MIN_POSITIVE);
+    for i in 0..n {
+        for j in 0..i {
+            if (m[i * n + j] - m[j * n + i]).abs() > 1e-9 * scale(i, j).max(m[i * n + j].abs()) {
+                return false;
+            }
+        }
+    }
+    let mut l = [[0.0f64; 6]; 6];
+    for j in 0..n {
+        let pivot = m[j * n + j] - (0..j).map(|k| l[j][k] * l[j][k]).sum::<f64>();
+        if pivot < -1e-9 * scale(j, j) {
+            return false;
+        }
+        let zero = pivot <= 1e-12 * scale(j, j);
+        l[j][j] = if zero { 0.0 } else { pivot.sqrt() };
+        for i in j + 1..n {
+            let rest = m[i * n + j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
+            if zero {
+                if rest.abs() > 1e-9 * scale(i, j) {
+                    return false;
+                }
+                l[i][j] = 0.0;
+            } else {
+                l[i][j] = rest / l[j][j];
+            }
+        }
+    }
+    true
+}
+
 /// μ_v + B u: the mean velocity at a rule's point u ([`velocity_given_position`]).
 #[inline(always)]
 pub fn velocity_at_point(mean: [f64; 3], b: &[[f64; 3]; 3], u: [f64; 3]) -> [f64; 3] {

@@ -310,17 +310,19 @@ impl ScanDetection {
     }
 
     /// The expectation of the scan's range-rate notch (a model has one at most) at offsets
-    /// `g`, Δp·Δv having variance Δpᵀ `spread` Δp; 1 without a notch.
+    /// `g`, the velocity having covariance `spread`: ṙ has variance uᵀ `spread` u along the
+    /// unit line of sight u = Δp/|Δp|; 1 without a notch.
     fn notch_given(&self, g: &Offsets<f64>, spread: &[[f64; 3]; 3]) -> f64 {
         let Some(notch) = self.notch() else {
             return 1.0;
         };
-        let d = [g.dx, g.dy, g.dz];
+        let r = g.r2.sqrt();
+        let u = [g.dx / r, g.dy / r, g.dz / r];
         let mut var = 0.0;
-        for (di, row) in d.iter().zip(spread) {
-            var += di * (row[0] * d[0] + row[1] * d[1] + row[2] * d[2]);
+        for (ui, row) in u.iter().zip(spread) {
+            var += ui * (row[0] * u[0] + row[1] * u[1] + row[2] * u[2]);
         }
-        notch.expected_at(g.dot, var, g.r2)
+        notch.expected_at(g.dot, g.r2, var)
     }
 
     /// [`Self::notch_given`] at a point: the factor the expected kernels take apart.
@@ -615,6 +617,13 @@ impl ScanDetection {
                 "covars",
                 format!("row {row}: the position block is not a finite symmetric positive semi-definite matrix"),
             ),
+            Some(lanes::BadGaussian::Velocity) => ModelError::invalid(
+                "covars",
+                format!("row {row}: the block of the position and the velocity (which the range-rate notch reads) is not a finite symmetric positive semi-definite matrix"),
+            ),
+            _ if mapping.velocity.is_some() => {
+                ModelError::non_finite("means", row, "position or velocity is NaN or infinite")
+            }
             _ => ModelError::non_finite("means", row, "position is NaN or infinite"),
         })
     }

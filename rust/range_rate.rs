@@ -90,22 +90,22 @@ impl RangeRateNotch {
         select(notched, self.inside, self.outside)
     }
 
-    /// The expectation of [`Self::at`] when Δp·Δv is normal with mean `dot` and variance
-    /// `dot_var` (at squared range `r2`): [`Self::at`] itself where the variance is 0 (or
-    /// not a number above 0) or the target is at the sensor.
-    pub fn expected_at(&self, dot: f64, dot_var: f64, r2: f64) -> f64 {
-        if !(dot_var > 0.0 && r2 > 0.0 && dot.is_finite() && dot_var.is_finite()) {
+    /// The expectation of [`Self::at`] at Δp·Δv = `dot` and squared range `r2` when the
+    /// radial speed ṙ = `dot`/r is normal with variance `speed_var`: [`Self::at`] itself
+    /// where that variance is 0 (or not a number above 0), or the target is at the sensor
+    /// or its offsets are not finite. An infinite variance puts no mass in any interval.
+    pub fn expected_at(&self, dot: f64, r2: f64, speed_var: f64) -> f64 {
+        if !(speed_var > 0.0 && r2 > 0.0 && r2.is_finite() && dot.is_finite()) {
             return self.at(dot, r2);
         }
-        // In units of Δp·Δv: the notch is |Δp·Δv| ≤ w r, a blind speed k v_b at ±k v_b r.
-        let (s, r) = (dot_var.sqrt(), r2.sqrt());
-        let half = self.width * r;
-        let mut inside = normal_mass((-half - dot) / s, (half - dot) / s);
+        // In m/s, so that no bound overflows: the notch is |ṙ| ≤ w, a blind speed |ṙ ∓ k v_b| ≤ w.
+        let (mean, s, w) = (dot / r2.sqrt(), speed_var.sqrt(), self.width);
+        let mut inside = normal_mass((-w - mean) / s, (w - mean) / s);
         if let Some(v) = self.blind_speed {
             for k in 1..=self.multiples {
-                let centre = f64::from(k) * v * r;
-                inside += normal_mass((centre - half - dot) / s, (centre + half - dot) / s)
-                    + normal_mass((-centre - half - dot) / s, (-centre + half - dot) / s);
+                let centre = f64::from(k) * v;
+                inside += normal_mass((centre - w - mean) / s, (centre + w - mean) / s)
+                    + normal_mass((-centre - w - mean) / s, (-centre + w - mean) / s);
             }
         }
         let inside = inside.clamp(0.0, 1.0);
@@ -180,17 +180,22 @@ mod tests {
         let mti = RangeRateNotch::new(1.0, Some(10.0), 2, 0.0, 1.0).unwrap();
         let r2 = 1e6; // 1 km: Δp·Δv is 1000 ṙ
                       // no spread: the point value
-        assert_eq!(mti.expected_at(500.0, 0.0, r2), mti.at(500.0, r2));
+        assert_eq!(mti.expected_at(500.0, r2, 0.0), mti.at(500.0, r2));
         // ṙ ~ N(0, 1): P(|ṙ| ≤ 1) = 0.682689492…, the blind intervals [9, 11] add 2·1.1e-19
-        let e = mti.expected_at(0.0, 1e6, r2);
+        let e = mti.expected_at(0.0, r2, 1.0);
         assert!((e - (1.0 - 0.682_689_492_137_085_9)).abs() < 1e-15, "{e}");
         // ṙ ~ N(10, 0.5²): centred on the first blind speed, P(|ṙ − 10| ≤ 1) = 0.954499736…
-        let e = mti.expected_at(10_000.0, 0.25e6, r2);
+        let e = mti.expected_at(10_000.0, r2, 0.25);
         assert!((e - (1.0 - 0.954_499_736_103_641_6)).abs() < 1e-15, "{e}");
         // far from every interval: outside, to the last bit
-        assert_eq!(mti.expected_at(5_000.0, 1e-4, r2), 1.0);
+        assert_eq!(mti.expected_at(5_000.0, r2, 1e-10), 1.0);
         // at the sensor: in the notch whatever the spread
-        assert_eq!(mti.expected_at(0.0, 1.0, 0.0), 0.0);
+        assert_eq!(mti.expected_at(0.0, 0.0, 1.0), 0.0);
+        // a spread so wide it overflows: no mass in the notch; a notch wider than any
+        // speed far away: inside, not NaN
+        assert_eq!(mti.expected_at(0.0, r2, f64::INFINITY), 1.0);
+        let huge = RangeRateNotch::new(1e200, Some(3e200), 1, 0.0, 1.0).unwrap();
+        assert_eq!(huge.expected_at(1e220, 1e220, 1.0), 0.0);
     }
 
     #[test]

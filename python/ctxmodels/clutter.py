@@ -196,10 +196,13 @@ class ClutterDensityModel(ModelComponent):
         detection instead of the range of its position, NaN where there is none — a
         bearing–range sensor's *measured* range, so a detection measured exactly on a band
         edge falls in the band that owns the edge."""
+        given = positions
         positions, heights = self._plane_and_heights(positions)
         n = positions.shape[0]
         metadata = self.metadata_array(metadata, n)
-        inputs = dict(positions=positions, metadata=metadata)
+        # (the caller's array: the columns split off it would hide an overlap with out)
+        inputs = dict(positions=given if isinstance(given, np.ndarray) else positions,
+                      metadata=metadata)
         if ranges is not None:
             ranges = as_array(ranges, "ranges", 1, f"({n},) ranges")
             if ranges.shape != (n,):

@@ -113,7 +113,11 @@ impl LaneKernel for Densities<'_> {
                     let map = read_map(map);
                     for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(8)) {
                         let at = |i: usize| {
-                            let measured = ranges.map_or(f64::NAN, |r| r[first + 4 * j + i]);
+                            // (a map is of the plane: a 3-D detection's range is a slant one)
+                            let measured = match (ranges, heights) {
+                                (Some(r), None) => r[first + 4 * j + i],
+                                _ => f64::NAN,
+                            };
                             map.value_at(pose, p[2 * i], p[2 * i + 1], measured)
                         };
                         let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);

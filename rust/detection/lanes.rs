@@ -6,7 +6,9 @@
 
 use super::{Offsets, ScanDetection, Step, Tilted};
 use crate::batch::{CvRows, Heights, Planar, PositionMapping, Positions, RowHeights, Rows, Velocities};
-use crate::cubature::{cholesky2_lanes, cholesky3, velocity_at_point, velocity_given_position, Rule, SpatialRule};
+use crate::cubature::{
+    cholesky2_lanes, cholesky3, is_positive_semidefinite, velocity_at_point, velocity_given_position, Rule, SpatialRule,
+};
 use crate::elevation::ElevationSector;
 use crate::range_bands::SquaredBands;
 use crate::sector::FramedSector;
@@ -329,6 +331,8 @@ macro_rules! without_notch {
 pub(super) enum BadGaussian {
     Mean,
     Covar,
+    /// The covariance of the position and the velocity a notch reads, together.
+    Velocity,
 }
 
 /// Means (N, ncols) and their (N, ncols, ncols) covariances.
@@ -377,8 +381,8 @@ impl Gaussians<'_> {
 
     /// The velocity of row `row` given its position ([`velocity_given_position`]), the
     /// position block being `l` (lower triangular) on `positions`, the velocity in columns
-    /// `velocities`: (B, the covariance left), or None where an entry is not finite or the
-    /// covariance left is not positive semi-definite (the covariance is not).
+    /// `velocities`: (B, the covariance left), or None where the covariance of the position
+    /// and the velocity together is not finite, symmetric and positive semi-definite.
     #[allow(clippy::type_complexity)]
     fn velocity_spread<const D: usize>(
         self,
@@ -396,12 +400,23 @@ impl Gaussians<'_> {
                 block[i][j] = c[vi * k + velocities[j]];
             }
         }
-        let scale = (0..D).fold(f64::MIN_POSITIVE, |m, i| m.max(block[i][i].abs()));
+        // the joint block of the positions and the velocity, as the state orders neither
+        let mut joint = [0.0; 36];
+        let axes = positions.iter().chain(&velocities);
+        for (a, &i) in axes.clone().enumerate() {
+            for (b, &j) in axes.clone().enumerate() {
+                joint[a * 2 * D + b] = c[i * k + j];
+            }
+        }
+        if !is_positive_semidefinite(&joint[..4 * D * D], 2 * D) {
+            return None;
+        }
         let (b, left) = velocity_given_position(l, cross, block);
-        let fine = b.iter().chain(&left).flatten().all(|v| v.is_finite())
-            && (0..D).all(|i| left[i][i] >= -1e-9 * scale)
-            && (0..D).all(|i| (0..D).all(|j| (block[i][j] - block[j][i]).abs() <= 1e-9 * scale));
-        fine.then_some((b, left))
+        b.iter()
+            .chain(&left)
+            .flatten()
+            .all(|v| v.is_finite())
+            .then_some((b, left))
     }
 
     /// The (x, y) columns and the (vx, vy) columns (the latter zero without velocities).
@@ -490,8 +505,9 @@ impl<V: Velocities> Expected<'_, V> {
         for (g, group) in out.chunks_mut(4 * GROUP).enumerate() {
             let start = 4 * GROUP * g;
             for (j, block) in group.chunks(4).enumerate() {
-                let (mut mx, mut my, mut l, mut bad_mean, mut bad_covar) =
+                let (mut mx, mut my, mut l, mut bad_mean, bad_covar) =
                     gaussians.lanes::<L>(first + start + 4 * j, block.len());
+                let mut bad_velocity = L::none();
                 if V::MOVING {
                     let [l11, l21, l22] = [l[0].to_array(), l[1].to_array(), l[2].to_array()];
                     let mut refused = [0.0; 4];
@@ -502,7 +518,7 @@ impl<V: Velocities> Expected<'_, V> {
                             None => *flag = 1.0,
                         }
                     }
-                    bad_covar = L::or(bad_covar, L::from_array(refused).gt(zero));
+                    bad_velocity = L::select(bad_covar, zero, L::from_array(refused)).gt(zero);
                 }
                 let mut v = match block.len() {
                     4 => velocities.lanes::<L>(first + start + 4 * j),
@@ -514,12 +530,13 @@ impl<V: Velocities> Expected<'_, V> {
                         L::or(v[0].non_finite(), L::or(v[1].non_finite(), v[2].non_finite())),
                     );
                 }
-                let unusable = L::or(bad_mean, bad_covar);
+                let unusable = L::or(bad_mean, L::or(bad_covar, bad_velocity));
                 if L::any(unusable) {
                     // Said for the first such Gaussian; evaluated as a point mass at the
                     // origin in its place.
-                    let (mean, either) = (
+                    let (mean, position, either) = (
                         L::select(bad_mean, one, zero).to_array(),
+                        L::select(bad_covar, one, zero).to_array(),
                         L::select(unusable, one, zero).to_array(),
                     );
                     for (i, spread) in spreads[j].iter_mut().enumerate() {
@@ -532,8 +549,10 @@ impl<V: Velocities> Expected<'_, V> {
                             start + 4 * j + i,
                             if mean[i] != 0.0 {
                                 BadGaussian::Mean
-                            } else {
+                            } else if position[i] != 0.0 {
                                 BadGaussian::Covar
+                            } else {
+                                BadGaussian::Velocity
                             },
                         )));
                     }
@@ -652,8 +671,10 @@ impl<V: Velocities> ExpectedRaised<'_, V> {
                 let problem =
                     if !(x.is_finite() && y.is_finite() && z.is_finite() && velocity.iter().all(|v| v.is_finite())) {
                         Some(BadGaussian::Mean)
-                    } else if factor.is_none() || spread.is_none() {
+                    } else if factor.is_none() {
                         Some(BadGaussian::Covar)
+                    } else if spread.is_none() {
+                        Some(BadGaussian::Velocity)
                     } else {
                         None
                     };

@@ -388,15 +388,42 @@ fn a_velocity_covariance_that_is_not_one_is_named() {
         .with_velocity(velocity(false))
         .unwrap();
     let (data, good) = (rows(9), joint_covariances(9));
-    for (entry, value) in [(6 + 1, -1.0), (6 + 3, f64::NAN), (6 * 3 + 1, 1e9)] {
+    // row 4's [x, vx, y, vy] block: var(vx) < 0, cov(vx, vy) NaN, asymmetric velocity block
+    let single: [&[(usize, f64)]; 3] = [&[(6 + 1, -1.0)], &[(6 + 3, f64::NAN)], &[(6 * 3 + 1, 1e9)]];
+    // a velocity block with a negative eigenvalue; a position known exactly (var(x) = 0)
+    // that covaries with vx; the position–velocity block asymmetric
+    let (vv, xv) = (6 + 1, 1); // (vx, vx), (x, vx) entries
+    let joint: [&[(usize, f64)]; 3] = [
+        &[(vv, 100.0), (6 * 3 + 3, 100.0), (6 + 3, 500.0), (6 * 3 + 1, 500.0)],
+        &[
+            (0, 0.0),
+            (xv, 10.0),
+            (6, 10.0),
+            (2, 0.0),
+            (12, 0.0),
+            (4, 0.0),
+            (24, 0.0),
+        ],
+        &[(xv, 30.0), (6, 0.0)],
+    ];
+    for changes in single.into_iter().chain(joint) {
         let mut covars = good.clone();
-        covars[36 * 4 + entry] = value; // row 4: var(vx) < 0, cov(vx, vy) NaN, asymmetric
+        for &(entry, value) in changes {
+            covars[36 * 4 + entry] = value;
+        }
         let err = scan
             .expected_at_gaussians(&data, &covars, 6, mapping, &Rule::cubature(), &mut [0.0; 9])
             .unwrap_err();
-        assert_eq!(err.argument(), "covars", "{entry}");
+        assert_eq!(err.argument(), "covars", "{changes:?}");
         assert!(err.to_string().contains("row 4"), "{err}");
     }
+    // the velocity's fault is said as the velocity's
+    let mut covars = good.clone();
+    covars[36 * 4 + vv] = -1.0;
+    let err = scan
+        .expected_at_gaussians(&data, &covars, 6, mapping, &Rule::cubature(), &mut [0.0; 9])
+        .unwrap_err();
+    assert!(err.to_string().contains("the position and the velocity"), "{err}");
 }
 
 #[test]

@@ -190,6 +190,13 @@ def test_coverage_refuses_two_models_of_one_name_and_bad_mathtext(tmp_path, caps
     assert "argument --model" in line and "second model named 'radar'" in line
     line = usage_error(["coverage", "--title", "$\\foo$", "--output", str(png)], capsys)
     assert "argument --title" in line and "mathtext" in line
+    # a model's name is drawn in its titles: checked as the title is
+    from ctxmodels import SensorModel
+    radar = paper_sensor_models()["radar"]
+    named = SensorModel(detection=radar.detection, clutter=radar.clutter, name="radar $\\frac{$ A")
+    first.write_text(YAML().dumps(named))
+    line = usage_error(["coverage", "--model", str(first), "--output", str(png)], capsys)
+    assert "the model named" in line and "mathtext" in line
     assert not png.exists()
 
 

@@ -119,3 +119,46 @@ def test_heights_missing_where_a_model_reads_them_are_named():
         _model().evaluate(POSE, bad)
     with pytest.raises(ValueError, match="factors"):
         ClutterDensityModel(factors=[ElevationSector(lower=LOW, upper=HIGH, outside=0.0)])
+
+
+def test_a_map_in_a_3d_model_reads_the_plane_on_every_path():
+    """A bearing–range map of a 3-D radar reads the detection's plane range, whether λ
+    comes from the detection (whose measured range is a slant one) or from its (x, y, z)."""
+    from ctxmodels import ClutterMap, Mounting
+    learned = ClutterMap(space="bearing-range",
+                         edges=(np.linspace(-math.pi, math.pi, 9), np.array([0., 5000, 10000, 20000])),
+                         prior_intensity=1e-3, prior_scans=10, forgetting=0.99)
+    rng = np.random.default_rng(0)
+    for _ in range(50):  # clutter learned in the 5–10 km ring only
+        r, b = rng.uniform(5000, 10000, 40), rng.uniform(-math.pi, math.pi, 40)
+        learned.update(Pose(x=0, y=0, z=25), np.column_stack([r * np.cos(b), r * np.sin(b)]))
+    sensor = SensorModel(detection=DetectionProbabilityModel(factors=[0.9]),
+                         clutter=ClutterDensityModel(factors=[learned]),
+                         position_mapping=(0, 2, 4), mounting=Mounting(up=25))
+    context = sensor.context(Pose(x=0, y=0), T0)
+    model = CartesianToElevationBearingRange(
+        ndim_state=6, mapping=(0, 2, 4), noise_covar=np.eye(3),
+        translation_offset=np.array([[0.0], [0.0], [25.0]]))
+    truth = np.array([4000.0, 0, 100, 0, 4000, 0])  # plane range 4.0 km, slant range 5.6 km
+    detection = Detection(model.function(State(truth.reshape(-1, 1))), timestamp=T0,
+                          measurement_model=model)
+    from_detection = context.clutter_spatial_density_detections([detection])
+    from_position = context.clutter_spatial_density_array(truth[[0, 2, 4]][None])
+    plane = ClutterDensityModel(factors=[learned]).evaluate(context.pose, truth[[0, 2]][None])
+    np.testing.assert_allclose(from_detection, plane, rtol=1e-12)
+    np.testing.assert_allclose(from_position, plane, rtol=1e-12)
+
+
+def test_out_may_not_overlap_positions_with_heights():
+    positions = np.asfortranarray(np.column_stack([np.full(4, 1000.0), np.zeros(4), np.zeros(4)]))
+    with pytest.raises(ArgumentError, match="out: overlaps positions"):
+        _model().evaluate(POSE, positions, out=positions[:, 2])
+    assert np.all(positions[:, 2] == 0.0)
+
+
+def test_a_planar_birth_with_an_elevation_density_is_refused_when_built():
+    density = ClutterDensityModel(factors=[ElevationSector(lower=LOW, upper=HIGH, inside=0.1,
+                                                           outside=1.0)])
+    with pytest.raises(ArgumentError) as info:
+        MeasurementDrivenBirth(birth_weight=0.5, birth_covar=np.eye(4), birth_density=density)
+    assert info.value.argument == "birth_density"

@@ -283,6 +283,17 @@ def test_coverage_draws_the_radar_curves_and_the_horizon():
     rings = [c for c in plan.collections if hasattr(c, "get_paths")]
     radii = [np.hypot(*path.vertices.T) for c in rings for path in c.get_paths() if len(path.vertices)]
     assert radii and all(abs(r.mean() - horizon) < 2 * 40_000 / 60 for r in radii)
+    # a horizon beyond the map is named as not drawn; two radar equations are said to be
+    from ctxmodels import DetectionProbabilityModel, SensorModel
+    near = coverage_plots._figure_coverage({"coast": radar}, (0.0, 0.0, 0.0), extents=(1000.0,),
+                                           resolution=20)
+    assert "(not on these maps)" in legend_texts(near)
+    twice = SensorModel(detection=DetectionProbabilityModel(factors=[
+        *radar.detection.factors, radar.detection.factors[0]]), clutter=radar.clutter)
+    fig = coverage_plots._figure_coverage({"coast": twice}, (0.0, 0.0, 0.0), extents=(1000.0,),
+                                          resolution=20)
+    (curves,) = [ax for ax in fig.axes if ax.get_xlabel() == "range (m)"]
+    assert "the first of its 2 radar equations" in curves.get_title()
     # without a radar equation or a horizon: neither
     fig = coverage_plots._figure_coverage({"lidar": _air_radar()}, (0.0, 0.0, 0.0),
                                           extents=(1000.0,), resolution=20)

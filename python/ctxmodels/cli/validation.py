@@ -165,14 +165,22 @@ def check_coverage(args) -> None:
     if not output.parent.is_dir():
         raise UsageError(f"argument --output: folder {output.parent} does not exist")
     check_writable_folder(output.parent)
-    if "$" in args.title:  # matplotlib reads $...$ as mathtext, and fails only when drawing
-        from matplotlib.mathtext import MathTextParser
-        try:
-            MathTextParser("path").parse(args.title)
-        except Exception as err:
-            first = (str(err).strip().splitlines() or [type(err).__name__])[0]
-            raise UsageError(f"argument --title: not valid mathtext ({first}); "
-                             "escape a literal dollar as \\$") from None
+    _check_mathtext(args.title, "argument --title", "escape a literal dollar as \\$")
+    for name in args.models or ():  # (a model's name is in its maps' titles)
+        _check_mathtext(name, f"argument --model: the model named {name!r}",
+                        "rename it (a literal dollar as \\$)")
+
+
+def _check_mathtext(text: str, what: str, fix: str) -> None:
+    """``text`` must draw: matplotlib reads $...$ as mathtext, and fails only when drawing."""
+    if "$" not in text:
+        return
+    from matplotlib.mathtext import MathTextParser
+    try:
+        MathTextParser("path").parse(text)
+    except Exception as err:
+        first = (str(err).strip().splitlines() or [type(err).__name__])[0]
+        raise UsageError(f"{what}: not valid mathtext ({first}); {fix}") from None
 
 
 def load_models(files) -> dict:

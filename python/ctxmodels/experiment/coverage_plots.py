@@ -84,8 +84,8 @@ def _horizon_only(model):
 
 def horizon_range(model, height: float = 0.0) -> float | None:
     """The nearest radar horizon of ``model``'s factors for targets ``height`` metres up (a
-    horizon at each target's height reads it; one at a fixed height does not), metres;
-    None without a horizon."""
+    horizon at each target's height reads it; one at a fixed height does not, and is a
+    range — a slant range in a 3-D model), metres; None without a horizon."""
     from ..horizon import RadarHorizon
     ranges = [RadarHorizon(antenna_height=h.antenna_height, target_height=max(height, 0.0),
                            k=h.k, earth_radius=h.earth_radius).range
@@ -107,7 +107,8 @@ def radar_curves(radar, ranges: np.ndarray) -> dict[int, np.ndarray]:
 SWERLING_COLOURS = ["#000000", "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728"]
 
 
-def _draw_radar_curves(ax, name: str, radar, reach: float, horizon: float | None) -> None:
+def _draw_radar_curves(ax, name: str, radars: list, reach: float, horizon: float | None) -> None:
+    radar = radars[0]
     ranges = np.linspace(0.0, reach, 400)
     for case, pd in radar_curves(radar, ranges).items():
         own = case == radar.swerling
@@ -118,7 +119,9 @@ def _draw_radar_curves(ax, name: str, radar, reach: float, horizon: float | None
         ax.axvline(horizon, color="0.3", ls=":", lw=1.2, label="radar horizon")
     ax.set_xlim(0.0, reach)
     ax.set_ylim(0.0, 1.02)
-    ax.set_title(f"{name}: radar equation P_D per Swerling case\n"
+    more = (f" (the first of its {len(radars)} radar equations: P_D is their product)"
+            if len(radars) > 1 else "")
+    ax.set_title(f"{name}: radar equation P_D per Swerling case{more}\n"
                  f"{radar.reference_snr:g} dB at {radar.reference_range:,.0f} m, "
                  f"P_FA {radar.false_alarm_probability:g}, {radar.pulses} pulse(s)", fontsize=9)
     ax.set_xlabel("range (m)", fontsize=8)
@@ -155,6 +158,7 @@ def _figure_coverage(sensor_models, pose, extents=(1800.0, 100.0), land=(), reso
     image = None
     horizons = {name: _horizon_only(model) for name, model in sensor_models.items()}
     horizons = {name: model for name, model in horizons.items() if model is not None}
+    drawn: set = set()  # the models whose horizon is on a map
     for row, extent in enumerate(extents):
         xs, ys, grids = coverage_grid(sensor_models, pose, extent, resolution, height)
         rings = coverage_grid(horizons, pose, extent, resolution, height)[2] if horizons else {}
@@ -170,6 +174,7 @@ def _figure_coverage(sensor_models, pose, extents=(1800.0, 100.0), land=(), reso
             if name in rings and rings[name].min() < 0.5 < rings[name].max():
                 ax.contour(xs, ys, rings[name], levels=[0.5], colors="w", linestyles="--",
                            linewidths=1.0)
+                drawn.add(name)
             length = 0.14 * extent
             ax.annotate("", xy=(px + length * math.cos(heading), py + length * math.sin(heading)),
                         xytext=(px, py), arrowprops=dict(arrowstyle="-|>", color=HEADING_COLOUR,
@@ -202,13 +207,14 @@ def _figure_coverage(sensor_models, pose, extents=(1800.0, 100.0), land=(), reso
             if name in rings and rings[name].min() < 0.5 < rings[name].max():
                 ax.contour(ranges, heights, rings[name], levels=[0.5], colors="w",
                            linestyles="--", linewidths=1.0)
+                drawn.add(name)
     if curves:
         for col, name in enumerate(panels):
             ax = axes[-1, col]
             if not radars.get(name):
                 ax.remove()
                 continue
-            _draw_radar_curves(ax, name, radars[name][0], extents[0],
+            _draw_radar_curves(ax, name, radars[name], extents[0],
                                horizon_range(sensor_models[name], height))
     maps = [ax for ax in fig.axes if ax.images]
     colourbar = fig.colorbar(image, ax=maps, shrink=0.85, aspect=30)
@@ -220,8 +226,9 @@ def _figure_coverage(sensor_models, pose, extents=(1800.0, 100.0), land=(), reso
         handles.append(Line2D([], [], color="w", lw=1.2, mec="0.5",
                               label="land outline (white)"))
     for name in horizons:
+        where = "white dashed" if name in drawn else "not on these maps"
         handles.append(Line2D([], [], color="w", lw=1.0, ls="--",
-                              label=f"{name}: radar horizon (white dashed) at "
+                              label=f"{name}: radar horizon ({where}) at "
                                     f"{horizon_range(sensor_models[name], height) / 1000:,.1f} km"))
     # (in as many columns as the figure has panels: one panel's width holds one entry)
     fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), len(panels)),

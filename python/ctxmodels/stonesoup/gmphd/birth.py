@@ -132,6 +132,11 @@ class MeasurementDrivenBirth(Base):
         if self.birth_density is not None and not isinstance(self.birth_density, ClutterDensityModel):
             raise ArgumentTypeError("birth_density", f"expected a ClutterDensityModel, got "
                                                      f"{type(self.birth_density).__name__}")
+        if self.birth_density is not None and self.birth_density.uses_height \
+                and len(position) != 3:
+            raise ArgumentError("birth_density", "its ElevationSector reads each detection's "
+                                                 "height, but position_mapping gives no height; "
+                                                 "give the (x, y, z) indices")
         if self.max_delay is not None and not isinstance(self.max_delay, datetime.timedelta):
             raise TypeError(f"max_delay: expected a datetime.timedelta, "
                             f"got {type(self.max_delay).__name__}")
