@@ -381,6 +381,59 @@ def _bench_clutter(n, repeats, min_sample):
     return [row("clutter_metadata", n, n, times, check)]
 
 
+def bench_clutter_heights(sizes, repeats, min_sample):
+    """λ of a 3-D radar's detections, (M, 3) positions: range bands on the slant range from
+    the sensor's height × sea clutter below +0.5° of elevation (an elevation sector)."""
+    rows = []
+    lower, upper = math.radians(-90), math.radians(0.5)
+    clutter = ClutterDensityModel(factors=[
+        RangeBands(edges=(20_000.0,), values=(1e-9, 2e-10)),
+        ElevationSector(lower=lower, upper=upper, inside=50.0, outside=1.0)])
+    model = SensorModel(detection=DetectionProbabilityModel(factors=[0.9]), clutter=clutter,
+                        position_mapping=(0, 2, 4))
+    context = model.context((0.0, 0.0, 0.0, 25.0))
+    for n in sizes:
+        rng = np.random.default_rng(n + 3)
+        positions = np.column_stack([rng.uniform(-40e3, 40e3, n), rng.uniform(-40e3, 40e3, n),
+                                     rng.uniform(0, 3000, n)])
+        x, y, z = (np.ascontiguousarray(positions[:, c]) for c in range(3))
+        out = np.empty(n)
+        dz, r2, r, tmp = (np.empty(n) for _ in range(4))
+        sea = np.empty(n, bool)
+
+        def numpy_clutter():
+            # slant r², the band, then r sin(lower) ≤ dz ≤ r sin(upper) without an arctangent
+            np.subtract(z, 25.0, out=dz)
+            np.multiply(x, x, out=r2)
+            np.multiply(y, y, out=tmp)
+            np.add(r2, tmp, out=r2)
+            np.multiply(dz, dz, out=tmp)
+            np.add(r2, tmp, out=r2)
+            np.sqrt(r2, out=r)
+            np.multiply(r, math.sin(upper), out=tmp)
+            np.less_equal(dz, tmp, out=sea)
+            np.multiply(sea, 49.0, out=tmp)
+            np.add(tmp, 1.0, out=tmp)
+            np.copyto(out, np.where(r <= 20_000.0, 1e-9, 2e-10))
+            return np.multiply(out, tmp, out=out)
+
+        ours = context.clutter_spatial_density_array(positions).copy()
+        ref = np.array(numpy_clutter(), copy=True)
+        elevation = np.arctan2(z - 25.0, np.hypot(x, y))
+        slant = np.sqrt(x ** 2 + y ** 2 + (z - 25.0) ** 2)
+        near = (np.abs(elevation - upper) < 1e-9) | (np.abs(slant - 20_000.0) < TOL)
+        check = agreement(ours, ref, near)
+        ours_out = np.empty(n)
+        times = {
+            "ctxmodels": median_time(
+                lambda: context.clutter_spatial_density_array(positions, out=ours_out),
+                repeats, min_sample),
+            "numpy": median_time(numpy_clutter, repeats, min_sample),
+        }
+        rows.append(row("clutter_elevation_slant", n, n, times, check))
+    return rows
+
+
 def land_models(n_vertices: int, jagged: bool):
     ring = coastline(n_vertices, jagged)
     polygon = shapely.Polygon(ring)
@@ -751,6 +804,7 @@ def main(argv=None) -> int:
     out += bench_radar(radar_sizes, repeats, min_sample)
     out += bench_heights(radar_sizes, repeats, min_sample)
     out += bench_range_rate(radar_sizes, repeats, min_sample)
+    out += bench_clutter_heights(radar_sizes, repeats, min_sample)
     print_table(results)
     bad = [r["benchmark"] for r in out if r["agreement"]["differ_far_from_boundary"]]
     results["agree"] = not bad

@@ -198,40 +198,37 @@ impl ClutterModel {
         ranges: Option<&[f64]>,
         out: &mut [f64],
     ) -> Result<()> {
-        self.evaluate_raised(pose, positions, None, metadata, ranges, out)
+        self.evaluate_rows(pose, positions, 2, metadata, ranges, out)
     }
 
-    /// As [`evaluate_with_ranges`](Self::evaluate_with_ranges), for detections at world
-    /// heights `heights` (M,) when given: range bands read the slant range from the
-    /// sensor's height (`pose.z`) and elevation sectors the elevation above it. A model
-    /// with an elevation sector needs the heights.
-    pub fn evaluate_raised(
+    /// As [`evaluate_with_ranges`](Self::evaluate_with_ranges), for `positions` of `ncols`
+    /// columns: (M, 2) rows (x, y), or (M, 3) rows (x, y, z) of detections with a height,
+    /// whose range bands read the slant range from the sensor's height (`pose.z`) and whose
+    /// elevation sectors read the elevation above it. A model with an elevation sector
+    /// needs the heights.
+    pub fn evaluate_rows(
         &self,
         pose: &Pose,
         positions: &[f64],
-        heights: Option<&[f64]>,
+        ncols: usize,
         metadata: &[f64],
         ranges: Option<&[f64]>,
         out: &mut [f64],
     ) -> Result<()> {
         let m = out.len();
-        match heights {
-            None if self.uses_height => return Err(ModelError::shape(
-                "positions",
-                "the clutter model's elevation sector reads each detection's height: give (M, 3) positions (x, y, z)",
-            )),
-            Some(h) if h.len() != m => {
-                return Err(ModelError::shape(
-                    "positions",
-                    format!("must have {m} heights, got {}", h.len()),
-                ))
-            }
-            _ => {}
-        }
-        if positions.len() != 2 * m {
+        if ncols == 2 && self.uses_height {
             return Err(ModelError::shape(
                 "positions",
-                format!("must be ({m}, 2), got {} values", positions.len()),
+                "the clutter model's elevation sector reads each detection's height: give (M, 3) positions (x, y, z)",
+            ));
+        }
+        if !(ncols == 2 || ncols == 3) || positions.len() != ncols * m {
+            return Err(ModelError::shape(
+                "positions",
+                format!(
+                    "must be ({m}, 2) or ({m}, 3), got {} values in rows of {ncols}",
+                    positions.len()
+                ),
             ));
         }
         if let Some(r) = ranges {
@@ -263,7 +260,7 @@ impl ClutterModel {
                 model: self,
                 pose,
                 positions,
-                heights,
+                ncols,
                 metadata,
                 ranges,
                 first,
@@ -271,8 +268,8 @@ impl ClutterModel {
             })
         });
         if let Some(row) = bad {
-            let z = heights.map(|h| h[row]);
-            let (argument, message) = self.problem(positions, z, metadata, row, out[row]);
+            let place = &positions[ncols * row..][..ncols];
+            let (argument, message) = self.problem(place, metadata, row, out[row]);
             return Err(ModelError::non_finite(argument, row, message));
         }
         Ok(())
@@ -318,16 +315,8 @@ impl ClutterModel {
 
     /// Why row `row` has no finite density > 0 (every factor value is one, so it could not
     /// be evaluated, or the product under/overflowed).
-    fn problem(
-        &self,
-        positions: &[f64],
-        z: Option<f64>,
-        metadata: &[f64],
-        row: usize,
-        density: f64,
-    ) -> (&'static str, String) {
-        let (x, y) = (positions[2 * row], positions[2 * row + 1]);
-        if self.uses_position && !(x.is_finite() && y.is_finite() && z.is_none_or(f64::is_finite)) {
+    fn problem(&self, place: &[f64], metadata: &[f64], row: usize, density: f64) -> (&'static str, String) {
+        if self.uses_position && !place.iter().all(|v| v.is_finite()) {
             return ("positions", "position is NaN or infinite".to_string());
         }
         let k = self.metadata_columns;

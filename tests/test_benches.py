@@ -38,7 +38,7 @@ def test_quick_run_writes_agreeing_results(quick_results):
                      "pd_radar_land_sight", "pd_call_array (per call)",
                      "pd_call_scalar (per call)", "pd_radar_equation_swerling1",
                      "pd_radar_equation_swerling0_10", "pd_radar_horizon", "pd_elevation_sector",
-                     "pd_3d_beam_horizon", "pd_range_rate_notch"}
+                     "pd_3d_beam_horizon", "pd_range_rate_notch", "clutter_elevation_slant"}
     assert {r["size"] for r in quick_results["results"]
             if r["benchmark"] == "pd_call_array (per call)"} == {1, 10, 100}
     for r in quick_results["results"]:

@@ -292,11 +292,10 @@ class ClutterModel:
         metadata: _Floats,
         out: _Floats | None = None,
         ranges: _Floats | None = None,
-        heights: _Floats | None = None,
     ) -> _Floats:
-        """λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing;
-        range bands read `ranges[i]` (a measured range) where given and not NaN; with
-        `heights` (M,), detections at those world heights (slant ranges, elevations)."""
+        """λ at world `positions` (M, 2), or (M, 3) with heights (slant ranges, elevations),
+        with `metadata` (M, metadata_columns), NaN = missing; range bands read `ranges[i]`
+        (a measured range) where given and not NaN."""
 
 @final
 class ClutterMap:

@@ -196,11 +196,10 @@ class ClutterDensityModel(ModelComponent):
         detection instead of the range of its position, NaN where there is none — a
         bearing–range sensor's *measured* range, so a detection measured exactly on a band
         edge falls in the band that owns the edge."""
-        given = positions
-        positions, heights = self._plane_and_heights(positions)
+        given, positions = positions, self._rows(positions)
         n = positions.shape[0]
         metadata = self.metadata_array(metadata, n)
-        # (the caller's array: the columns split off it would hide an overlap with out)
+        # (the caller's array: a copy made of it would hide an overlap with out)
         inputs = dict(positions=given if isinstance(given, np.ndarray) else positions,
                       metadata=metadata)
         if ranges is not None:
@@ -208,22 +207,18 @@ class ClutterDensityModel(ModelComponent):
             if ranges.shape != (n,):
                 raise ValueError(f"ranges: must have {n} entries, got shape {ranges.shape}")
             inputs["ranges"] = ranges
-        if heights is not None:
-            inputs["heights"] = heights
         return self._compiled().evaluate(pose_tuple(pose), positions, metadata,
-                                         check_out(out, n, **inputs), ranges, heights)
+                                         check_out(out, n, **inputs), ranges)
 
-    def _plane_and_heights(self, positions) -> tuple[np.ndarray, np.ndarray | None]:
-        """(M, 2) positions and their (M,) heights (None for (M, 2) positions)."""
+    def _rows(self, positions) -> np.ndarray:
+        """(M, 2) positions, or (M, 3) with heights (which the core reads in place)."""
         if isinstance(positions, (list, tuple)) and len(positions) == 0:
-            return np.empty((0, 2)), (np.empty(0) if self.uses_height else None)
+            return np.empty((0, 3 if self.uses_height else 2))
         rows = as_rows(positions, "positions")
-        if rows.shape[1] == 3:
-            return np.ascontiguousarray(rows[:, :2]), np.ascontiguousarray(rows[:, 2])
-        if rows.shape[1] != 2:
+        if rows.shape[1] not in (2, 3):
             raise ShapeError("positions", f"must have 2 columns (x, y) or 3 (x, y, z), got "
                                           f"shape {rows.shape}")
-        if self.uses_height:
+        if rows.shape[1] == 2 and self.uses_height:
             raise ShapeError("positions", "the clutter model's ElevationSector reads each "
                                           "detection's height: give (M, 3) positions (x, y, z)")
-        return rows, None
+        return rows

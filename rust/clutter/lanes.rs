@@ -13,9 +13,11 @@ use crate::simd::{LaneKernel, Lanes};
 pub(super) struct Densities<'a> {
     pub model: &'a ClutterModel,
     pub pose: &'a Pose,
+    /// World positions, (M, 2) rows (x, y), or (M, 3) rows (x, y, z) of detections with a
+    /// height (slant ranges and elevations).
     pub positions: &'a [f64],
-    /// World heights (M,) of detections with a height: slant ranges and elevations.
-    pub heights: Option<&'a [f64]>,
+    /// 2 or 3: the columns of `positions`.
+    pub ncols: usize,
     pub metadata: &'a [f64],
     pub ranges: Option<&'a [f64]>,
     pub first: usize,
@@ -27,11 +29,23 @@ impl LaneKernel for Densities<'_> {
 
     #[inline(always)]
     fn run<L: Lanes>(self) -> Option<usize> {
+        if self.ncols == 3 {
+            self.run_with::<L, true>()
+        } else {
+            self.run_with::<L, false>()
+        }
+    }
+}
+
+impl Densities<'_> {
+    /// The kernel for rows of 2 columns, or of 3 (`RAISED`), fixed at compile time.
+    #[inline(always)]
+    fn run_with<L: Lanes, const RAISED: bool>(self) -> Option<usize> {
         let Densities {
             model,
             pose,
             positions,
-            heights,
+            ncols,
             metadata,
             ranges,
             first,
@@ -42,21 +56,18 @@ impl LaneKernel for Densities<'_> {
         // (a λ below the smallest normal double is refused: 1/λ would overflow)
         let (one, nan, normal) = (L::splat(1.0), L::splat(f64::NAN), L::splat(f64::MIN_POSITIVE));
         let (ox, oy, oz) = (L::splat(pose.x), L::splat(pose.y), L::splat(pose.z));
-        // Heights above the sensor of the chunk's detections (zeros for planar ones: the
-        // same bits, as the scalar reference adds dz² = 0).
-        let zs = heights.map(|h| &h[first..first + full]);
         // Exact-size chunks, so the loads need no bounds checks. (No closure returns lanes
         // here: it would be compiled outside the AVX2 function.)
-        let xy = &positions[2 * first..2 * (first + full)];
+        let xy = &positions[ncols * first..ncols * (first + full)];
+        let block = 4 * ncols;
         let rows = &metadata[k * first..k * (first + full)];
         // λ starts at 1 (NaN where a position the bands read is not finite): in a pass of
         // its own, or, when the first factor is a range factor, in that factor's pass.
         let fused_start = matches!(model.factors.first(), Some(ClutterFactor::Range(_)));
         if !fused_start {
             if model.uses_position {
-                for (j, (o, p)) in out[..full].chunks_exact_mut(4).zip(xy.chunks_exact(8)).enumerate() {
-                    let (x, y) = L::pairs(p);
-                    let dz = height_above::<L>(zs, j, oz);
+                for (o, p) in out[..full].chunks_exact_mut(4).zip(xy.chunks_exact(block)) {
+                    let (x, y, dz) = place::<L, RAISED>(p, oz);
                     let bad_position = L::or(L::or(x.non_finite(), y.non_finite()), dz.non_finite());
                     L::select(bad_position, nan, one).store(o);
                 }
@@ -83,10 +94,14 @@ impl LaneKernel for Densities<'_> {
                 }
                 ClutterFactor::Range(bands) => {
                     let fresh = i == 0 && fused_start;
-                    for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(8)) {
-                        let (x, y) = L::pairs(p);
-                        let (dx, dy, dz) = (x - ox, y - oy, height_above::<L>(zs, j, oz));
-                        let squared = dx * dx + dy * dy + dz * dz;
+                    for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(block)) {
+                        let (x, y, dz) = place::<L, RAISED>(p, oz);
+                        let (dx, dy) = (x - ox, y - oy);
+                        let squared = if RAISED {
+                            dx * dx + dy * dy + dz * dz
+                        } else {
+                            dx * dx + dy * dy
+                        };
                         // With measured ranges the bands read a range; without, the squared
                         // range through their root thresholds: the same bits, no square root.
                         let value = match ranges {
@@ -111,14 +126,14 @@ impl LaneKernel for Densities<'_> {
                 ClutterFactor::Map(map) => {
                     // a gather per detection: the map is read once for the whole pass
                     let map = read_map(map);
-                    for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(8)) {
+                    for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(block)) {
                         let at = |i: usize| {
                             // (a map is of the plane: a 3-D detection's range is a slant one)
-                            let measured = match (ranges, heights) {
-                                (Some(r), None) => r[first + 4 * j + i],
+                            let measured = match ranges {
+                                Some(r) if !RAISED => r[first + 4 * j + i],
                                 _ => f64::NAN,
                             };
-                            map.value_at(pose, p[2 * i], p[2 * i + 1], measured)
+                            map.value_at(pose, p[ncols * i], p[ncols * i + 1], measured)
                         };
                         let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);
                         if checks {
@@ -128,9 +143,9 @@ impl LaneKernel for Densities<'_> {
                     }
                 }
                 ClutterFactor::Elevation(sector) => {
-                    for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(8)) {
-                        let (x, y) = L::pairs(p);
-                        let (dx, dy, dz) = (x - ox, y - oy, height_above::<L>(zs, j, oz));
+                    for (o, p) in blocks.zip(xy.chunks_exact(block)) {
+                        let (x, y, dz) = place::<L, RAISED>(p, oz);
+                        let (dx, dy) = (x - ox, y - oy);
                         let density = L::load(o) * sector.lanes_at(dz, dx * dx + dy * dy + dz * dz);
                         if checks {
                             bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
@@ -139,8 +154,8 @@ impl LaneKernel for Densities<'_> {
                     }
                 }
                 ClutterFactor::Coast(_) | ClutterFactor::Zone(_) => {
-                    for (o, p) in blocks.zip(xy.chunks_exact(8)) {
-                        let at = |i: usize| f.point_value(pose, p[2 * i], p[2 * i + 1]);
+                    for (o, p) in blocks.zip(xy.chunks_exact(block)) {
+                        let at = |i: usize| f.point_value(pose, p[ncols * i], p[ncols * i + 1]);
                         let density = L::load(o) * L::from_array([at(0), at(1), at(2), at(3)]);
                         if checks {
                             bad = L::or(bad, L::or(density.non_finite(), density.lt(normal)));
@@ -184,8 +199,8 @@ impl LaneKernel for Densities<'_> {
             let measured = ranges.map_or(f64::NAN, |r| r[row]);
             *density = model.at_one(
                 pose,
-                [positions[2 * row], positions[2 * row + 1]],
-                heights.map(|h| h[row]),
+                [positions[ncols * row], positions[ncols * row + 1]],
+                RAISED.then(|| positions[3 * row + 2]),
                 &metadata[row * k..(row + 1) * k],
                 measured,
             );
@@ -197,11 +212,19 @@ impl LaneKernel for Densities<'_> {
     }
 }
 
-/// z − z_sensor of block `j`'s four detections (0 without heights).
+/// x, y and z − z_sensor of a block's four detections: from (x, y) pairs (dz 0: the same bits,
+/// as the scalar reference adds dz² = 0), or from (x, y, z) rows.
 #[inline(always)]
-fn height_above<L: Lanes>(zs: Option<&[f64]>, j: usize, oz: L) -> L {
-    match zs {
-        Some(z) => L::load(&z[4 * j..]) - oz,
-        None => L::splat(0.0),
+fn place<L: Lanes, const RAISED: bool>(p: &[f64], oz: L) -> (L, L, L) {
+    if RAISED {
+        let p = &p[..12];
+        (
+            L::from_array([p[0], p[3], p[6], p[9]]),
+            L::from_array([p[1], p[4], p[7], p[10]]),
+            L::from_array([p[2], p[5], p[8], p[11]]) - oz,
+        )
+    } else {
+        let (x, y) = L::pairs(p);
+        (x, y, L::splat(0.0))
     }
 }

@@ -288,6 +288,16 @@ fn every_backend_gives_the_reference_bits() {
                 .into_iter()
                 .flat_map(|r| height_options.iter().map(move |h| (r, h)))
             {
+                // the rows the kernel reads: (x, y), or (x, y, z) with the heights
+                let (rows, ncols): (Vec<f64>, usize) = match heights {
+                    None => (positions.clone(), 2),
+                    Some(h) => (
+                        (0..m)
+                            .flat_map(|i| [positions[2 * i], positions[2 * i + 1], h[i]])
+                            .collect(),
+                        3,
+                    ),
+                };
                 let reference: Vec<u64> = (0..m)
                     .map(|i| {
                         model
@@ -309,8 +319,8 @@ fn every_backend_gives_the_reference_bits() {
                         Densities {
                             model: &model,
                             pose: &pose,
-                            positions: &positions,
-                            heights,
+                            positions: &rows,
+                            ncols,
                             metadata: &metadata,
                             ranges,
                             first: 0,
@@ -341,23 +351,30 @@ fn a_model_reading_heights_needs_them_and_names_a_bad_one() {
     assert_eq!(err.argument(), "positions");
     // 1 km out: at the sea (elevation −1.1°, inside) and 500 m up (+26°, outside)
     model
-        .evaluate_raised(&pose, &positions, Some(&[0.0, 500.0]), &[], None, &mut out)
+        .evaluate_rows(&pose, &[1000.0, 0.0, 0.0, 1000.0, 0.0, 500.0], 3, &[], None, &mut out)
         .unwrap();
     assert_eq!(out, [8.0, 1.0]);
     let err = model
-        .evaluate_raised(&pose, &positions, Some(&[0.0, f64::NAN]), &[], None, &mut out)
+        .evaluate_rows(
+            &pose,
+            &[1000.0, 0.0, 0.0, 1000.0, 0.0, f64::NAN],
+            3,
+            &[],
+            None,
+            &mut out,
+        )
         .unwrap_err();
     assert_eq!(err.argument(), "positions");
     assert!(err.to_string().contains("row 1"), "{err}");
     let err = model
-        .evaluate_raised(&pose, &positions, Some(&[0.0]), &[], None, &mut out)
+        .evaluate_rows(&pose, &[1000.0, 0.0, 0.0, 1000.0, 0.0], 3, &[], None, &mut out)
         .unwrap_err();
     assert_eq!(err.argument(), "positions");
     // slant range bands: 1 km out and 1 km up is 1.41 km away
     let bands = RangeBands::new(vec![1200.0], vec![1.0, 2.0], vec![true]).unwrap();
     let model = ClutterModel::new(vec![ClutterFactor::Range(bands)]).unwrap();
     model
-        .evaluate_raised(&pose, &positions, Some(&[20.0, 1020.0]), &[], None, &mut out)
+        .evaluate_rows(&pose, &[1000.0, 0.0, 20.0, 1000.0, 0.0, 1020.0], 3, &[], None, &mut out)
         .unwrap();
     assert_eq!(out, [1.0, 2.0]);
 }

@@ -210,7 +210,7 @@ impl PyClutterAtPose {
         })
     }
 
-    /// λ at world `positions` (M, 2) with `metadata` (M, K) in the model's column order
+    /// λ at world `positions` (M, 2) — or (M, 3) with heights — with `metadata` (M, K) in the model's column order
     /// (None when the model reads no metadata), into `out` if given. None (nothing
     /// evaluated) unless every array is a C-contiguous, aligned float64 array of its shape.
     #[pyo3(signature = (positions, metadata = None, out = None))]
@@ -223,7 +223,10 @@ impl PyClutterAtPose {
     ) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
         let model = &self.model.get().0;
         let k = model.metadata_columns();
-        let Some(positions) = common_rows(positions, 2) else {
+        let Some((positions, ncols)) = common_rows(positions, 2)
+            .map(|p| (p, 2))
+            .or_else(|| common_rows(positions, 3).map(|p| (p, 3)))
+        else {
             return Ok(None);
         };
         let n = positions.shape()[0];
@@ -251,9 +254,9 @@ impl PyClutterAtPose {
             .map_err(|_| value_error("out", "must be C-contiguous"))?;
         let pose = &self.pose;
         if n < DETACH_ROWS {
-            guarded(|| model.evaluate(pose, p, m, buffer))?;
+            guarded(|| model.evaluate_rows(pose, p, ncols, m, None, buffer))?;
         } else {
-            detached(py, || model.evaluate(pose, p, m, buffer))?;
+            detached(py, || model.evaluate_rows(pose, p, ncols, m, None, buffer))?;
         }
         Ok(Some(result))
     }

@@ -408,11 +408,10 @@ impl PyClutterModel {
         self.0.uses_height()
     }
 
-    /// λ at world `positions` (M, 2) with `metadata` (M, metadata_columns), NaN = missing;
-    /// range bands read `ranges[i]` (a measured range) where given and not NaN; with
-    /// `heights` (M,), detections at those world heights (slant ranges, elevations).
-    #[pyo3(signature = (pose, positions, metadata, out = None, ranges = None, heights = None))]
-    #[allow(clippy::too_many_arguments)]
+    /// λ at world `positions` (M, 2), or (M, 3) with heights (slant ranges, elevations),
+    /// with `metadata` (M, metadata_columns), NaN = missing; range bands read `ranges[i]`
+    /// (a measured range) where given and not NaN.
+    #[pyo3(signature = (pose, positions, metadata, out = None, ranges = None))]
     fn evaluate<'py>(
         &self,
         py: Python<'py>,
@@ -421,28 +420,31 @@ impl PyClutterModel {
         metadata: Bound<'py, PyArray2<f64>>,
         out: Option<Bound<'py, PyArray1<f64>>>,
         ranges: Option<Bound<'py, PyArray1<f64>>>,
-        heights: Option<Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let pose = pose_of(pose)?;
         let n = positions.shape()[0];
+        let ncols = positions.shape()[1];
+        if !(ncols == 2 || ncols == 3) {
+            return Err(shape_error(
+                "positions",
+                format_args!("must have shape (M, 2) or (M, 3), got {:?}", positions.shape()),
+            ));
+        }
         let positions = borrow(&positions, "positions")?;
-        let p = points_slice(&positions, "positions")?;
+        let p = slice(&positions, "positions")?;
         let metadata = borrow(&metadata, "metadata")?;
         let m = slice(&metadata, "metadata")?;
         let ranges = ranges.map(|r| borrow(&r, "ranges")).transpose()?;
         let r = ranges.as_ref().map(|r| slice(r, "ranges")).transpose()?;
-        let heights = heights.map(|h| borrow(&h, "heights")).transpose()?;
-        let h = heights.as_ref().map(|h| slice(h, "heights")).transpose()?;
         let mut inputs = vec![("positions", p), ("metadata", m)];
         inputs.extend(r.map(|r| ("ranges", r)));
-        inputs.extend(h.map(|h| ("heights", h)));
         let mut out = output(py, out, n, &inputs)?;
         let result = Bound::clone(&out);
         let buffer = out
             .as_slice_mut()
             .map_err(|_| value_error("out", "must be C-contiguous"))?;
         let model = &self.0;
-        detached(py, || model.evaluate_raised(&pose, p, h, m, r, buffer))?;
+        detached(py, || model.evaluate_rows(&pose, p, ncols, m, r, buffer))?;
         Ok(result)
     }
 }
