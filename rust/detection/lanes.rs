@@ -10,6 +10,7 @@ use crate::cubature::{
     cholesky2_lanes, cholesky3, is_positive_semidefinite, velocity_at_point, velocity_given_position, Rule, SpatialRule,
 };
 use crate::elevation::ElevationSector;
+use crate::horizon::Horizon;
 use crate::range_bands::SquaredBands;
 use crate::sector::FramedSector;
 use crate::simd::{LaneKernel, Lanes};
@@ -84,6 +85,13 @@ impl FixedSteps for &ElevationSector {
     #[inline(always)]
     fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
         pd * self.lanes_at(g.dz, g.r2)
+    }
+}
+
+impl FixedSteps for &Horizon {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
+        pd * self.lanes_at(g.h2, g.z)
     }
 }
 
@@ -174,6 +182,11 @@ macro_rules! with_fixed_steps {
             }
             [Step::Sector(a), Step::SquaredBands(b)] => {
                 let $steps = (a, b);
+                $body
+            }
+            // a 3-D surveillance beam: slant range, elevation, the horizon at each height
+            [Step::SquaredBands(a), Step::Elevation(b), Step::Horizon(c)] => {
+                let $steps = ((a, b), c);
                 $body
             }
             other => {

@@ -56,6 +56,12 @@ fn models() -> Vec<DetectionModel> {
         ],
         // planar factors alone: ranges become slant ranges
         vec![bands(&[100.0, 700.0], &[0.9, 0.5, 0.1], &[true, false])],
+        // a surveillance beam (its kernels are specialised): slant band, elevation, horizon
+        vec![
+            bands(&[1612.0], &[0.9, 0.0], &[false]),
+            elevation(-2.0, 30.0, 1.0, 0.0),
+            horizon(),
+        ],
     ]
     .into_iter()
     .map(|f| DetectionModel::new(f).unwrap())
