@@ -5,7 +5,8 @@
 //! A target at offset Δp from the sensor, moving at Δv relative to it, closes or opens at
 //! ṙ = Δp·Δv / |Δp|. The factor takes `inside` where |ṙ| ≤ w (the notch's half-width),
 //! decided without a square root as (Δp·Δv)² ≤ w² |Δp|², and, with blind speeds, where
-//! ||ṙ| − k v_b| ≤ w for k = 1…K; `outside` elsewhere. A target at the sensor (Δp = 0) has
+//! ||ṙ| − k v_b| ≤ w for k = 1…K, decided as (k v_b − w)² |Δp|² ≤ (Δp·Δv)² ≤
+//! (k v_b + w)² |Δp|² (k v_b > w, as v_b > 2w); `outside` elsewhere. A target at the sensor (Δp = 0) has
 //! no radial speed: inside the notch.
 //!
 //! For a target whose velocity is uncertain — normal given its position, Δv ~ N(μ, C) — ṙ
@@ -24,6 +25,8 @@ pub struct RangeRateNotch {
     multiples: u32,
     inside: f64,
     outside: f64,
+    /// (k v_b − w)² and (k v_b + w)² for k = 1…multiples: the blind intervals of ṙ².
+    blind: Vec<[f64; 2]>,
 }
 
 /// The most blind-speed multiples a notch tests (beyond them a radar's PRF staggering or
@@ -62,12 +65,23 @@ impl RangeRateNotch {
                 return Err(ModelError::invalid(name, format!("must be finite, got {v}")));
             }
         }
+        let blind = blind_speed
+            .map(|v| {
+                (1..=multiples)
+                    .map(|k| {
+                        let centre = f64::from(k) * v;
+                        [(centre - width) * (centre - width), (centre + width) * (centre + width)]
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
         Ok(RangeRateNotch {
             width,
             blind_speed,
             multiples,
             inside,
             outside,
+            blind,
         })
     }
 
@@ -78,14 +92,10 @@ impl RangeRateNotch {
     /// The value for Δp·Δv = `dot` at squared range `r2`.
     #[inline(always)]
     pub fn at(&self, dot: f64, r2: f64) -> f64 {
-        let mut notched = dot * dot <= self.width * self.width * r2;
-        if let Some(v) = self.blind_speed {
-            if r2 > 0.0 {
-                let speed = dot.abs() / r2.sqrt();
-                for k in 1..=self.multiples {
-                    notched |= (speed - f64::from(k) * v).abs() <= self.width;
-                }
-            }
+        let squared = dot * dot;
+        let mut notched = squared <= self.width * self.width * r2;
+        for &[low, high] in &self.blind {
+            notched |= (low * r2 <= squared) & (squared <= high * r2);
         }
         select(notched, self.inside, self.outside)
     }
@@ -116,14 +126,13 @@ impl RangeRateNotch {
     #[inline(always)]
     pub(crate) fn lanes_at<L: Lanes>(&self, dot: L, r2: L) -> L {
         let w = L::splat(self.width);
-        let mut notched = (dot * dot).le(w * w * r2);
-        if let Some(v) = self.blind_speed {
-            let zero = L::splat(0.0);
-            // (r² = 0 lanes: a NaN speed, which no comparison passes, as the scalar skips them)
-            let speed = L::select(r2.gt(zero), dot.abs().div(r2.sqrt()), L::splat(f64::NAN));
-            for k in 1..=self.multiples {
-                notched = L::or(notched, (speed - L::splat(f64::from(k) * v)).abs().le(w));
-            }
+        let squared = dot * dot;
+        let mut notched = squared.le(w * w * r2);
+        for &[low, high] in &self.blind {
+            notched = L::or(
+                notched,
+                L::and((L::splat(low) * r2).le(squared), squared.le(L::splat(high) * r2)),
+            );
         }
         L::select(notched, L::splat(self.inside), L::splat(self.outside))
     }
