@@ -15,6 +15,16 @@ use std::f64::consts::PI;
 /// Every build this CPU runs: the AVX2 one only where the CPU has AVX2 (elsewhere these
 /// tests check the portable build alone; tests/core/test_simd_dispatch.py checks that a CPU
 /// with AVX2 runs the AVX2 build). Shared by the detection kernels' test files.
+/// The integration rules the expected-P_D tests run: each kind, Gauss–Hermite of order 3.
+pub(super) fn rules() -> [Rule; 4] {
+    [
+        Rule::mean(),
+        Rule::cubature(),
+        Rule::unscented(),
+        Rule::gauss_hermite(3).unwrap(),
+    ]
+}
+
 pub(super) fn backends() -> Vec<Backend> {
     [Backend::Portable, Backend::Avx2]
         .into_iter()

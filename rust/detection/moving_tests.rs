@@ -1,7 +1,7 @@
 //! States with velocities (a range-rate notch): the kernels against the scalar reference
 //! [`ScanDetection::at_state`], bit for bit on every backend and layout, planar and raised.
 
-use super::lane_tests::{backends, kernel_bits};
+use super::lane_tests::{backends, kernel_bits, rules};
 use super::lanes::{Expected, ExpectedRaised, Gaussians};
 use super::*;
 use crate::batch::{
@@ -58,6 +58,17 @@ fn rows(n: usize) -> Vec<f64> {
     data
 }
 
+/// (x, y) with (vx, vy), or (x, y, z) with (vx, vy, vz), of [x, vx, y, vy, z, vz] rows.
+fn moving_mapping(raised: bool) -> PositionMapping {
+    if raised {
+        PositionMapping::raised(0, 2, 4).unwrap()
+    } else {
+        PositionMapping::new(0, 2).unwrap()
+    }
+    .with_velocity(velocity(raised))
+    .unwrap()
+}
+
 fn velocity(raised: bool) -> VelocityMapping {
     VelocityMapping {
         vx: 1,
@@ -75,13 +86,7 @@ fn moving_states_give_the_reference_bits_on_every_path() {
     for model in models() {
         let scan = model.at_pose(&pose);
         for raised in [false, true] {
-            let mapping = if raised {
-                PositionMapping::raised(0, 2, 4).unwrap()
-            } else {
-                PositionMapping::new(0, 2).unwrap()
-            }
-            .with_velocity(velocity(raised))
-            .unwrap();
+            let mapping = moving_mapping(raised);
             for n in [1, 3, 4, 9, 130] {
                 let data = rows(n);
                 let want: Vec<u64> = (0..n)
@@ -158,10 +163,7 @@ fn the_notch_needs_velocities_and_reports_a_non_finite_one() {
         .at_states(&data, 6, PositionMapping::new(0, 2).unwrap(), &mut [0.0; 9])
         .unwrap_err();
     assert_eq!(err.argument(), "velocity_mapping");
-    let mapping = PositionMapping::new(0, 2)
-        .unwrap()
-        .with_velocity(velocity(false))
-        .unwrap();
+    let mapping = moving_mapping(false);
     for bad in 0..9 {
         let mut data = rows(9);
         data[6 * bad + 3] = f64::NAN;
@@ -190,10 +192,7 @@ fn a_model_without_a_notch_reads_no_velocities() {
     let scan = model.at_pose(&Pose::new(0.0, 0.0, 0.0).unwrap());
     let mut data = rows(5);
     data[6 + 1] = f64::NAN; // a velocity nobody reads
-    let mapping = PositionMapping::new(0, 2)
-        .unwrap()
-        .with_velocity(velocity(false))
-        .unwrap();
+    let mapping = moving_mapping(false);
     let mut out = [0.0; 5];
     scan.at_states(&data, 6, mapping, &mut out).unwrap();
     assert_eq!(out, [0.5; 5]);
@@ -244,19 +243,8 @@ fn expected_pd_integrates_the_notch_over_the_velocity_given_the_position() {
         let scan = model.at_pose(&pose);
         for raised in [false, true] {
             let positions: &[usize] = if raised { &[0, 2, 4] } else { &[0, 2] };
-            let mapping = if raised {
-                PositionMapping::raised(0, 2, 4).unwrap()
-            } else {
-                PositionMapping::new(0, 2).unwrap()
-            }
-            .with_velocity(velocity(raised))
-            .unwrap();
-            for rule in [
-                Rule::mean(),
-                Rule::cubature(),
-                Rule::unscented(),
-                Rule::gauss_hermite(3).unwrap(),
-            ] {
+            let mapping = moving_mapping(raised);
+            for rule in rules() {
                 let spatial = rule.spatial();
                 // the reference: each point's P_D with the notch's expectation over the
                 // velocity given that point
@@ -383,10 +371,7 @@ fn expected_pd_integrates_the_notch_over_the_velocity_given_the_position() {
 #[test]
 fn a_velocity_covariance_that_is_not_one_is_named() {
     let scan = models().remove(0).at_pose(&Pose::new(0.0, 0.0, 0.0).unwrap());
-    let mapping = PositionMapping::new(0, 2)
-        .unwrap()
-        .with_velocity(velocity(false))
-        .unwrap();
+    let mapping = moving_mapping(false);
     let (data, good) = (rows(9), joint_covariances(9));
     // row 4's [x, vx, y, vy] block: var(vx) < 0, cov(vx, vy) NaN, asymmetric velocity block
     let single: [&[(usize, f64)]; 3] = [&[(6 + 1, -1.0)], &[(6 + 3, f64::NAN)], &[(6 * 3 + 1, 1e9)]];
@@ -451,10 +436,7 @@ fn stone_soups_cv_rows_give_the_reference_bits_with_velocities() {
                 let got = kernel_bits(&scan, backend, CvRows(&data), crate::batch::Planar, CvRows(&data), 0, n);
                 assert_eq!(got, (want.clone(), None), "{backend:?} n={n}");
             }
-            let mapping = PositionMapping::new(0, 2)
-                .unwrap()
-                .with_velocity(velocity(false))
-                .unwrap();
+            let mapping = moving_mapping(false);
             let mut out = vec![0.0; n];
             scan.at_states(&data, 4, mapping, &mut out).unwrap();
             assert_eq!(out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), want);

@@ -2,7 +2,7 @@
 //! [`ScanDetection::at_raised`], bit for bit on every backend, and the planar evaluation as
 //! the raised one at the sensor's height.
 
-use super::lane_tests::{backends, kernel_bits};
+use super::lane_tests::{backends, kernel_bits, rules};
 use super::lanes::{expected_raised_reference, ExpectedRaised, Gaussians};
 use super::*;
 use crate::batch::{ColumnHeights, Columns, Cv3Rows, Positions, RowHeights, Rows};
@@ -268,12 +268,7 @@ fn raised_expected_pd_gives_the_reference_bits() {
     };
     for model in models() {
         let scan = model.at_pose(&pose);
-        for rule in [
-            Rule::mean(),
-            Rule::cubature(),
-            Rule::unscented(),
-            Rule::gauss_hermite(3).unwrap(),
-        ] {
+        for rule in rules() {
             let spatial = rule.spatial();
             let want: Vec<u64> = (0..n)
                 .map(|i| {
