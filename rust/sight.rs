@@ -15,10 +15,13 @@
 //!   or one. Building costs O(E log E) per sensor position, so it pays from a few thousand
 //!   targets per position on.
 //!
-//! The sensor is assumed to be at sea: from a sensor on land every ray meets its own
-//! coastline (or ends on land) and every target is shadowed.
+//! With no clearance the sensor is assumed to be at sea: from a sensor on land every ray
+//! meets its own coastline (or ends on land) and every target is shadowed. A *clearance* c
+//! (a sensor on a mast or a cliff top, above the land around it) lets land within c of the
+//! sensor block nothing: the segment tested starts c along the way to the target,
+//! s + c (t − s)/‖t − s‖, and a target within c is blocked only by standing on land.
 
-use crate::error::Result;
+use crate::error::{ModelError, Result};
 use crate::land::{segments_meet, LandMask};
 use crate::memory;
 use parry2d_f64::bounding_volume::Aabb;
@@ -29,6 +32,8 @@ use std::sync::Arc;
 #[derive(Debug, Clone)]
 pub struct LineOfSight {
     land: Arc<LandMask>,
+    /// Land nearer than this to the sensor blocks nothing (world units, ≥ 0).
+    clearance: f64,
     /// Coastline edges as (a, b), in the land mask's order and index frame (world × `scale`,
     /// a power of two that is 1 unless the mask is tiny; see [`LandMask`]).
     edges: Vec<[[f64; 2]; 2]>,
@@ -40,6 +45,18 @@ pub struct LineOfSight {
 
 impl LineOfSight {
     pub fn new(land: Arc<LandMask>) -> Result<Self> {
+        Self::with_clearance(land, 0.0)
+    }
+
+    /// Line of sight over which land within `clearance` of the sensor does not block (see
+    /// the module docs); `clearance` must be finite and ≥ 0.
+    pub fn with_clearance(land: Arc<LandMask>, clearance: f64) -> Result<Self> {
+        if !(clearance.is_finite() && clearance >= 0.0) {
+            return Err(ModelError::invalid(
+                "clearance",
+                format!("must be a finite distance >= 0, got {clearance}"),
+            ));
+        }
         let edges: Vec<[[f64; 2]; 2]> = memory::collected("land", land.edges().iter().map(|e| [e.a, e.b]))?;
         let scale = edges
             .iter()
@@ -60,6 +77,7 @@ impl LineOfSight {
         let scale = land.scale();
         Ok(LineOfSight {
             land,
+            clearance,
             edges,
             scale,
             bvh,
@@ -68,6 +86,27 @@ impl LineOfSight {
 
     pub fn land(&self) -> &Arc<LandMask> {
         &self.land
+    }
+
+    pub fn clearance(&self) -> f64 {
+        self.clearance
+    }
+
+    /// Where the tested segment to `target` starts (index frame): the sensor, or with a
+    /// clearance c the point c along the way; `None` when the target is within c.
+    #[inline(always)]
+    fn segment_start(&self, sensor: [f64; 2], target: [f64; 2]) -> Option<[f64; 2]> {
+        if self.clearance == 0.0 {
+            return Some(sensor);
+        }
+        let d = [target[0] - sensor[0], target[1] - sensor[1]];
+        let c = self.clearance * self.scale;
+        let r = d[0].hypot(d[1]);
+        if r <= c || r.is_nan() {
+            return None; // (NaN: the land test answers for it)
+        }
+        let f = c / r;
+        Some([sensor[0] + f * d[0], sensor[1] + f * d[1]])
     }
 
     /// Whether the segment sensor → target is free of land (one query; see
@@ -88,6 +127,9 @@ impl LineOfSight {
         if sensor == target {
             return !self.land.contains_scaled(target);
         }
+        let Some(sensor) = self.segment_start(sensor, target) else {
+            return !self.land.contains_scaled(target);
+        };
         let d = [target[0] - sensor[0], target[1] - sensor[1]];
         if !(d[0].is_finite() && d[1].is_finite()) {
             return !self.land.contains_scaled(target);
@@ -211,7 +253,7 @@ impl<'a> VisibilityIndex<'a> {
         let mut spans = Vec::with_capacity(edges.len());
         let mut coverage = 0.0; // Σ (hi − lo): how many edges a direction meets, × 4
         for (k, &[a, b]) in edges.iter().enumerate() {
-            if segments_meet(s, s, a, b) {
+            if sight.clearance == 0.0 && segments_meet(s, s, a, b) {
                 index.on_coast = true;
                 return index;
             }
@@ -351,6 +393,11 @@ impl<'a> VisibilityIndex<'a> {
         }
         let (dx, dy) = (target[0] - s[0], target[1] - s[1]);
         let r2 = dx * dx + dy * dy;
+        // (the bin and the distance cut-off are the sensor's: the segment from `start` is
+        // part of the segment from the sensor, so its candidates are among these)
+        let Some(start) = self.sight.segment_start(s, target) else {
+            return !self.sight.land.contains_scaled(target);
+        };
         // NaN lands in bin 0 and meets nothing; the land test answers for it.
         let bin = ((pseudo_angle(dx, dy) * (self.bins as f64 / 4.0)) as usize) % self.bins;
         let list = &self.entries[self.bin_start[bin] as usize..self.bin_start[bin + 1] as usize];
@@ -358,7 +405,7 @@ impl<'a> VisibilityIndex<'a> {
             if e.near2 > r2 {
                 break;
             }
-            if segments_meet(s, target, e.a, e.b) {
+            if segments_meet(start, target, e.a, e.b) {
                 return false;
             }
         }

@@ -141,7 +141,7 @@ class LandMask:
 class LineOfSight:
     """Occlusion of sensor → target segments by a :class:`LandMask`."""
 
-    def __new__(cls, land: LandMask) -> LineOfSight: ...
+    def __new__(cls, land: LandMask, clearance: float = 0.0) -> LineOfSight: ...
     def visible(self, sensor: tuple[float, float], targets: _Floats) -> _Bools:
         """Whether each target row of `targets` (M, 2) is visible from `sensor` (x, y); NaN/±inf
         are an error."""

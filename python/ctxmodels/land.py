@@ -10,6 +10,7 @@ from stonesoup.base import Property
 from . import _core
 from ._component import ModelComponent, as_float, as_rows, frozen_copy
 from ._geojson import Document, land_from_document, read_geojson
+from .errors import ArgumentError
 
 
 def _ring(ring: Any, where: str) -> np.ndarray:
@@ -152,21 +153,38 @@ class LandMask(ModelComponent):
 class LineOfSight(ModelComponent):
     r"""Occlusion by land: the factor is 0 when the straight segment from the sensor to the
     target meets land (grazing a coastline counts), 1 otherwise — radar shadow behind
-    islands. The sensor is assumed to be at sea.
+    islands.
+
+    With ``clearance`` :math:`c = 0` the sensor is taken to be at sea (from a sensor on land
+    every target is shadowed). A coastal radar stands on land, on a mast or a cliff top
+    that looks over the land around it: with :math:`c > 0` the segment tested starts at
+    :math:`s + c\,(t - s)/\lVert t - s\rVert` instead of at the sensor :math:`s`, so land
+    within :math:`c` of the sensor blocks nothing and the land beyond it (the rest of its
+    own island, the headlands along the coast) still does. A target within :math:`c` is
+    shadowed only by standing on land. Without heights in the land data this is a 2-D
+    stand-in for the antenna's view down over the coast, to choose per site.
 
     Each query is a ray cast through a bounding-volume hierarchy over the coastline edges
     (parry), :math:`O(\log E)` per target.
     """
 
     land: LandMask = Property(doc="The land that blocks the view.")
+    clearance: float = Property(
+        default=0.0,
+        doc="Land within this distance (metres) of the sensor blocks nothing (≥ 0; 0: the "
+            "sensor is at sea).")
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         if not isinstance(self.land, LandMask):
             raise TypeError(f"land: expected a LandMask, got {type(self.land).__name__}")
+        clearance = as_float(self.clearance, "clearance")
+        if not clearance >= 0.0:
+            raise ArgumentError("clearance", f"must be a distance >= 0 metres, got {clearance}")
+        self._replace("clearance", clearance)
 
     def _compiled(self) -> _core.LineOfSight:
-        return self._cached("core", lambda: _core.LineOfSight(self.land._compiled()))
+        return self._cached("core", lambda: _core.LineOfSight(self.land._compiled(), self.clearance))
 
     def visible(self, sensor, targets) -> np.ndarray:
         """Whether each (x, y) row of ``targets`` is visible from ``sensor`` (x, y). A NaN

@@ -123,9 +123,12 @@ pub struct PyLineOfSight(Arc<LineOfSight>);
 #[pymethods]
 impl PyLineOfSight {
     #[new]
-    fn new(py: Python<'_>, land: &PyLandMask) -> PyResult<Self> {
+    #[pyo3(signature = (land, clearance = 0.0))]
+    fn new(py: Python<'_>, land: &PyLandMask, clearance: f64) -> PyResult<Self> {
         let land = land.0.clone();
-        Ok(PyLineOfSight(Arc::new(detached(py, || LineOfSight::new(land))?)))
+        Ok(PyLineOfSight(Arc::new(detached(py, || {
+            LineOfSight::with_clearance(land, clearance)
+        })?)))
     }
 
     /// Whether each target row of `targets` (M, 2) is visible from `sensor` (x, y).

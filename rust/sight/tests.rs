@@ -244,3 +244,27 @@ fn agrees_with_a_brute_force_segment_test() {
         }
     }
 }
+
+#[test]
+fn clearance_from_a_sensor_on_land() {
+    let shell = vec![[100.0, -10.0], [120.0, -10.0], [120.0, 10.0], [100.0, 10.0]];
+    let land = Arc::new(LandMask::new(vec![Polygon { shell, holes: vec![] }]).unwrap());
+    assert!(LineOfSight::with_clearance(land.clone(), -1.0).is_err());
+    assert!(LineOfSight::with_clearance(land.clone(), f64::NAN).is_err());
+    // On the island's west shore, 2 m inland, with 5 m of clearance.
+    let sight = LineOfSight::with_clearance(land, 5.0).unwrap();
+    let sensor = [102.0, 0.0];
+    let index = sight.from_point(sensor);
+    for (target, visible) in [
+        ([0.0, 0.0], true),    // out to sea over its own shore
+        ([50.0, 30.0], true),  // likewise, off the axis
+        ([200.0, 0.0], false), // across the island: its far shore is 18 m away
+        ([104.0, 0.0], false), // within the clearance, on land
+        ([98.0, 0.0], true),   // within the clearance, at sea
+        ([102.0, 0.0], false), // the sensor's own spot is land
+    ] {
+        assert_eq!(sight.visible(sensor, target), visible, "{target:?}");
+        assert_eq!(index.visible(target), visible, "{target:?}");
+    }
+    assert_eq!(sight.clearance(), 5.0);
+}

@@ -99,6 +99,7 @@ FACTORIES = {
     "LandMask-shapely-MultiPolygon": lambda: LandMask(polygons=MultiPolygon(
         [Polygon(ISLAND, [LAKE]), Polygon(ISLAND + [1000.0, 0.0])])),
     "LineOfSight": lambda: LineOfSight(land=land_mask()),
+    "LineOfSight-clearance": lambda: LineOfSight(land=land_mask(), clearance=250.0),
     "RadarEquation": lambda: RadarEquation(reference_snr=13.0, reference_range=1500.0,
                                            false_alarm_probability=1e-6, swerling=3, pulses=4,
                                            loss=1.5),

@@ -159,6 +159,56 @@ def test_line_of_sight_matches_shapely(config, seed):
     assert 0 < got.mean() < 1
 
 
+@settings(max_examples=examples(12))
+@given(config=land_configs, seed=seeds, clearance=st.sampled_from([0.0, 5.0, 40.0]))
+def test_line_of_sight_with_clearance_matches_shapely(config, seed, clearance):
+    """A sensor anywhere, on land too: the segment tested starts ``clearance`` along the way
+    (shapely on that segment), a target nearer than that is blocked only on land; the
+    single queries and a scan's index (through a DetectionModel) agree."""
+    rng = np.random.default_rng(seed)
+    polygons = random_land(rng, **config)
+    union = shapely.union_all(polygons)
+    xmin, ymin, xmax, ymax = union.bounds
+    low, high = [xmin - 100, ymin - 100], [xmax + 100, ymax + 100]
+    sensor = rng.uniform(low, high)
+    targets = np.concatenate([rng.uniform(low, high, (5_000, 2)), sensor + rng.normal(0, 30, (500, 2))])
+    land = LandMask(polygons=polygons)
+    sight = LineOfSight(land=land, clearance=clearance)
+    got = sight.visible(sensor, targets)
+    offset = targets - sensor
+    distance = np.hypot(offset[:, 0], offset[:, 1])
+    far = distance > clearance
+    starts = sensor + offset * (clearance / np.where(far, distance, 1.0))[:, None]
+    lines = shapely.linestrings(np.stack([starts[far], targets[far]], axis=1))
+    blocked, robust = robust_segments(union, lines)
+    assert robust.mean() > 0.99
+    np.testing.assert_array_equal(got[far][robust], ~blocked[robust])
+    on_land, clear = robust_points(union, targets[~far])
+    np.testing.assert_array_equal(got[~far][clear], ~on_land[clear])
+    states = np.column_stack([targets[:, 0], np.zeros(len(targets)), targets[:, 1], np.zeros(len(targets))])
+    scan = DetectionProbabilityModel(factors=[sight]).evaluate(Pose(x=sensor[0], y=sensor[1]), states)
+    np.testing.assert_array_equal(scan, got.astype(float))
+
+
+def test_clearance_lets_a_radar_on_land_see_over_its_own_coast():
+    square = np.array([[0.0, 0], [100, 0], [100, 100], [0, 100]])
+    far_island = np.array([[300.0, 40], [320, 40], [320, 60], [300, 60]])
+    land = LandMask(polygons=[square, far_island])
+    sensor, targets = (90.0, 50.0), np.array([[200.0, 50], [400.0, 50], [-50.0, 50], [95.0, 50]])
+    assert not LineOfSight(land=land).visible(sensor, targets).any()  # at sea: all shadowed
+    # 20 m of clearance clears its own coast 10 m away, not the far island nor its own land
+    # 90 m behind it; the target 5 m away stands on land
+    assert LineOfSight(land=land, clearance=20.0).visible(sensor, targets).tolist() == [
+        True, False, False, False]
+
+
+@pytest.mark.parametrize("clearance", [-1.0, float("nan"), float("inf"), "10"])
+def test_bad_clearance_is_named(clearance):
+    land = LandMask(polygons=[np.array([[0.0, 0], [1, 0], [0, 1]])])
+    with pytest.raises((ValueError, TypeError), match="clearance"):
+        LineOfSight(land=land, clearance=clearance)
+
+
 @settings(max_examples=examples(10))
 @given(seed=seeds, heading=st.floats(-7, 7))
 def test_land_and_sight_factors_in_a_detection_model(seed, heading):
