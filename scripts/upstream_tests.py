@@ -6,9 +6,9 @@ The Stone Soup wheel ships no tests; the sdist does (``stonesoup/<sub>/tests/``)
 script
 
 1. downloads ``stonesoup-<version>.tar.gz`` with pip (``--require-hashes`` against the
-   sha256 pinned below, the hash PyPI publishes for the file) into a cache directory
-   (``$CTXMODELS_UPSTREAM_CACHE``, else ``~/.cache/ctxmodels-upstream``), reusing it when its
-   hash matches;
+   sha256 PyPI publishes for the file) into ctxmodels' download cache
+   (:mod:`ctxmodels.downloads`: ``$CTXMODELS_CACHE``, else ``~/.cache/ctxmodels``), reusing
+   it when its hash matches;
 2. extracts only the upstream test modules listed in :data:`UPSTREAM_TESTS`, the
    ``conftest.py`` files above them and their packages' ``__init__.py`` into a temporary
    directory (nothing is copied into this repository);
@@ -29,7 +29,6 @@ at least one passing test, and every internals check ran and passed.
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import os
 import subprocess
@@ -38,14 +37,14 @@ import tarfile
 import tempfile
 from pathlib import Path, PurePosixPath
 
+from ctxmodels.downloads import STONESOUP, DownloadError, fetch
+
 REPO = Path(__file__).resolve().parent.parent
 PLUGIN_DIR = REPO / "tests" / "upstream"
 
-STONESOUP_VERSION = "1.9.1"
-SDIST = f"stonesoup-{STONESOUP_VERSION}.tar.gz"
-# sha256 of the sdist as published on PyPI (pip's --report "archive_info" for
-# https://files.pythonhosted.org/packages/d2/f0/2c161d27615c1fdb70123b441328e1c39abedd039a78cb78ad2aaaf634b6/stonesoup-1.9.1.tar.gz).
-SDIST_SHA256 = "2714bfaebad8e3bdaae08f534470a41bde4aaae557549048fef70f59967cdf56"
+# The sdist, pinned by the sha256 PyPI publishes for it (ctxmodels.downloads.STONESOUP).
+STONESOUP_VERSION = STONESOUP.requirement.split("==")[1]
+SDIST, SDIST_SHA256 = STONESOUP.filename, STONESOUP.sha256
 
 # Upstream test modules (paths inside the sdist's stonesoup/) -> the substituted components
 # they build. Every test in these modules runs; the report shows which test built which
@@ -79,40 +78,6 @@ UPSTREAM_TESTS = {
 # None so far: every selected upstream test passes with the substitutes.
 DESELECT: dict[str, str] = {
 }
-
-
-def sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
-def fetch_sdist(cache_dir: Path) -> Path:
-    """The verified sdist, from the cache or downloaded with pip."""
-    cached = cache_dir / SDIST
-    if cached.exists():
-        if sha256(cached) == SDIST_SHA256:
-            return cached
-        print(f"{cached}: wrong sha256, downloading again", file=sys.stderr)
-        cached.unlink()
-    cache_dir.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=cache_dir) as scratch:
-        requirements = Path(scratch) / "requirements.txt"
-        requirements.write_text(f"stonesoup=={STONESOUP_VERSION} --hash=sha256:{SDIST_SHA256}\n")
-        download = Path(scratch) / "download"
-        command = [sys.executable, "-m", "pip", "download", "--quiet", "--disable-pip-version-check",
-                   "--no-deps", "--no-binary", ":all:", "--require-hashes",
-                   "-r", str(requirements), "-d", str(download)]
-        result = subprocess.run(command, capture_output=True, text=True)
-        if result.returncode:
-            sys.exit(f"downloading {SDIST} failed:\n{result.stdout}{result.stderr}")
-        fetched = download / SDIST
-        if not fetched.exists() or sha256(fetched) != SDIST_SHA256:
-            sys.exit(f"{SDIST}: missing or wrong sha256 after download")
-        os.replace(fetched, cached)
-    return cached
 
 
 def extract(sdist: Path, destination: Path) -> list[Path]:
@@ -159,8 +124,8 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--profile", default="default", choices=sorted(PROFILES))
-    parser.add_argument("--cache-dir", type=Path, default=Path(os.environ.get(
-        "CTXMODELS_UPSTREAM_CACHE", Path.home() / ".cache" / "ctxmodels-upstream")))
+    parser.add_argument("--cache-dir", type=Path, default=None,
+                        help="where the sdist is kept (default: ctxmodels' download cache)")
     parser.add_argument("--report", type=Path, help="write the JSON report here")
     parser.add_argument("--control", action="store_true",
                         help="negative control: substitute nothing; the plugin's checks must "
@@ -174,7 +139,10 @@ def main(argv: list[str] | None = None) -> int:
         sys.exit(f"installed stonesoup is {stonesoup.__version__}, the upstream tests are "
                  f"{STONESOUP_VERSION}'s")
 
-    sdist = fetch_sdist(args.cache_dir)
+    try:
+        sdist = fetch(STONESOUP, args.cache_dir)
+    except DownloadError as err:
+        sys.exit(str(err))
     work = Path(tempfile.mkdtemp(prefix="ctxmodels-upstream-"))
     try:
         source = work / "src"

@@ -222,7 +222,7 @@ def land_from_document(cls, node, document: Document, origin) :
     """The mask of a GeoJSON document's polygons, projected around ``origin``: errors in a
     polygon (from the projection or the mask's validation) name where it is."""
     if origin is not None:
-        from .geo import _origin
+        from .geo.plane import _origin
         origin = _origin(origin)  # refused before the document is read, naming origin
     found = _geojson_polygons(node, document)
     if not found:
@@ -230,7 +230,7 @@ def land_from_document(cls, node, document: Document, origin) :
     polygons = []
     for where, rings in found:
         if origin is not None:
-            from .geo import lonlat_to_local
+            from .geo.plane import lonlat_to_local
             projected = []
             for k, ring in enumerate(rings):
                 try:

@@ -34,7 +34,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ._component import as_float, as_rows
+from .._component import as_float, as_rows
 
 #: WGS 84: semi-major axis (m) and flattening.
 WGS84_A = 6378137.0
