@@ -29,6 +29,7 @@ def test_guide_examples_run(capsys):
     assert "[0.9 0.  0.9 0.  0.9]" in printed  # 3-D coverage: horizon at height, the beam
     assert "[0.9 0.  0. ]\n[0.9 0.9 0.9]" in printed  # the MTI notch, then a moving radar
     assert "ahead 0.090, behind 9.5e-05" in printed  # the learned clutter map
+    assert "True 120.0\n[ True False False]" in printed  # a radar on Southsea's shore
     # pooled: the rings' level, and with the weight estimated no scatter of its cells
     assert "ring, weight 10: far λ 9.9e-03 ± 7e-03" in printed
     assert "ring, weight estimated: far λ 9.7e-03 ± 2e-03" in printed

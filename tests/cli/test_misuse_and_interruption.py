@@ -122,6 +122,16 @@ def test_default_trackers_skip_line_of_sight_where_there_is_no_land(tmp_path, mo
     (["--extent", "0"], "--extent"),
     (["--extent", "-100"], "--extent"),
     (["--sensors", "sonar"], "--sensors"),
+    (["--antenna-height", "20"], "--antenna-height"),
+    (["--clearance", "100"], "--clearance"),
+    (["--coastline", "f"], "--coastline"),
+    (["--site", "-1.1", "50.8", "--coastline", "x"], "--coastline"),
+    (["--site", "-1.1", "50.8", "--clearance", "-1"], "--clearance"),
+    (["--site", "-1.1", "50.8", "--antenna-height", "0"], "--antenna-height"),
+    (["--site", "200", "50"], "--site"),
+    (["--site", "-1.1", "85"], "--site"),
+    (["--site", "-1.1", "50.8", "--scenario", "islands"], "--site"),
+    (["--site", "-1.1", "50.8", "--extent", "600000"], "--extent"),
 ])
 def test_coverage_usage_errors(argv, option, tmp_path, capsys):
     png = tmp_path / "cov.png"
@@ -175,6 +185,25 @@ def test_coverage_of_a_saved_sensor_model(tmp_path):
                  str(png)]) == 0
     assert png.read_bytes()[:4] == b"\x89PNG"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cov.png", "radar.yaml"]
+
+
+def test_coverage_at_a_real_site(tmp_path, capsys):
+    from stonesoup.serialise import YAML
+
+    from ctxmodels.experiment.sensors import paper_sensor_models
+    png = tmp_path / "site.png"
+    # Southsea Castle, Portsmouth: a radar on the shore (the shorelines are downloaded once)
+    assert main(["coverage", "--site", "-1.0889", "50.7780", "--extent", "8000", "--coastline", "h",
+                 "--resolution", "40", "--output", str(png)]) == 0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    said = capsys.readouterr().err
+    assert "on land" in said and "land within 500 m of the antenna blocks nothing" in said
+    # a saved model at a site 3 km inland: told that it sees nothing
+    model = tmp_path / "radar.yaml"
+    model.write_text(YAML().dumps(paper_sensor_models()["radar"]))
+    assert main(["coverage", "--site", "-1.29", "50.69", "--model", str(model), "--coastline", "i",
+                 "--extent", "3000", "--resolution", "20", "--output", str(png)]) == 0
+    assert "every ray meets land" in capsys.readouterr().err
 
 
 def test_coverage_refuses_two_models_of_one_name_and_bad_mathtext(tmp_path, capsys):

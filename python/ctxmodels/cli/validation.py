@@ -146,8 +146,10 @@ def _remove_if_empty(folder: Path) -> None:
 
 
 def check_coverage(args) -> None:
-    """Loads the --model files into ``args.models`` and checks the output file."""
+    """Loads the --model files into ``args.models``, checks the site options and the output
+    file."""
     args.sensors = list(dict.fromkeys(args.sensors))
+    _check_site(args)
     args.models = load_models(args.model) if args.model else None
     require_module("matplotlib", "--output", "a coverage map")
     output = Path(args.output)
@@ -169,6 +171,32 @@ def check_coverage(args) -> None:
     for name in args.models or ():  # (a model's name is in its maps' titles)
         _check_mathtext(name, f"argument --model: the model named {name!r}",
                         "rename it (a literal dollar as \\$)")
+
+
+def _check_site(args) -> None:
+    """--site's options: only with --site, its latitude off the poles, not with --scenario
+    (which brings its own land); fills in their defaults."""
+    site_only = {"--antenna-height": args.antenna_height, "--clearance": args.clearance,
+                 "--coastline": args.coastline}
+    if args.site is None:
+        given = [flag for flag, value in site_only.items() if value is not None]
+        if given:
+            raise UsageError(f"argument {given[0]}: only with --site")
+        args.extent = args.extent or [1800.0, 100.0]
+        return
+    if args.scenario:
+        raise UsageError("argument --site: not with --scenario (a site brings its own land)")
+    lon, lat = args.site
+    if not -80.0 <= lat <= 80.0:
+        raise UsageError(f"argument --site: latitude must lie in [-80, 80] degrees (the GSHHG "
+                         f"boxes and the local plane are for coasts off the poles), got {lat:g}")
+    args.extent = args.extent or [25000.0]
+    if max(args.extent) > 500_000.0:
+        raise UsageError(f"argument --extent: with --site at most 500000 m (the local plane's "
+                         f"reach), got {max(args.extent):g}")
+    args.antenna_height = 20.0 if args.antenna_height is None else args.antenna_height
+    args.clearance = 500.0 if args.clearance is None else args.clearance
+    args.coastline = args.coastline or "f"
 
 
 def _check_mathtext(text: str, what: str, fix: str) -> None:
