@@ -47,7 +47,8 @@ def test_margins_and_kinds_are_the_declared_ones():
     assert MARGINS == {"hota": 1.0, "gospa": 1.0}
     kinds = {f.key: f.test for f in FINDINGS}
     assert {k for k, v in kinds.items() if v == NON_INFERIORITY} == {
-        "context-beats-pd-aware", "learned-clutter-matches-context", "learned-matches-context"}
+        "context-beats-pd-aware", "learned-clutter-matches-context", "learned-matches-context",
+        "solent-learned-matches-sight"}
     assert all(("≥" in f.claim) == (f.test == NON_INFERIORITY) for f in FINDINGS)
     with pytest.raises(ValueError, match="test must be"):
         Finding("x", "A ≈ B", "ours", ("a",), ("b",), "islands", test="equivalence")

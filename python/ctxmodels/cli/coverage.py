@@ -10,7 +10,7 @@ from .validation import MAX_COORDINATE, MAX_RESOLUTION, check_coverage, integer,
 
 
 def add_coverage_command(commands) -> None:
-    from ..experiment.scenarios import SCENARIOS
+    from ..experiment.scenarios import SIMULATED_SCENARIOS
     cov = commands.add_parser(
         "coverage", help="draw a sensor model's P_D coverage map",
         description="Draws P_D around a sensor pose for the paper's radar and lidar models "
@@ -23,7 +23,7 @@ def add_coverage_command(commands) -> None:
     cov.add_argument("--sensors", nargs="+", default=["radar", "lidar"], choices=["radar", "lidar"])
     cov.add_argument("--model", nargs="+", metavar="YAML",
                      help="SensorModel files (Stone Soup YAML) instead of the paper's models")
-    cov.add_argument("--scenario", choices=list(SCENARIOS), default=None,
+    cov.add_argument("--scenario", choices=list(SIMULATED_SCENARIOS), default=None,
                      help="draw with this scenario's land (e.g. islands)")
     cov.add_argument("--site", nargs=2, type=number(-180.0, 180.0), default=None,
                      metavar=("LON", "LAT"),

@@ -7,7 +7,7 @@ import sys
 from .options import study_options
 from .output import OutputFolder
 from .validation import (MAX_BEARING_STD_DEG, MAX_LIDAR_CLUTTER, MAX_RADAR_CLUTTER,
-                         check_experiment, number)
+                         UsageError, check_experiment, number)
 
 
 def add_experiment_command(commands) -> None:
@@ -126,6 +126,16 @@ def _run_experiment(args, folder) -> int:
 
 def _check_experiment(args) -> None:
     check_experiment(args)
+    from ..experiment.scenarios import SOLENT
+    truth_options = {"--truth": args.truth != "calibrated",
+                     "--radar-clutter": args.radar_clutter is not None,
+                     "--radar-bearing-std": args.radar_bearing_std is not None,
+                     "--lidar-clutter": args.lidar_clutter is not None}
+    given = [flag for flag, used in truth_options.items() if used]
+    if SOLENT in args.scenarios and given:
+        raise UsageError(f"argument {given[0]}: changes the simulated radar and lidar of the "
+                         f"paper's scenes, not the Solent's radars (fixed: "
+                         f"ctxmodels.experiment.solent.radars); run the Solent apart")
     args.folder = OutputFolder(args.output)  # last: no folder is created for a bad command
 
 

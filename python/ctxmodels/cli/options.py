@@ -8,10 +8,13 @@ def study_options(sub, output: str, full_seeds: int, quick_seeds: int,
                   quick_duration: float) -> None:
     """The options ``experiment`` and ``sweep`` share: what to run, on how many seeds, where
     the results go."""
-    from ..experiment.scenarios import SCENARIOS
+    from ..experiment.scenarios import DEFAULT_SCENARIOS, SCENARIOS
     from ..trackers import TRACKERS
-    sub.add_argument("--scenarios", nargs="+", default=list(SCENARIOS), choices=list(SCENARIOS),
-                     metavar="NAME", help=f"scenarios to run (default: all of {list(SCENARIOS)})")
+    sub.add_argument("--scenarios", nargs="+", default=list(DEFAULT_SCENARIOS),
+                     choices=list(SCENARIOS), metavar="NAME",
+                     help=f"scenarios to run, of {list(SCENARIOS)} (default: "
+                          f"{' '.join(DEFAULT_SCENARIOS)}; solent downloads its shoreline and "
+                          f"AIS data once, from the package index)")
     sub.add_argument("--trackers", nargs="+", default=None, metavar="NAME",
                      choices=list(TRACKERS) + ["all"],
                      help="trackers to compare, or 'all' (default: all; `ctxmodels list` "

@@ -6,7 +6,8 @@ import sys
 
 from .options import study_options
 from .output import OutputFolder
-from .validation import MAX_BEARING_STD_DEG, MAX_LIDAR_CLUTTER, check_experiment, number
+from .validation import (MAX_BEARING_STD_DEG, MAX_LIDAR_CLUTTER, UsageError, check_experiment,
+                         number)
 
 #: The largest far clutter density (per rad·m): the calibrated near clutter plus this much
 #: beyond 1000 m stays within MAX_RADAR_CLUTTER returns a scan (scans are drawn up front).
@@ -52,6 +53,11 @@ def add_sweep_command(commands) -> None:
 
 
 def _check_sweep(args) -> None:
+    from ..experiment.scenarios import SOLENT
+    if SOLENT in args.scenarios:
+        raise UsageError("argument --scenarios: the sweep varies the simulated radar and lidar "
+                         "of the paper's scenes; the Solent's radars are fixed (run it with "
+                         "ctxmodels experiment)")
     check_experiment(args)
     args.folder = OutputFolder(args.output)  # last: no folder is created for a bad command
 

@@ -99,13 +99,13 @@ def check_experiment(args) -> None:
             why = " (line of sight needs a scenario's land)" if spec.line_of_sight else ""
             raise UsageError(f"argument --trackers: {tracker} cannot run on "
                              f"{', '.join(skipped)}; it runs only on "
-                             f"{', '.join(spec.only_scenarios or ())}{why}")
+                             f"{', '.join(s for s in SCENARIOS if applicable(tracker, s))}{why}")
         args.skipped += [(tracker, s) for s in skipped]
     if args.seeds is None:
         args.seeds = args.quick_seeds if args.quick else args.full_seeds
     if args.duration is None and args.quick:
         args.duration = args.quick_duration
-    length = min(SCENARIOS[s].layout().default_duration for s in args.scenarios)
+    length = min(SCENARIOS[s].duration for s in args.scenarios)
     if args.duration is not None and not MIN_DURATION <= args.duration <= length:
         raise UsageError(f"argument --duration: expected seconds in [{MIN_DURATION:g}, "
                          f"{length:g}] (the scenarios are {length:g} s long), "

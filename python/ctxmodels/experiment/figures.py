@@ -9,9 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from .findings import COMBINED, paper_effect
+from .scenarios import SOLENT
 
 _SCOPE_TITLES = {COMBINED: "Scenarios 1 and 2 combined", "mixed-range": "Scenario 1 (mixed-range)",
-                 "formation": "Scenario 2 (formation)", "islands": "Scenario 3 (islands)"}
+                 "formation": "Scenario 2 (formation)", "islands": "Scenario 3 (islands)",
+                "solent": "Scenario 4 (Solent)"}
 
 
 def draw_experiment_figures(results, folder: Path) -> dict[str, Path]:
@@ -25,6 +27,9 @@ def draw_experiment_figures(results, folder: Path) -> dict[str, Path]:
     for scenario in config.scenarios:
         plotted = [(r.job.tracker, r.tracks) for r in sorted(results.results, key=lambda r: r.job.tracker)
                    if r.job.scenario == scenario and r.job.seed == config.plot_seed]
+        if scenario == SOLENT:
+            written.update(_draw_solent(folder, config.plot_seed, config.duration, plotted))
+            continue
         written.update(_draw_scenario(folder, scenario, config.plot_seed, config.duration,
                                       plotted, config.radar, config.lidar))
         if scenario == "mixed-range":
@@ -62,6 +67,28 @@ def _draw_scenario(folder: Path, scenario: str, seed: int, duration, plotted, ra
     path = folder / f"coverage_{scenario}.png"
     plot_coverage(path, paper_sensor_models(land=run.land), tuple(pose), land=run.land,
                   title=f"P_D of the context-aware models, {scenario}, first radar scan")
+    written[path.stem] = path
+    return written
+
+
+def _draw_solent(folder: Path, seed: int, duration, plotted) -> dict[str, Path]:
+    """The Solent's tracks per tracker over the coast, and its radars' coverage."""
+    from .runner import simulated_run
+    from .solent.figures import plot_solent_coverage, plot_solent_tracks
+    from .track_plots import Polyline
+    from ..trackers import TRACKERS
+    written = {}
+    run = simulated_run(SOLENT, seed, duration, None, None)
+    epoch = run.radar_times[0]
+    truths = [Polyline.from_states(t.states, epoch, label=t.id)
+              for t in sorted(run.truths, key=lambda t: t.id)]
+    for tracker, paths in plotted:
+        path = folder / f"tracks_{SOLENT}_{tracker}.png"
+        plot_solent_tracks(path, f"Solent: {TRACKERS[tracker].label} (seed {seed})",
+                           [Polyline(times, xy) for times, xy in paths], truths)
+        written[path.stem] = path
+    path = folder / f"coverage_{SOLENT}.png"
+    plot_solent_coverage(path)
     written[path.stem] = path
     return written
 

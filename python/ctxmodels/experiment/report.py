@@ -31,7 +31,8 @@ from .paper import paper_row
 from .statistics import bootstrap_mean
 
 #: Scenario names in table order, and the short labels of the results table.
-SCENARIO_LABELS = {"mixed-range": "Scenario 1", "formation": "Scenario 2", "islands": "Scenario 3"}
+SCENARIO_LABELS = {"mixed-range": "Scenario 1", "formation": "Scenario 2", "islands": "Scenario 3",
+                   "solent": "Scenario 4 (Solent)"}
 
 #: The track-management table's columns: key, markdown header, format.
 MANAGEMENT_COLUMNS = (
@@ -205,14 +206,13 @@ class ExperimentResults:
             lines.append(f"| {row['label']} | {names.get(row['scope'], row['scope'])} | "
                          + " | ".join(format(row[key], spec)
                                       for key, _, spec in MANAGEMENT_COLUMNS) + " |")
-        lines += ["", "Mean over seeds; a scope's runs of one seed are pooled first (counts "
-                  "summed over its scenarios, rates as ratios of sums). Truths and tracks are "
-                  "matched by GOSPA's assignment (c = 30 m) at each radar time, static-object "
-                  "tracks dropped. GOSPA's terms are the means over radar times of the parts of "
-                  "the squared GOSPA: they add up to the mean over seeds of RMS GOSPA². False "
-                  "tracks are never matched; their life runs from first to last radar time; "
-                  "time to track runs from a vessel's first radar time to its first match "
-                  "(never-tracked vessels count their whole presence)."]
+        lines += ["", "Mean over seeds; a scope's runs of one seed are pooled first (counts summed over its "
+                  "scenarios, rates as ratios of sums). Truths and tracks are matched by GOSPA's assignment"
+                  " (c = 30 m; 300 m on the Solent) at each radar time, static-object tracks dropped. "
+                  "GOSPA's terms are the means over radar times of the parts of the squared GOSPA: they add"
+                  " up to the mean over seeds of RMS GOSPA². False tracks are never matched; their life "
+                  "runs from first to last radar time; time to track runs from a vessel's first radar time "
+                  "to its first match (never-tracked vessels count their whole presence)."]
         return "\n".join(lines)
 
     def track_counts(self) -> list[dict]:

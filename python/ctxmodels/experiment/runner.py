@@ -250,7 +250,7 @@ def job_cost(job: Job) -> float:
 
 @functools.cache
 def _default_duration(scenario: str) -> float:
-    return SCENARIOS[scenario].layout().default_duration
+    return SCENARIOS[scenario].duration
 
 
 def submission_order(jobs: list[Job]) -> list[Job]:

@@ -85,7 +85,11 @@ static and land returns are ``Clutter``. Every detection's ``metadata['source']`
 
 from __future__ import annotations
 
-from .simulation.layouts import SCENARIOS, ScenarioSpec, make_scenario
+from dataclasses import dataclass
+
+from .simulation.layouts import SCENARIOS as SIMULATED_SCENARIOS
+from .simulation.layouts import ScenarioSpec
+from .simulation.layouts import make_scenario as make_simulated_scenario
 from .simulation.lidar import LidarConfig
 from .simulation.motion import (
     DriftMotion,
@@ -101,9 +105,53 @@ from .simulation.scans import Scan, SensorPose
 from .simulation.scene import SceneLayout, StaticObject, TargetSpec
 from .simulation.truths import TRUTHS, Truth
 
+
+#: The Solent: two coastal radars on a real coastline with real traffic (:mod:`.solent`).
+SOLENT = "solent"
+
+
+@dataclass(frozen=True)
+class SolentSpec:
+    """The Solent's registry entry (its scene: :mod:`ctxmodels.experiment.solent.scene`)."""
+
+    name: str = SOLENT
+    number: int = 4
+    title: str = "Two coastal radars over the Solent"
+    description: str = ("two coastal radars on the GSHHG shoreline, AIS vessels as truth "
+                        "(downloaded once)")
+
+    @property
+    def duration(self) -> float:
+        from .solent.scene import DURATION
+        return DURATION
+
+
+#: Every scenario by name: the paper's two, our islands, and the Solent.
+SCENARIOS: dict = {**SIMULATED_SCENARIOS, SOLENT: SolentSpec()}
+#: What a study runs when no scenario is named: the simulated ones (the Solent needs its
+#: data downloaded once; name it).
+DEFAULT_SCENARIOS = tuple(SIMULATED_SCENARIOS)
+
+
+def make_scenario(name, seed: int, duration: float | None = None, *, radar=None, lidar=None):
+    """A simulated scenario's run (:func:`~.simulation.layouts.make_scenario`), or the
+    Solent's (:func:`~.solent.run.make_solent`; its radars' truth is fixed, so ``radar``
+    and ``lidar`` must be None)."""
+    if name == SOLENT:
+        if radar is not None or lidar is not None:
+            raise ValueError("radar/lidar: the Solent's radars are fixed (its scene module "
+                             "says why); these settings are the simulated scenarios'")
+        from .solent.run import make_solent
+        return make_solent(seed, duration)
+    return make_simulated_scenario(name, seed, duration, radar=radar, lidar=lidar)
+
+
 __all__ = [
+    "DEFAULT_SCENARIOS",
     "EPOCH",
     "SCENARIOS",
+    "SIMULATED_SCENARIOS",
+    "SOLENT",
     "TRUTHS",
     "DriftMotion",
     "EgoNavigation",

@@ -75,7 +75,11 @@ def score_run(run, tracks: list, static_distractors: bool = True,
               mapping=(0, 2)) -> RunScore:
     """HOTA, GOSPA and the track-management metrics of ``tracks`` (in a fixed order) against
     ``run``'s vessels at its radar times, static objects as distractors unless
-    ``static_distractors`` is false."""
+    ``static_distractors`` is false.
+
+    The distances (HOTA's full and zero similarity, 5 m and 30 m; GOSPA's cut-off c = 30 m)
+    are the paper's for its 1.6 km radar, times ``run.distance_scale`` where a run has one
+    (a scene whose radars reach farther, where their bearing errors span more metres)."""
     truths = list(run.truth_by_id.values())  # by id, not set (address) order
     frames = metrics.frames_from_stonesoup(truths, tracks, run.radar_times,
                                            position_mapping=mapping)
@@ -89,10 +93,15 @@ def score_run(run, tracks: list, static_distractors: bool = True,
             track_count -= int(np.count_nonzero(dropped_per_track == lengths))
     start = run.radar_times[0]
     seconds = [(time - start).total_seconds() for time in run.radar_times]
-    return RunScore(metrics.hota_from_frames(frames), metrics.gospa_from_frames(frames),
+    scale = getattr(run, "distance_scale", 1.0)
+    c = metrics.GOSPA_C * scale
+    hota = metrics.hota_from_frames(
+        frames, full_similarity_distance=metrics.FULL_SIMILARITY_DISTANCE * scale,
+        zero_similarity_distance=metrics.ZERO_SIMILARITY_DISTANCE * scale)
+    return RunScore(hota, metrics.gospa_from_frames(frames, c=c),
                     track_count, tuple(int(frame.track_ids.size) for frame in frames),
                     tuple(int(frame.truth_ids.size) for frame in frames),
-                    track_management(frames, seconds))
+                    track_management(frames, seconds, c=c))
 
 
 def tracks_digest(tracks) -> str:

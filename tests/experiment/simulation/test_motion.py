@@ -10,7 +10,7 @@ from scipy.integrate import cumulative_simpson
 
 from ctxmodels.experiment.scenarios import (
     EPOCH,
-    SCENARIOS,
+    SIMULATED_SCENARIOS as SCENARIOS,
     FormationMotion,
     PathBuilder,
     PathMotion,

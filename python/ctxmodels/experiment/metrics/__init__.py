@@ -6,12 +6,16 @@ makes between radar scans do not count). Both read a plain NumPy form, one
 Stone Soup truths and tracks); :func:`~.hota.hota` and :func:`~.gospa.gospa` do both steps
 at once."""
 from .frames import EvaluationFrame, frames_from_stonesoup
-from .gospa import GOSPAResult, combine_gospa, gospa, gospa_from_frames, gospa_split
-from .hota import (HOTA_ALPHAS, HOTAResult, combine_hota, hota, hota_from_frames,
-                   hota_from_similarity, position_similarity)
+from .gospa import GOSPA_C, GOSPAResult, combine_gospa, gospa, gospa_from_frames, gospa_split
+from .hota import (FULL_SIMILARITY_DISTANCE, HOTA_ALPHAS, ZERO_SIMILARITY_DISTANCE, HOTAResult,
+                   combine_hota, hota, hota_from_frames, hota_from_similarity,
+                   position_similarity)
 
 __all__ = [
+    "FULL_SIMILARITY_DISTANCE",
+    "GOSPA_C",
     "HOTA_ALPHAS",
+    "ZERO_SIMILARITY_DISTANCE",
     "EvaluationFrame",
     "HOTAResult",
     "GOSPAResult",

@@ -264,6 +264,11 @@ class ScenarioSpec:
     title: str
     layout: Callable[[], SceneLayout]
 
+    @property
+    def duration(self) -> float:
+        """The scenario's length (s)."""
+        return self.layout().default_duration
+
 
 SCENARIOS: dict[str, ScenarioSpec] = {
     "mixed-range": ScenarioSpec("mixed-range", 1, "Mixed-range traffic", _mixed_range_layout),

@@ -1,0 +1,1 @@
+"""The Solent study (see :mod:`.scene`)."""
