@@ -52,6 +52,11 @@ def test_example_runs(example, tmp_path):
                 tuple(int(v) for v in re.findall(r"(\d+)%", line)) for line in text.splitlines())
             assert stock_in <= 20 and aware_in >= 80, text  # the claim: held through the cone
             assert stock_out >= 90 and aware_out >= 90, text
+    if example.stem == "solent_coastal_radars":
+        # the claim: a uniform P_D loses the ships only the Foreland sees (seen: 48 % vs 92-93 %)
+        shares = [int(v) for v in re.findall(r"tracked (\d+) %", output)]
+        uniform, bands, sight = shares
+        assert uniform < 60 and bands > 85 and sight > 85, output
     if example.stem == "paper_sensor_models":
         assert output.splitlines() == [
             "500 m ahead: radar 0.40, lidar 0.00, either 0.400",
