@@ -8,6 +8,7 @@ from ..pose import NavigationTrack
 from ..trackers import TRACKERS, PaperTracker, TrackerSpec, paper_tracker
 from .scenarios import SOLENT
 from .sensors import paper_sensor_models
+from .simulation.scans import ScanStream
 
 #: Run when no trackers are named: all of them (each on the scenarios it is made for).
 DEFAULT_TRACKERS = tuple(TRACKERS)
@@ -23,16 +24,6 @@ def applicable(tracker: str, scenario: str) -> bool:
     return spec.only_scenarios is None or scenario in spec.only_scenarios
 
 
-class _ScanReader:
-    """One sensor's scans of a simulated run as a (time, detections) stream."""
-
-    def __init__(self, scans):
-        self.scans = scans
-
-    def __iter__(self):
-        return ((scan.timestamp, set(scan.detections)) for scan in self.scans)
-
-
 def build_tracker(spec: TrackerSpec, run, fast: bool = True) -> PaperTracker:
     """A tracker for ``spec`` over the scans of a simulated ``run`` (iterate it):
     :func:`~ctxmodels.trackers.paper_tracker` on the run's radar and lidar streams and the
@@ -40,7 +31,7 @@ def build_tracker(spec: TrackerSpec, run, fast: bool = True) -> PaperTracker:
     if run.name == SOLENT:
         from .solent.trackers import build_solent_tracker
         return build_solent_tracker(spec, run, fast)
-    streams = {"radar": _ScanReader(run.radar_scans), "lidar": _ScanReader(run.lidar_scans)}
+    streams = {"radar": ScanStream(run.radar_scans), "lidar": ScanStream(run.lidar_scans)}
     navigation = NavigationTrack(timestamps=run.ego.timestamps, positions=run.ego.positions,
                                  headings=run.ego.headings)
     models = paper_sensor_models(land=run.land if spec.line_of_sight or spec.coastal else ())

@@ -70,6 +70,17 @@ def object_detection(source, state_vector, timestamp, model, metadata, truth_pat
     return Clutter(state_vector, timestamp=timestamp, measurement_model=model, metadata=metadata)
 
 
+class ScanStream:
+    """One sensor's scans as the (time, detections) stream a tracker reads (again on every
+    iteration)."""
+
+    def __init__(self, scans):
+        self.scans = scans
+
+    def __iter__(self):
+        return ((scan.timestamp, set(scan.detections)) for scan in self.scans)
+
+
 def scan_offsets_us(period: float, phase: float, duration: float) -> np.ndarray:
     """Scan times in integer microseconds after the epoch, in [0, duration)."""
     period_us, phase_us = round(period * 1e6), round(phase * 1e6)

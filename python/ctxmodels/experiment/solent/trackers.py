@@ -34,6 +34,7 @@ from ... import (ClutterDensityModel, ConstantPose, DetectionProbabilityModel, L
 from ...trackers import PaperTracker, TrackerSpec, paper_tracker
 from ...trackers.specs import REGION_MARGIN
 from ..simulation.radar import RadarConfig
+from ..simulation.scans import ScanStream
 from . import scene
 from .radars import CLUTTER_PER_SCAN, MIN_RANGE
 
@@ -74,14 +75,6 @@ def region_radius() -> float:
     return max(math.hypot(*site.position) + site.reach for site in scene.SITES) + REGION_MARGIN
 
 
-class _ScanReader:
-    def __init__(self, scans):
-        self.scans = scans
-
-    def __iter__(self):
-        return ((scan.timestamp, set(scan.detections)) for scan in self.scans)
-
-
 def build_solent_tracker(spec: TrackerSpec, run, fast: bool = True) -> PaperTracker:
     """A tracker for ``spec`` (one of :data:`TRACKERS`) over a Solent ``run``'s scans."""
     if spec.name not in TRACKERS:
@@ -93,7 +86,7 @@ def build_solent_tracker(spec: TrackerSpec, run, fast: bool = True) -> PaperTrac
     spec = dataclasses.replace(spec, pd="learned" if learned else "context",
                                clutter="learned" if learned else "context",
                                line_of_sight=False, coastal=False, only_scenarios=None)
-    streams = {name: _ScanReader(scans) for name, scans in run.scans.items()}
+    streams = {name: ScanStream(scans) for name, scans in run.scans.items()}
     platform = ConstantPose(pose=Pose(x=0.0, y=0.0, heading=0.0))
     return paper_tracker(spec, streams, site_models(kind), platform,
                          primary=scene.SITES[0].name, fast=fast, region_radius=region_radius())
