@@ -27,6 +27,7 @@ import subprocess
 import sys
 import tarfile
 import tempfile
+import threading
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
@@ -124,7 +125,9 @@ def member(archive: Archive, name: str, directory: Path | None = None) -> Path:
         return extracted
     path = fetch(archive, directory)
     extracted.parent.mkdir(parents=True, exist_ok=True)
-    partial = extracted.with_name(extracted.name + ".partial")
+    # (a name of this process's own: two processes extracting at once, as a study's
+    # workers may on first use, each write their own copy and the last rename wins)
+    partial = extracted.with_name(f"{extracted.name}.{os.getpid()}.{threading.get_ident()}.partial")
     if archive.is_sdist:
         inside = f"{stem}/{name}"
         with tarfile.open(path) as tar:

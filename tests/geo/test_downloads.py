@@ -71,3 +71,25 @@ def test_without_an_index_the_error_says_where_to_put_the_file(monkeypatch, tmp_
     assert "does not match its sha256" in capsys.readouterr().err
     assert not (cache / archive.filename).exists()
     assert list(cache.iterdir()) == []  # no scratch left behind
+
+
+def test_processes_extracting_at_once_get_whole_files(tmp_path):
+    """A study's workers may extract the same member at once on first use."""
+    import subprocess
+    import sys
+    wheel = tmp_path / "example-1.0-py3-none-any.whl"
+    payload = bytes(range(256)) * 40_000  # 10 MB: long enough for the writes to overlap
+    with zipfile.ZipFile(wheel, "w", compression=zipfile.ZIP_DEFLATED) as z:
+        z.writestr("pkg/big.bin", payload)
+    archive = archive_of(wheel)
+    code = ("import sys; from pathlib import Path; from ctxmodels import downloads; "
+            f"a = downloads.Archive({archive.requirement!r}, {archive.filename!r}, "
+            f"{archive.sha256!r}, 1); "
+            "print(downloads.member(a, 'pkg/big.bin', Path(sys.argv[1])))")
+    runs = [subprocess.Popen([sys.executable, "-c", code, str(tmp_path)], stdout=subprocess.PIPE)
+            for _ in range(4)]
+    paths = {run.communicate()[0].decode().strip() for run in runs}
+    assert all(run.returncode == 0 for run in runs)
+    (path,) = paths
+    assert open(path, "rb").read() == payload
+    assert not list((tmp_path / "example-1.0-py3-none-any").rglob("*.partial"))
