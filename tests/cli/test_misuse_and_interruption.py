@@ -132,6 +132,8 @@ def test_default_trackers_skip_line_of_sight_where_there_is_no_land(tmp_path, mo
     (["--site", "-1.1", "85"], "--site"),
     (["--site", "-1.1", "50.8", "--scenario", "islands"], "--site"),
     (["--site", "-1.1", "50.8", "--extent", "600000"], "--extent"),
+    (["--site", "20", "80", "--extent", "500000"], "--extent"),
+    (["--site", "179.99", "0", "--extent", "5000"], "--extent"),
 ])
 def test_coverage_usage_errors(argv, option, tmp_path, capsys):
     png = tmp_path / "cov.png"
@@ -204,6 +206,10 @@ def test_coverage_at_a_real_site(tmp_path, capsys):
     assert main(["coverage", "--site", "-1.29", "50.69", "--model", str(model), "--coastline", "i",
                  "--extent", "3000", "--resolution", "20", "--output", str(png)]) == 0
     assert "every ray meets land" in capsys.readouterr().err
+    # open sea, no land within the maps: the radar alone
+    assert main(["coverage", "--site", "-30", "-40", "--extent", "2000", "--coastline", "c",
+                 "--resolution", "20", "--output", str(png)]) == 0
+    assert "no land within the maps" in capsys.readouterr().err
 
 
 def test_coverage_refuses_two_models_of_one_name_and_bad_mathtext(tmp_path, capsys):

@@ -32,7 +32,8 @@ def test_each_rule(tmp_path):
     log = read_ais(write(tmp_path, rows), box=(-1.5, 50.5, -0.9, 50.9), origin=(-1.2, 50.7))
     assert log.epoch == dt.datetime(2016, 1, 12, 13, 0, 0)
     assert log.origin == (-1.2, 50.7)
-    assert log.dropped == {"outside box": 1, "duplicate time": 1, "isolated jump": 1, "not finite": 0}
+    assert log.dropped == {"outside box": 1, "duplicate time": 1, "isolated jump": 1,
+                           "not a position": 0}
     one, two = log.trajectories
     assert (one.mmsi, two.mmsi) == (1, 2)
     assert one.times.tolist() == [0.0, 10.0, 30.0, 1200.0]
@@ -68,6 +69,40 @@ def test_default_origin_is_the_box_centre_else_the_mean(tmp_path):
 def test_malformed_logs_are_named(tmp_path, rows, header, message):
     with pytest.raises(ValueError, match=f"source: .*{message}"):
         read_ais(write(tmp_path, rows, header))
+
+
+def test_what_a_receiver_garbles(tmp_path):
+    rows = ["2016-01-12 13:00:00,1,50.70,-1.20,0,5", "2016-01-12 13:00:10,1,95.0,-1.20,0,5",
+            "2016-01-12 13:00:20,1,nan,-1.20,0,5", "2016-01-12 13:00:30,1,50.70,181,0,5"]
+    path = tmp_path / "log.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + (HEADER + "".join(f"{r}\n" for r in rows)).encode())  # a BOM
+    log = read_ais(path)
+    assert log.dropped["not a position"] == 3 and len(log.trajectories[0].times) == 1
+    # every position garbled and nothing to place the plane by
+    with pytest.raises(ValueError, match="source: .* holds no report with a position"):
+        read_ais(write(tmp_path, ["2016-01-12 13:00:00,1,nan,-1.2,0,5"]))
+    # a box that keeps nothing gives no trajectories
+    assert read_ais(path, box=(10, 10, 11, 11)).trajectories == ()
+    with pytest.raises(ValueError, match="source: .*line 2: not an AIS report"):
+        read_ais(write(tmp_path, ["2016-01-12 13:00:00,99999999999999999999,50,-1,0,0"]))
+    bad = tmp_path / "latin1.csv"
+    bad.write_bytes(HEADER.encode() + b"2016-01-12 13:00:00,1,50,-1,0,0 \xe9\xff\n")
+    with pytest.raises(ValueError, match="source: .* is not UTF-8"):
+        read_ais(bad)
+    with pytest.raises(TypeError, match="source: expected a file path"):
+        read_ais(None)
+
+
+def test_times_are_numbers(tmp_path):
+    trajectory = read_ais(write(tmp_path, ["2016-01-12 13:00:00,1,50.7,-1.2,0,5",
+                                           "2016-01-12 13:00:10,1,50.71,-1.2,0,5"])).trajectories[0]
+    assert trajectory.position_at(5.0).shape == (1, 2)
+    assert np.isnan(trajectory.position_at([np.nan])).all()
+    for t in ("5", [[1.0, 2.0]], [True], np.datetime64("2016-01-12"), None):
+        with pytest.raises(TypeError, match="t: expected seconds"):
+            trajectory.position_at(t)
+        with pytest.raises(TypeError, match="t: expected seconds"):
+            trajectory.velocity_at(t)
 
 
 def test_bad_arguments_are_named(tmp_path):

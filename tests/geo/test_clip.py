@@ -64,6 +64,11 @@ def test_whole_cases():
     assert len(holes) == 1
     # box apart: nothing
     assert check(square, [lake], (20, 20, 30, 30)) == []
+    # the box's centre in a lake wholly inside the box: the box is land with the lake
+    (ring, holes), = check(square, [lake], (3, 3, 7, 7))
+    assert len(holes) == 1 and abs(signed_area(ring) - 16) < 1e-12
+    # a lake touching the box's side from inside
+    check(square, [np.array([[3.0, 4], [6, 4], [6, 6], [3, 6]])], (3, 3, 7, 7))
     # a lake cut by the box's side becomes a bay of the shell
     (ring, holes), = check(square, [lake], (1, 1, 5, 9))
     assert holes == [] and abs(signed_area(ring) - (4 * 8 - 2)) < 1e-12
@@ -84,3 +89,17 @@ def test_orientation_of_the_input_does_not_matter(orientation):
     shell = star(rng, (0.0, 0.0), 2.0, 10.0, 40)[::orientation]
     hole = star(rng, (0.5, 0.0), 0.2, 0.6, 7)[::-orientation]
     check(shell, [hole], (-3.0, -5.0, 6.0, 0.3))
+
+
+@pytest.mark.parametrize("shell, box, message", [
+    ([[0, 0], [1, 0], [0, 1]], (7, 7, 3, 3), "box: expected finite"),
+    ([[0, 0], [1, 0], [0, 1]], (float("nan"), 0, 1, 1), "box: expected finite"),
+    ([[0, 0], [1, 0], [0, 1]], (0, 0, 0, 1), "box: expected finite"),
+    ([[0, 0], [1, 0], [0, 1]], "box", "box: expected"),
+    ([[0, 0], [1, 0]], (0, 0, 1, 1), "shell: expected"),
+    ([0, 1, 2], (0, 0, 1, 1), "shell: expected"),
+    ([[0, 0], [1, float("nan")], [0, 1]], (0, 0, 1, 1), "shell: vertices must be finite"),
+])
+def test_bad_input_is_named(shell, box, message):
+    with pytest.raises((TypeError, ValueError), match=message):
+        clip_to_box(shell, [], box)

@@ -99,6 +99,22 @@ def test_polygons_are_in_the_plane_around_the_origin():
     assert not np.allclose(centred[0]["shell"], polygons[0]["shell"])
 
 
+def test_antarctica_is_land():
+    polygons = shoreline_polygons((1.0, -80.0, 10.0, -70.0), resolution="c")
+    assert polygons and LandMask(polygons=polygons).contains(
+        lonlat_to_local([(5.0, -75.0)], (5.5, -75.0))).all()
+    # across the meridian GSHHG cuts Antarctica along, its halves would touch: refused
+    with pytest.raises(ValueError, match="box: holds both halves of GSHHG polygon 4"):
+        shoreline_polygons((-5.0, -80.0, 5.0, -70.0), resolution="c")
+
+
+def test_a_box_beyond_the_plane_around_its_origin_is_named():
+    with pytest.raises(ValueError, match="box: reaches farther than 1000 km"):
+        shoreline_polygons((-10.0, 40.0, 20.0, 60.0), resolution="c")
+    with pytest.raises(ValueError, match="box: reaches farther"):
+        shoreline_polygons(SOLENT, origin=(30.0, 30.0), resolution="c")
+
+
 def test_a_box_of_open_sea_has_no_land():
     assert shoreline_polygons((-3.0, 49.6, -2.5, 49.8), resolution="i") == []
 
@@ -106,12 +122,14 @@ def test_a_box_of_open_sea_has_no_land():
 @pytest.mark.parametrize("box, message", [
     ((-1, 50, -2, 51), "box: longitudes"), ((-1, 51, 0, 50), "box: latitudes"),
     ((-1, 50, 0), "box: expected"), ("solent", "box: expected"),
-    ((-1, 50, float("nan"), 51), "box"), ((170, 0, 190, 1), "box: longitudes")])
+    ((-1, 50, float("nan"), 51), "box"), ((170, 0, 190, 1), "box: longitudes"),
+    (np.array(5.0), "box: expected")])
 def test_bad_boxes_are_named(box, message):
     with pytest.raises((TypeError, ValueError), match=message):
         read_shorelines(box, "c")
 
 
 def test_bad_resolution_is_named():
-    with pytest.raises(ValueError, match="resolution: one of"):
-        read_shorelines(SOLENT, "x")
+    for resolution in ("x", ["c"], None):
+        with pytest.raises(ValueError, match="resolution: one of"):
+            read_shorelines(SOLENT, resolution)

@@ -19,8 +19,7 @@ def test_box_around_holds_the_half_width(lonlat, half_width):
                               lonlat)
     west_east = lonlat_to_local([(box[0], lonlat[1]), (box[2], lonlat[1])], lonlat)[:, 0]
     south_north = lonlat_to_local([(lonlat[0], box[1]), (lonlat[0], box[3])], lonlat)[:, 1]
-    if box[0] > -180.0:
-        assert west_east[0] <= -half_width
+    assert west_east[0] <= -half_width
     assert west_east[1] >= half_width
     assert south_north[0] <= -half_width and south_north[1] >= half_width
     assert np.all(np.abs(corners) < 3 * half_width)
@@ -60,3 +59,22 @@ def test_sites_of_one_scene_share_its_land():
     second = coastal_site((-1.07, 50.68), 20000.0, origin=(-1.15, 50.75), land=first.land)
     assert second.land is first.land
     assert np.allclose(second.position, lonlat_to_local([(-1.07, 50.68)], (-1.15, 50.75))[0])
+
+
+@pytest.mark.parametrize("lonlat, half_width, message", [
+    (SOUTHSEA, 0.0, "half_width: must be a distance > 0"),
+    (SOUTHSEA, -5.0, "half_width: must be a distance > 0"),
+    (SOUTHSEA, float("nan"), "half_width: must be finite"),
+    (SOUTHSEA, "10", "half_width: expected a number"),
+    ((179.99, 65.5), 20000.0, "lonlat: .* crosses the antimeridian"),
+    ((0.0, 88.9), 20000.0, "lonlat: .* within a degree of a pole"),
+])
+def test_bad_boxes_around_a_site_are_named(lonlat, half_width, message):
+    with pytest.raises((TypeError, ValueError), match=message):
+        box_around(lonlat, half_width)
+
+
+def test_a_site_at_open_sea_has_no_land():
+    site = coastal_site((-30.0, -40.0), 5000.0, resolution="c")
+    assert site.land is None and not site.on_land and site.shore_distance == np.inf
+    assert site.line_of_sight(500.0) is None

@@ -106,14 +106,14 @@ def _at_site(args):
         sys.exit(f"ctxmodels coverage: {err}")
     sight = site.line_of_sight(args.clearance)
     where = (f"on land, {site.shore_distance:,.0f} m from the shore" if site.on_land
-             else "at sea")
+             else "at sea" if site.land is not None else "at sea, no land within the maps")
     print(f"site {args.site[0]:g}, {args.site[1]:g}: {where} on the GSHHG '{args.coastline}' "
           f"shoreline; land within {args.clearance:g} m of the antenna blocks nothing",
           file=sys.stderr)
     if site.on_land and site.shore_distance > args.clearance:
         print(f"note: the shore is farther than --clearance ({args.clearance:g} m): every ray "
               f"meets land and the site sees nothing", file=sys.stderr)
-    site_factors = [site.land, sight]
+    site_factors = [] if site.land is None else [site.land, sight]
     if args.models is None:
         radar = DetectionProbabilityModel(factors=[
             RangeBands(edges=(max(args.extent),), values=(1.0, 0.0)),
@@ -132,5 +132,6 @@ def _at_site(args):
     args.title = args.title or (
         f"site {abs(lat):.4f}° {'N' if lat >= 0 else 'S'}, {abs(lon):.4f}° {'E' if lon >= 0 else 'W'}, "
         f"antenna {args.antenna_height:g} m\nGSHHG '{args.coastline}' shoreline; x east, y north")
-    outlines = [ring for polygon in site.land.polygons for ring in [polygon["shell"], *polygon["holes"]]]
+    polygons = () if site.land is None else site.land.polygons
+    outlines = [ring for polygon in polygons for ring in [polygon["shell"], *polygon["holes"]]]
     return models, outlines

@@ -61,8 +61,8 @@ class Trajectory:
 
     def position_at(self, t) -> np.ndarray:
         """(N, 2) positions at times ``t`` (N,) seconds after the epoch, linear between the
-        reports of a segment, NaN outside every segment."""
-        t = np.atleast_1d(np.asarray(t, dtype=np.float64))
+        reports of a segment, NaN outside every segment (and at a NaN time)."""
+        t = _seconds(t)
         out = np.full((len(t), 2), np.nan)
         for start, stop in self.segments:
             times = self.times[start:stop]
@@ -75,7 +75,7 @@ class Trajectory:
     def velocity_at(self, t) -> np.ndarray:
         """(N, 2) east/north velocities (m/s) between the reports around each time (the
         segment's last report uses the one before it), NaN outside every segment."""
-        t = np.atleast_1d(np.asarray(t, dtype=np.float64))
+        t = _seconds(t)
         out = np.full((len(t), 2), np.nan)
         for start, stop in self.segments:
             if stop - start < 2:
@@ -86,6 +86,15 @@ class Trajectory:
                 k = np.clip(np.searchsorted(times, t[inside], side="right") - 1, 0, len(times) - 2)
                 out[inside] = (points[k + 1] - points[k]) / (times[k + 1] - times[k])[:, None]
         return out
+
+
+def _seconds(t) -> np.ndarray:
+    """``t`` as (N,) float seconds: real numbers, a scalar or one dimension."""
+    given = np.asarray(t)
+    if given.dtype.kind not in "iuf" or given.ndim > 1:
+        raise TypeError(f"t: expected seconds after the epoch, a number or (N,) numbers, got "
+                        f"{given.dtype} of shape {given.shape}")
+    return np.atleast_1d(given.astype(np.float64))
 
 
 @dataclass(frozen=True)
@@ -101,7 +110,7 @@ class AISLog:
 
 
 def _rows(path: Path):
-    with open(path, newline="") as handle:
+    with open(path, newline="", encoding="utf-8-sig") as handle:
         reader = csv.reader(handle)
         header = next(reader, None)
         if header is None:
@@ -120,8 +129,11 @@ def _rows(path: Path):
                 if when.tzinfo is not None:
                     when = when.astimezone(dt.timezone.utc).replace(tzinfo=None)
                 values = [float(v) for v in fields[2:]]
-                yield when, int(fields[1]), values
-            except (IndexError, ValueError) as err:
+                mmsi = int(fields[1])
+                if not 0 <= mmsi < 2**63:
+                    raise ValueError(f"MMSI {fields[1]} out of range")
+                yield when, mmsi, values
+            except (IndexError, ValueError, OverflowError) as err:
                 raise ValueError(f"source: {path}, line {line}: not an AIS report ({err})") from None
 
 
@@ -146,6 +158,8 @@ def read_ais(source, box=None, origin=None, *, max_gap: float = 300.0,
     plane's origin, the box's centre by default (else the reports' mean). ``max_gap``
     (seconds) cuts a trajectory into segments; ``max_speed`` (m/s, 60 knots by default)
     marks an isolated jump."""
+    if not isinstance(source, (str, Path)):
+        raise TypeError(f"source: expected a file path, got {type(source).__name__}")
     path = Path(source)
     if not path.is_file():
         raise FileNotFoundError(f"source: no such file: {path}")
@@ -156,7 +170,10 @@ def read_ais(source, box=None, origin=None, *, max_gap: float = 300.0,
     if not max_speed > 0:
         raise ValueError(f"max_speed: must be positive m/s, got {max_speed}")
     bounds = check_box(box) if box is not None else None
-    reports = list(_rows(path))
+    try:
+        reports = list(_rows(path))
+    except UnicodeDecodeError as err:
+        raise ValueError(f"source: {path} is not UTF-8 text ({err.reason} at byte {err.start})") from None
     if not reports:
         raise ValueError(f"source: {path} holds no reports")
     epoch = min(r[0] for r in reports)
@@ -165,12 +182,16 @@ def read_ais(source, box=None, origin=None, *, max_gap: float = 300.0,
     values = np.array([r[2] for r in reports], dtype=np.float64).reshape(-1, 4)
     lat, lon, course, sog = values.T
     dropped = {"outside box": 0, "duplicate time": 0, "isolated jump": 0}
-    keep = np.isfinite(values).all(axis=1)
-    dropped["not finite"] = int(np.count_nonzero(~keep))
+    # a position off the Earth (or not a number) is the receiver's garbage, as a wild one is
+    keep = np.isfinite(values).all(axis=1) & (np.abs(lat) <= 90.0) & (np.abs(lon) <= 180.0)
+    dropped["not a position"] = int(np.count_nonzero(~keep))
     if bounds is not None:
         inside = (lon >= bounds[0]) & (lon <= bounds[2]) & (lat >= bounds[1]) & (lat <= bounds[3])
         dropped["outside box"] = int(np.count_nonzero(keep & ~inside))
         keep &= inside
+    if not keep.any() and origin is None and bounds is None:
+        raise ValueError(f"source: {path} holds no report with a position (so no origin for "
+                         f"the plane either)")
     if origin is not None:
         origin = _origin(origin)
     elif bounds is not None:

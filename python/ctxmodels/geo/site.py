@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._component import as_float
+from ..errors import ArgumentError
 from ..land import LandMask, LineOfSight
 from .plane import _origin, lonlat_to_local
 from .shorelines import shoreline_polygons
@@ -22,13 +24,22 @@ METRES_PER_DEGREE = 111_195.0
 
 def box_around(lonlat, half_width: float) -> tuple[float, float, float, float]:
     """A (lon_min, lat_min, lon_max, lat_max) box that holds every point within
-    ``half_width`` metres east or north of ``lonlat`` (with 2 % to spare)."""
+    ``half_width`` metres east or north of ``lonlat`` (with 2 % to spare). A box that would
+    cross the antimeridian or come within a degree of a pole is refused, naming ``lonlat``."""
     lon, lat = _origin(lonlat)
+    half_width = as_float(half_width, "half_width")
+    if not half_width > 0:
+        raise ArgumentError("half_width", f"must be a distance > 0 metres, got {half_width}")
     dlat = 1.02 * half_width / METRES_PER_DEGREE
-    north = min(abs(lat) + dlat, 89.0)
+    north = abs(lat) + dlat
+    if north >= 89.0:
+        raise ArgumentError("lonlat", f"{half_width:g} m around ({lon}, {lat}) comes within a "
+                                      f"degree of a pole")
     dlon = 1.02 * half_width / (METRES_PER_DEGREE * np.cos(np.radians(north)))
-    return (max(lon - dlon, -180.0), max(lat - dlat, -90.0), min(lon + dlon, 180.0),
-            min(lat + dlat, 90.0))
+    if lon - dlon < -180.0 or lon + dlon > 180.0:
+        raise ArgumentError("lonlat", f"{half_width:g} m around ({lon}, {lat}) crosses the "
+                                      f"antimeridian, which the shorelines' boxes do not")
+    return lon - dlon, lat - dlat, lon + dlon, lat + dlat
 
 
 def shore_distance(polygons, point) -> float:
@@ -56,14 +67,14 @@ class CoastalSite:
     lonlat: tuple[float, float]
     origin: tuple[float, float]
     position: tuple[float, float]
-    land: LandMask
+    land: LandMask | None  # None: no land around (open sea)
     on_land: bool
-    shore_distance: float
+    shore_distance: float  # inf without land
 
-    def line_of_sight(self, clearance: float) -> LineOfSight:
+    def line_of_sight(self, clearance: float) -> LineOfSight | None:
         """Line of sight over the site's land, land within ``clearance`` (m) of the antenna
-        blocking nothing."""
-        return LineOfSight(land=self.land, clearance=clearance)
+        blocking nothing (None without land: nothing blocks)."""
+        return None if self.land is None else LineOfSight(land=self.land, clearance=clearance)
 
 
 def coastal_site(lonlat, half_width: float, origin=None, resolution: str = "f",
@@ -74,11 +85,11 @@ def coastal_site(lonlat, half_width: float, origin=None, resolution: str = "f",
     lonlat = _origin(lonlat)
     origin = _origin(origin) if origin is not None else lonlat
     if land is None:
-        land = LandMask(polygons=shoreline_polygons(box_around(lonlat, half_width), origin,
-                                                    resolution))
+        polygons = shoreline_polygons(box_around(lonlat, half_width), origin, resolution)
+        land = LandMask(polygons=polygons) if polygons else None
     position = lonlat_to_local([lonlat], origin)[0]
-    on_land = bool(land.contains(position[None, :])[0]) if land.polygons else False
-    distance = shore_distance(land.polygons, position) if land.polygons else np.inf
+    on_land = land is not None and bool(land.contains(position[None, :])[0])
+    distance = shore_distance(land.polygons, position) if land is not None else np.inf
     return CoastalSite(lonlat=lonlat, origin=origin, position=(float(position[0]), float(position[1])),
                        land=land, on_land=on_land, shore_distance=distance)
 
