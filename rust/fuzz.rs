@@ -245,8 +245,9 @@ proptest! {
     }
 
     #[test]
-    fn line_of_sight_never_panics(land in land(), sensor in [coord(), coord()], pts in points()) {
-        let sight = LineOfSight::new(land.clone()).unwrap();
+    fn line_of_sight_never_panics(land in land(), sensor in [coord(), coord()], pts in points(),
+                                  clearance in prop_oneof![Just(0.0), 0.0..50.0f64, Just(1e308)]) {
+        let sight = LineOfSight::with_clearance(land.clone(), clearance).unwrap();
         for t in &pts {
             let _ = sight.visible(sensor, *t);
         }

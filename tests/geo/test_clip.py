@@ -103,3 +103,10 @@ def test_orientation_of_the_input_does_not_matter(orientation):
 def test_bad_input_is_named(shell, box, message):
     with pytest.raises((TypeError, ValueError), match=message):
         clip_to_box(shell, [], box)
+
+
+def test_a_ring_that_crosses_itself_is_refused_not_looped_on():
+    bowtie = np.array([[0.0, 0], [4, 4], [4, 0], [0, 4]])
+    with pytest.raises(ValueError, match="cross"):
+        for box in [(1, -1, 3, 5), (-1, 1, 5, 3), (1, 1, 3, 3), (0.5, -1, 1.5, 5)]:
+            clip_to_box(bowtie, [], box)

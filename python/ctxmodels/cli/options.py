@@ -19,8 +19,9 @@ def study_options(sub, output: str, full_seeds: int, quick_seeds: int,
                      choices=list(TRACKERS) + ["all"],
                      help="trackers to compare, or 'all' (default: all; `ctxmodels list` "
                           "names them). Trackers "
-                          "run only on the scenarios they are made for (gmphd-sight needs the "
-                          "islands' land, the JPDAs run on the paper's two scenarios); a "
+                          "run only on the scenarios they are made for (gmphd-sight needs "
+                          "land: the islands or the Solent; the JPDAs run on the paper's two "
+                          "scenarios; the Solent runs five GM-PHDs); a "
                           "named tracker that fits none of --scenarios is an error")
     sub.add_argument("--seeds", type=integer(1, MAX_SEEDS), default=None,
                      help=f"Monte Carlo seeds per scenario, 1–{MAX_SEEDS} (default "

@@ -194,15 +194,20 @@ def _check_site(args) -> None:
     if max(args.extent) > 500_000.0:
         raise UsageError(f"argument --extent: with --site at most 500000 m (the local plane's "
                          f"reach), got {max(args.extent):g}")
-    from ..geo.shorelines import _near_origin
+    from ..errors import ArgumentError
+    from ..geo.plane import MAX_DISTANCE
+    from ..geo.shorelines import farthest_point
     from ..geo.site import box_around
+    extent = max(args.extent)
     try:
-        _near_origin(box_around((lon, lat), max(args.extent)), (lon, lat))
-    except ValueError as err:  # the box's reach: the extent, near the antimeridian or a pole
-        why = ("its box of shorelines reaches farther than 1000 km from the site (the local "
-               "plane's reach)" if "farther" in str(err) else str(err).split(": ", 1)[-1])
-        raise UsageError(f"argument --extent: {max(args.extent):g} m around the site: {why}; "
+        box = box_around((lon, lat), extent)
+    except ArgumentError as err:  # across the antimeridian, or at a pole
+        raise UsageError(f"argument --extent: {extent:g} m around the site: {err.detail}; "
                          f"take a smaller --extent") from None
+    if farthest_point(box, (lon, lat))[1] > MAX_DISTANCE:
+        raise UsageError(f"argument --extent: {extent:g} m around the site: its box of shorelines "
+                         f"reaches farther than {MAX_DISTANCE / 1000:g} km from it (the local "
+                         f"plane's reach); take a smaller --extent")
     args.antenna_height = 20.0 if args.antenna_height is None else args.antenna_height
     args.clearance = 500.0 if args.clearance is None else args.clearance
     args.coastline = args.coastline or "f"

@@ -20,6 +20,7 @@ import numpy as np
 
 from . import metrics
 from .paper import PAPER_JPDA, paper_row
+from .solent.scene import DISTANCE_SCALE as SOLENT_SCALE
 from .statistics import (ALPHA, MARGINS, NO_PAPER_EFFECT, NON_INFERIORITY, SUPERIORITY,
                          Interval, OneSidedTest, holm, one_sided_test, overall_verdict,
                          size_verdict, t_interval)
@@ -110,18 +111,18 @@ FINDINGS: tuple[Finding, ...] = (
     Finding("solent-uniform-loses-tracks",
             "uniform P_D loses what only the Foreland sees: radar-only GM-PHD > uniform "
             "(Solent)", "paper", ("gmphd-radar-only",), ("gmphd-uniform",), "solent",
-            "radar-only − uniform (Solent)", paper_scope="mixed-range", distance_scale=10.0),
+            "radar-only − uniform (Solent)", paper_scope="mixed-range", distance_scale=SOLENT_SCALE),
     Finding("solent-pd-aware-beats-radar-only", "P_D-aware GM-PHD > radar-only (Solent)",
             "paper", ("gmphd-pd-aware",), ("gmphd-radar-only",), "solent",
-            "P_D-aware − radar-only (Solent)", paper_scope=COMBINED, distance_scale=10.0),
+            "P_D-aware − radar-only (Solent)", paper_scope=COMBINED, distance_scale=SOLENT_SCALE),
     Finding("solent-sight-beats-pd-aware",
             "line-of-sight GM-PHD (land, shadows, horizon) > P_D-aware range bands (Solent)",
             "ours", ("gmphd-sight",), ("gmphd-pd-aware",), "solent",
-            "line of sight − P_D-aware (Solent)", distance_scale=10.0),
+            "line of sight − P_D-aware (Solent)", distance_scale=SOLENT_SCALE),
     Finding("solent-learned-matches-sight",
             "learned-λ-and-P_D GM-PHD ≥ line-of-sight (Solent)", "ours",
             ("gmphd-learned",), ("gmphd-sight",), "solent",
-            "learned λ, P_D − line of sight (Solent)", test=NON_INFERIORITY, distance_scale=10.0),
+            "learned λ, P_D − line of sight (Solent)", test=NON_INFERIORITY, distance_scale=SOLENT_SCALE),
 )
 
 
@@ -319,7 +320,8 @@ def findings_markdown(results: list[FindingResult]) -> str:
               "before the run: \">\" findings by a one-sided paired t-test of H0: Δ ≤ 0, \"≥\" "
               f"findings by a non-inferiority test of H0: Δ ≤ −margin (margins "
               f"{MARGINS['hota']:g} HOTA points and {MARGINS['gospa']:g} m GOSPA, the GOSPA "
-              f"margin times a scene's distance scale: 10 m on the Solent), each at 5 %; "
+              f"margin times a scene's distance scale: {MARGINS['gospa'] * SOLENT_SCALE:g} m on "
+              f"the Solent), each at 5 %; "
               "p-values Holm-adjusted over all findings × both metrics (family-wise 5 %). A "
               "metric is reproduced / non-inferior when its Holm-adjusted p is below 0.05, not "
               "reproduced / inferior when its one-sided 95 % upper bound lies below 0 / "

@@ -25,6 +25,9 @@ import numpy as np
 from . import findings as findings_
 from . import metrics
 from . import track_management as management_
+from .metrics import GOSPA_C
+from .scenarios import SOLENT
+from .solent.scene import DISTANCE_SCALE as SOLENT_SCALE
 from .executors import write_atomic, write_json
 from .findings import COMBINED, COMBINED_SCENARIOS, seed_scores
 from .paper import paper_row
@@ -32,7 +35,7 @@ from .statistics import bootstrap_mean
 
 #: Scenario names in table order, and the short labels of the results table.
 SCENARIO_LABELS = {"mixed-range": "Scenario 1", "formation": "Scenario 2", "islands": "Scenario 3",
-                   "solent": "Scenario 4 (Solent)"}
+                   SOLENT: "Scenario 4 (Solent)"}
 
 #: The track-management table's columns: key, markdown header, format.
 MANAGEMENT_COLUMNS = (
@@ -208,7 +211,8 @@ class ExperimentResults:
                                       for key, _, spec in MANAGEMENT_COLUMNS) + " |")
         lines += ["", "Mean over seeds; a scope's runs of one seed are pooled first (counts summed over its "
                   "scenarios, rates as ratios of sums). Truths and tracks are matched by GOSPA's assignment"
-                  " (c = 30 m; 300 m on the Solent) at each radar time, static-object tracks dropped. "
+                  f" (c = {GOSPA_C:g} m; {GOSPA_C * SOLENT_SCALE:g} m on the Solent) at each radar time, "
+                  "static-object tracks dropped. "
                   "GOSPA's terms are the means over radar times of the parts of the squared GOSPA: they add"
                   " up to the mean over seeds of RMS GOSPA². False tracks are never matched; their life "
                   "runs from first to last radar time; time to track runs from a vessel's first radar time "
@@ -263,19 +267,20 @@ class ExperimentResults:
                      f"of each scenario; "
                      f"{'component-path' if self.config.stock else 'array'} trackers. "
                      "In parentheses: the paper's Table II on its recorded data.")
-        if any(s != "solent" for s in self.config.scenarios):
+        if any(s != SOLENT for s in self.config.scenarios):
             lines.append("Simulated: the sensors, clutter and scenes (hand-built after the "
                          "paper's descriptions; its paths are not public). Calibrated: the "
                          "radar's P_D, clutter and bearing σ and the lidar's clutter rate, on "
                          "the paper's baseline rows only (docs/calibration.md). Not reproduced "
                          "by any calibrated setting: the baselines' absolute scores "
                          "(docs/calibration.md says why), so compare differences, not levels.")
-        if "solent" in self.config.scenarios:
+        if SOLENT in self.config.scenarios:
             lines.append("Scenario 4 (Solent): real coast (GSHHG) and real vessels (AIS, 12 "
                          "January 2016) with two simulated radars at real sites, the "
                          "calibrated radar's P_D, noise and false alarms a scan "
-                         "(ctxmodels.experiment.solent); distances in its scores × 10 (c = "
-                         "300 m). The paper has no such scene: its rows are its own scenarios'.")
+                         f"(ctxmodels.experiment.solent); distances in its scores × "
+                         f"{SOLENT_SCALE:g} (c = {GOSPA_C * SOLENT_SCALE:g} m). The paper has no "
+                         f"such scene: its rows are its own scenarios'.")
         lines.append(truth_line(self.config.radar, self.config.lidar))
         extract = getattr(self.config, "extract", "stone-soup")
         lines.append("Scored states: " + ("every state of every reported track (Stone Soup's "

@@ -194,9 +194,10 @@ def kept_paths(tracks, epoch) -> list:
 
 @functools.lru_cache(maxsize=2)
 def simulated_run(scenario: str, seed: int, duration, radar, lidar):
-    """The simulated scenario of a job. A worker runs every tracker of a (scenario, seed) in
-    turn (see :func:`run_experiment`'s job order), so it simulates each once. Trackers only
-    read the run (the results are the same with one worker or several: tested)."""
+    """The run of a job's scenario (simulated, or the Solent's). A worker runs every tracker
+    of a (scenario, seed) in turn (see :func:`run_experiment`'s job order), so it simulates
+    each once. Trackers only read the run (the results are the same with one worker or
+    several: tested)."""
     return make_scenario(scenario, seed, duration, radar=radar, lidar=lidar)
 
 

@@ -61,14 +61,18 @@ detection, noise and clutter draws, from independent radar and lidar streams.
 
 Public API
 ----------
-``make_scenario(name, seed, duration=None, *, radar=None, lidar=None) -> ScenarioRun``
-    Generate one named scenario.
+``make_scenario(name, seed, duration=None, *, radar=None, lidar=None)``
+    Generate one named scenario: a :class:`ScenarioRun`, or for ``"solent"`` a
+    :class:`~.solent.run.SolentRun` (real coast and traffic; its radars are fixed).
 ``simulate(layout, seed, duration=None, *, radar=None, lidar=None, name="custom")``
     Generate any :class:`SceneLayout` (build your own with :class:`PathBuilder`,
     :class:`PathMotion`, :class:`WeaveMotion`, :class:`FormationMotion`,
     :class:`DriftMotion`, :class:`TargetSpec`, :class:`StaticObject`).
 ``SCENARIOS``
-    ``{name: ScenarioSpec}``; ``ScenarioSpec.layout()`` builds its layout.
+    ``{name: spec}``: each spec's ``duration``; a simulated scene's :class:`ScenarioSpec`
+    builds its layout (``layout()``), the Solent's :class:`SolentSpec` has none.
+    ``SIMULATED_SCENARIOS`` holds the first three, ``DEFAULT_SCENARIOS`` what a study runs
+    unless told.
 ``TRUTHS``
     ``{name: Truth}``: named radar and lidar truths (``calibrated``, ``stress``).
 

@@ -128,7 +128,9 @@ def _rows(path: Path):
                 when = dt.datetime.fromisoformat(fields[0])
                 if when.tzinfo is not None:
                     when = when.astimezone(dt.timezone.utc).replace(tzinfo=None)
-                values = [float(v) for v in fields[2:]]
+                # (course and speed may be empty: "not available" in AIS)
+                values = [float(fields[2]), float(fields[3])] + [
+                    float(v) if v.strip() else float("nan") for v in fields[4:]]
                 mmsi = int(fields[1])
                 if not 0 <= mmsi < 2**63:
                     raise ValueError(f"MMSI {fields[1]} out of range")
@@ -149,7 +151,7 @@ def _isolated_jumps(times: np.ndarray, xy: np.ndarray, max_speed: float) -> np.n
 
 
 def read_ais(source, box=None, origin=None, *, max_gap: float = 300.0,
-             max_speed: float = 60.0 * KNOT) -> AISLog:
+             max_speed: float = 60.0 * KNOT, backend: str = "auto") -> AISLog:
     """Read an AIS CSV log (see the module docstring) into trajectories.
 
     ``box`` (lon_min, lat_min, lon_max, lat_max) degrees keeps the reports inside it (all by
@@ -157,7 +159,7 @@ def read_ais(source, box=None, origin=None, *, max_gap: float = 300.0,
     :data:`ctxmodels.geo.MAX_DISTANCE` needs one). ``origin`` (longitude, latitude) is the
     plane's origin, the box's centre by default (else the reports' mean). ``max_gap``
     (seconds) cuts a trajectory into segments; ``max_speed`` (m/s, 60 knots by default)
-    marks an isolated jump."""
+    marks an isolated jump. ``backend``: :func:`~ctxmodels.geo.lonlat_to_local`'s."""
     if not isinstance(source, (str, Path)):
         raise TypeError(f"source: expected a file path, got {type(source).__name__}")
     path = Path(source)
@@ -183,7 +185,8 @@ def read_ais(source, box=None, origin=None, *, max_gap: float = 300.0,
     lat, lon, course, sog = values.T
     dropped = {"outside box": 0, "duplicate time": 0, "isolated jump": 0}
     # a position off the Earth (or not a number) is the receiver's garbage, as a wild one is
-    keep = np.isfinite(values).all(axis=1) & (np.abs(lat) <= 90.0) & (np.abs(lon) <= 180.0)
+    keep = (np.isfinite(lat) & np.isfinite(lon) & (np.abs(lat) <= 90.0)
+            & (np.abs(lon) <= 180.0))
     dropped["not a position"] = int(np.count_nonzero(~keep))
     if bounds is not None:
         inside = (lon >= bounds[0]) & (lon <= bounds[2]) & (lat >= bounds[1]) & (lat <= bounds[3])
@@ -201,7 +204,7 @@ def read_ais(source, box=None, origin=None, *, max_gap: float = 300.0,
     order = np.lexsort((np.arange(len(times)), times, mmsi))  # stable: the log's order at ties
     order = order[keep[order]]
     xy = np.full((len(times), 2), np.nan)
-    xy[order] = lonlat_to_local(np.column_stack([lon[order], lat[order]]), origin)
+    xy[order] = lonlat_to_local(np.column_stack([lon[order], lat[order]]), origin, backend=backend)
     trajectories = []
     for vessel in np.unique(mmsi[order]):
         rows = order[mmsi[order] == vessel]

@@ -152,6 +152,9 @@ def _join(fragments: list[list], box) -> list[Ring]:
             points.extend(_corners_between(exits[k], entries[following], box))
             if following == first:
                 break
+            if following not in unused:  # only rings that cross themselves lead back here
+                raise ValueError("shell: the rings cross one another or themselves (not a "
+                                 "simple polygon with holes inside it)")
             k = following
         rings.append(np.array(points, dtype=np.float64))
     return rings

@@ -94,18 +94,25 @@ def read_shorelines(box, resolution: str = "f") -> list[Shoreline]:
     return found
 
 
-def _near_origin(box, origin) -> None:
-    """The whole box must map to the plane around ``origin`` (within
-    :data:`~ctxmodels.geo.plane.MAX_DISTANCE` of it)."""
+def farthest_point(box, origin) -> tuple[list[float], float]:
+    """The point of ``box``'s boundary farthest from ``origin`` (of 32 along it) and its
+    great-circle distance (m): the box maps to the plane only within
+    :data:`~ctxmodels.geo.plane.MAX_DISTANCE`."""
     lon0, lat0, lon1, lat1 = box
     lons, lats = np.linspace(lon0, lon1, 9), np.linspace(lat0, lat1, 9)
-    edge = [(x, y) for x in lons for y in (lat0, lat1)] + [(x, y) for x in (lon0, lon1) for y in lats]
-    points = np.array(edge)
-    far = MEAN_RADIUS * _central_angle(points[:, 0], points[:, 1], *origin) > MAX_DISTANCE
-    if far.any():
+    points = np.array([(x, y) for x in lons for y in (lat0, lat1)]
+                      + [(x, y) for x in (lon0, lon1) for y in lats])
+    distances = MEAN_RADIUS * _central_angle(points[:, 0], points[:, 1], *origin)
+    k = int(np.argmax(distances))
+    return points[k].tolist(), float(distances[k])
+
+
+def _near_origin(box, origin) -> None:
+    point, distance = farthest_point(box, origin)
+    if distance > MAX_DISTANCE:
         raise ValueError(f"box: reaches farther than {MAX_DISTANCE / 1000:.0f} km from the origin "
-                         f"{origin} (at {points[far][0].tolist()}); the local plane maps points "
-                         f"within MAX_DISTANCE only: take a smaller box or an origin inside it")
+                         f"{origin} (at {point}); the local plane maps points within "
+                         f"MAX_DISTANCE only: take a smaller box or an origin inside it")
 
 
 @functools.cache
@@ -124,10 +131,12 @@ def _files(resolution: str):
     return index, data
 
 
-def shoreline_polygons(box, origin=None, resolution: str = "f") -> list[dict]:
+def shoreline_polygons(box, origin=None, resolution: str = "f", *,
+                       backend: str = "auto") -> list[dict]:
     """Land inside ``box`` as ``{'shell': (K, 2), 'holes': [(K, 2), ...]}`` polygons in
     east/north metres around ``origin`` (longitude, latitude; the box's centre by default),
-    ready for :class:`ctxmodels.LandMask`."""
+    ready for :class:`ctxmodels.LandMask`. ``backend``: :func:`~ctxmodels.geo.lonlat_to_local`'s
+    (PROJ and NumPy agree to well under a millimetre, not to the bit)."""
     lon0, lat0, lon1, lat1 = check_box(box)
     origin = _origin(origin) if origin is not None else (0.5 * (lon0 + lon1), 0.5 * (lat0 + lat1))
     _near_origin((lon0, lat0, lon1, lat1), origin)
@@ -151,8 +160,9 @@ def shoreline_polygons(box, origin=None, resolution: str = "f") -> list[dict]:
                     break
         for shell, inner in zip(shells, holes):
             for ring, ring_holes in clip_to_box(shell.lonlat, inner, (lon0, lat0, lon1, lat1)):
-                polygons.append({"shell": lonlat_to_local(ring, origin),
-                                 "holes": [lonlat_to_local(h, origin) for h in ring_holes]})
+                polygons.append({"shell": lonlat_to_local(ring, origin, backend=backend),
+                                 "holes": [lonlat_to_local(h, origin, backend=backend)
+                                           for h in ring_holes]})
     return polygons
 
 

@@ -190,8 +190,9 @@ TRACKERS: dict[str, TrackerSpec] = {spec.name: spec for spec in (
                 "learned online instead of the paper's equations", "gmphd", pd="learned",
                 clutter="learned", cost=1.9),
     TrackerSpec("gmphd-sight", "GM-PHD (line-of-sight)",
-                "context-aware plus land mask and radar shadow", "gmphd", pd="context",
-                clutter="context", line_of_sight=True, only_scenarios=("islands",), cost=2.1),
+                "context-aware plus land mask and radar shadow (the islands; the Solent's real "
+                "coast)", "gmphd", pd="context", clutter="context", line_of_sight=True,
+                only_scenarios=("islands", "solent"), cost=2.1),
     TrackerSpec("gmphd-coastal", "GM-PHD (line-of-sight, coastal λ)",
                 "line-of-sight-aware plus a hand-written coastal band in the radar's λ",
                 "gmphd", pd="context", clutter="context", line_of_sight=True, coastal=True,

@@ -11,14 +11,17 @@ from . import scene
 
 LAND, WATER = "#d9c8a0", "#eef4f8"
 SITE_COLOURS = ("#7b2d8b", "#d95f02")
+#: The view (km east and north of Southsea Castle).
+VIEW_X, VIEW_Y = (-22.0, 24.0), (-31.0, 9.0)
 
 
-def _draw_land(ax) -> None:
+def _draw_land(ax, filled: bool = True, outline: str = "0.45") -> None:
     for polygon in scene.land():
         for k, ring in enumerate([polygon["shell"], *polygon["holes"]]):
             closed = np.vstack([ring, ring[:1]]) / 1000.0
-            ax.fill(closed[:, 0], closed[:, 1], color=LAND if k == 0 else WATER, lw=0, zorder=1)
-            ax.plot(closed[:, 0], closed[:, 1], color="0.45", lw=0.4, zorder=2)
+            if filled:
+                ax.fill(closed[:, 0], closed[:, 1], color=LAND if k == 0 else WATER, lw=0, zorder=1)
+            ax.plot(closed[:, 0], closed[:, 1], color=outline, lw=0.4 if filled else 0.5, zorder=2)
 
 
 def _draw_sites(ax) -> None:
@@ -32,8 +35,8 @@ def _draw_sites(ax) -> None:
 def _frame(ax, title: str) -> None:
     ax.set_facecolor(WATER)
     ax.set_aspect("equal")
-    ax.set_xlim(-22, 24)
-    ax.set_ylim(-31, 9)
+    ax.set_xlim(*VIEW_X)
+    ax.set_ylim(*VIEW_Y)
     ax.set_xlabel("east of Southsea Castle (km)", fontsize=8)
     ax.set_ylabel("north (km)", fontsize=8)
     ax.tick_params(labelsize=7)
@@ -62,8 +65,8 @@ def plot_solent_coverage(path: str | Path, resolution: int = 300) -> None:
     from ... import Pose
     from .trackers import site_models
     models = site_models("context")
-    xs = np.linspace(-22_000, 24_000, resolution)
-    ys = np.linspace(-31_000, 9_000, resolution)
+    xs = np.linspace(VIEW_X[0] * 1e3, VIEW_X[1] * 1e3, resolution)
+    ys = np.linspace(VIEW_Y[0] * 1e3, VIEW_Y[1] * 1e3, resolution)
     grid_x, grid_y = np.meshgrid(xs, ys)
     states = np.column_stack([grid_x.ravel(), np.zeros(grid_x.size), grid_y.ravel(),
                               np.zeros(grid_x.size)])
@@ -79,13 +82,10 @@ def plot_solent_coverage(path: str | Path, resolution: int = 300) -> None:
         image = ax.imshow(field, origin="lower", extent=(xs[0] / 1e3, xs[-1] / 1e3, ys[0] / 1e3,
                                                          ys[-1] / 1e3),
                           vmin=0, vmax=1, cmap="viridis", interpolation="nearest", zorder=0)
-        for polygon in scene.land():
-            for ring in [polygon["shell"], *polygon["holes"]]:
-                closed = np.vstack([ring, ring[:1]]) / 1000.0
-                ax.plot(closed[:, 0], closed[:, 1], color="w", lw=0.5, zorder=2)
+        _draw_land(ax, filled=False, outline="w")
         _draw_sites(ax)
     axes[0].legend(loc="lower left", fontsize=6.5, framealpha=0.9)
     fig.colorbar(image, ax=list(axes), shrink=0.8, label="P_D")
     fig.suptitle("The Solent: what each radar can see (range, horizon, land, line of sight "
-                 "with 500 m clearance)", fontsize=10)
+                 f"with {scene.CLEARANCE:g} m clearance)", fontsize=10)
     fig.savefig(path)

@@ -21,9 +21,9 @@ from stonesoup.types.angle import Bearing
 from stonesoup.types.array import StateVector
 from stonesoup.types.detection import Clutter, TrueDetection
 
-from ..simulation.geometry import TWO_PI, on_land, sight_blocked, wrap_angle
+from ..simulation.geometry import on_land, sight_blocked, wrap_angle
 from ..simulation.radar import RadarConfig
-from ..simulation.scans import Scan, SensorPose
+from ..simulation.scans import Scan, SensorPose, scan_offsets_us
 from . import scene
 
 #: The calibrated radar (docs/calibration.md): P_D, noise and false alarms per scan.
@@ -89,9 +89,8 @@ def _edges_that_can_block(site: scene.Site, polygons, reach: float):
 
 def scan_times(site: scene.Site, epoch: datetime.datetime, duration: float) -> list[datetime.datetime]:
     """The radar's scans in [epoch, epoch + duration), whole microseconds."""
-    period_us, phase_us = round(site.period * 1e6), round(site.phase * 1e6)
-    offsets = np.arange(phase_us, round(duration * 1e6), period_us, dtype=np.int64)
-    return [epoch + datetime.timedelta(microseconds=int(us)) for us in offsets]
+    return [epoch + datetime.timedelta(microseconds=int(us))
+            for us in scan_offsets_us(site.period, site.phase, duration)]
 
 
 def measurement_model(site: scene.Site):
@@ -133,5 +132,4 @@ def generate_scans(site: scene.Site, times, positions: np.ndarray, seen: np.ndar
     return scans
 
 
-__all__ = ["CLUTTER_PER_SCAN", "TWO_PI", "covered", "generate_scans", "on_water", "scan_times",
-           "within_reach"]
+__all__ = ["CLUTTER_PER_SCAN", "covered", "generate_scans", "on_water", "scan_times", "within_reach"]

@@ -36,9 +36,8 @@ class SolentRun:
     land: tuple
     static_objects: tuple = ()
     description: str = "two coastal radars over the Solent, AIS vessels as truth"
-    #: The scores' distances are the paper's × 10: its radar reaches 1.6 km, these 10 and
-    #: 20 km, and a bearing error spans metres in proportion to range.
-    distance_scale: float = 10.0
+    #: The scores' distances are the paper's times this (:data:`~.scene.DISTANCE_SCALE`).
+    distance_scale: float = scene.DISTANCE_SCALE
 
     @property
     def radar_times(self) -> list[datetime.datetime]:
