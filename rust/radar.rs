@@ -37,7 +37,7 @@
 //! bound the last bits of a sum could cross; it is monotone in range to within 1e-11.
 
 use crate::error::{ModelError, Result};
-use crate::simd::{exp, Lanes, Portable};
+use crate::simd::{exp, exp_within, Lanes, Portable};
 
 pub mod gamma;
 
@@ -103,6 +103,53 @@ impl OnePulse {
                 let pd = exp(L::splat(0.0) - q) * (one + (one - inverse) * q);
                 L::select(L::gt(pd, one), one, pd)
             }
+        }
+    }
+}
+
+/// A one-pulse closed form prepared for squared ranges. With c = S₀ r₀⁴ / L the SNR is
+/// S = c / r⁴, so 1 / (1 + S) = r⁴ / (r⁴ + c) and (Swerling 3–4) 1/δ = r⁴ / (r⁴ + c/2):
+/// one division per range, none for the SNR itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OnePulseAtRange {
+    form: OnePulse,
+    /// c for the exponential form, c/2 for the χ² one.
+    scale: f64,
+    threshold: f64,
+}
+
+impl OnePulseAtRange {
+    /// P_D at four squared ranges (r² = 0 gives 1; r⁴ beyond the largest double, S = 0,
+    /// gives P_FA; NaN gives NaN).
+    #[inline(always)]
+    pub fn lanes_at_squared<L: Lanes>(&self, r2: L) -> L {
+        if self.is_exponential() {
+            self.lanes_form::<L, true>(r2)
+        } else {
+            self.lanes_form::<L, false>(r2)
+        }
+    }
+
+    /// Whether the form is Swerling 1–2's e^{−T/(1+S)}.
+    pub fn is_exponential(&self) -> bool {
+        self.form == OnePulse::Exponential
+    }
+
+    /// [`Self::lanes_at_squared`] with the form known at compile time (`EXPONENTIAL`: as
+    /// [`Self::is_exponential`]), for loops that choose it once.
+    #[inline(always)]
+    pub fn lanes_form<L: Lanes, const EXPONENTIAL: bool>(&self, r2: L) -> L {
+        let one = L::splat(1.0);
+        let r4 = r2 * r2;
+        // (where r⁴ overflows, r⁴/(r⁴ + c) would be ∞/∞)
+        let near = L::select(L::gt(r4, L::splat(f64::MAX)), one, r4.div(r4 + L::splat(self.scale)));
+        // T < 690.8 (P_FA > 1e-300) and near ∈ [0, 1]: e^x within its range unclamped
+        let q = L::splat(self.threshold) * near;
+        if EXPONENTIAL {
+            exp_within(L::splat(0.0) - q)
+        } else {
+            let pd = exp_within(L::splat(0.0) - q) * (one + (one - near) * q);
+            L::select(L::gt(pd, one), one, pd)
         }
     }
 }
@@ -183,9 +230,28 @@ impl RadarEquation {
         self.snr * (ratio * ratio)
     }
 
+    /// The one-pulse closed form at squared ranges, if the radar has one (one pulse,
+    /// Swerling 1–4).
+    pub fn one_pulse(&self) -> Option<OnePulseAtRange> {
+        let form = OnePulse::of(self.swerling, self.pulses)?;
+        let c = self.snr * (self.reference_range2 * self.reference_range2);
+        let scale = match form {
+            OnePulse::Exponential => c,
+            OnePulse::ChiSquare4 => c * 0.5,
+        };
+        Some(OnePulseAtRange {
+            form,
+            scale,
+            threshold: self.threshold,
+        })
+    }
+
     /// P_D at squared range `r2` (NaN stays NaN): the reference [`Self::lanes_at_squared`]
     /// gives the bits of.
     pub fn at_squared(&self, r2: f64) -> f64 {
+        if let Some(form) = self.one_pulse() {
+            return form.lanes_at_squared(Portable::splat(r2)).to_array()[0];
+        }
         // (NaN r² gives a NaN SNR, which detection_probability keeps)
         detection_probability(
             self.swerling,
@@ -200,11 +266,8 @@ impl RadarEquation {
     /// after another (their length depends on the range).
     #[inline(always)]
     pub fn lanes_at_squared<L: Lanes>(&self, r2: L) -> L {
-        match OnePulse::of(self.swerling, self.pulses) {
-            Some(form) => {
-                let ratio = L::splat(self.reference_range2).div(r2);
-                form.at(L::splat(self.snr) * (ratio * ratio), self.threshold)
-            }
+        match self.one_pulse() {
+            Some(form) => form.lanes_at_squared(r2),
             None => {
                 let r2 = r2.to_array();
                 L::from_array(std::array::from_fn(|k| self.at_squared(r2[k])))

@@ -182,7 +182,37 @@ pub struct SquaredBands {
     at_least: [f64; SQUARED_EDGES],
 }
 
+/// [`SquaredBands`] with one edge (a range limit, a planar radar horizon), its three
+/// numbers held by value, so that a kernel's loop keeps them in registers.
+#[derive(Debug, Clone, Copy)]
+pub struct OneEdge {
+    at_least: f64,
+    below: f64,
+    above: f64,
+}
+
+impl OneEdge {
+    /// [`SquaredBands::lanes_at_squared`] of the bands it came from, the same bits.
+    #[inline(always)]
+    pub(crate) fn lanes_at_squared<L: Lanes>(self, r2: L) -> L {
+        L::select(
+            r2.ge(L::splat(self.at_least)),
+            L::splat(self.above),
+            L::splat(self.below),
+        )
+    }
+}
+
 impl SquaredBands {
+    /// The bands as a [`OneEdge`], if they have one edge.
+    pub fn one_edge(&self) -> Option<OneEdge> {
+        (self.count == 1).then_some(OneEdge {
+            at_least: self.at_least[0],
+            below: self.values[0],
+            above: self.values[1],
+        })
+    }
+
     #[inline(always)]
     pub fn at_squared(&self, r2: f64) -> f64 {
         let mut value = self.values[0];

@@ -85,9 +85,14 @@ fn models() -> Vec<DetectionModel> {
         ],
         // Every specialised step sequence of the kernels (lanes::with_fixed_steps) is here:
         // none, one sector, bands then a narrow or a wide sector, sector then bands, one set
-        // of bands.
+        // of bands, one edge (its edge owned by either side), a one-pulse radar equation of
+        // either form.
         vec![DetectionFactor::Constant(0.6)],
         vec![sector(2.0, 1.0, 0.2, 0.8)],
+        vec![bands(&[700.0], &[0.93, 0.11], &[true])],
+        vec![bands(&[80.0], &[0.2, 0.7], &[false])],
+        vec![radar(1, 1)],
+        vec![radar(3, 1)],
         // the radar equation between other factors, and alone
         vec![
             bands(&[50.0, 80.0], &[0.95, 0.2, 0.0], &[true, true]),

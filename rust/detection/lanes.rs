@@ -11,7 +11,8 @@ use crate::cubature::{
 };
 use crate::elevation::ElevationSector;
 use crate::horizon::Horizon;
-use crate::range_bands::SquaredBands;
+use crate::radar::OnePulseAtRange;
+use crate::range_bands::{OneEdge, SquaredBands};
 use crate::sector::FramedSector;
 use crate::simd::{LaneKernel, Lanes};
 
@@ -95,6 +96,24 @@ impl FixedSteps for &Horizon {
     }
 }
 
+impl FixedSteps for OneEdge {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
+        pd * self.lanes_at_squared(g.r2)
+    }
+}
+
+/// A one-pulse radar equation whose form (exponential or not) is fixed at compile time.
+#[derive(Clone, Copy)]
+struct OnePulse<const EXPONENTIAL: bool>(OnePulseAtRange);
+
+impl<const EXPONENTIAL: bool> FixedSteps for OnePulse<EXPONENTIAL> {
+    #[inline(always)]
+    fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
+        pd * self.0.lanes_form::<L, EXPONENTIAL>(g.r2)
+    }
+}
+
 /// A sector at most a half-plane wide ([`FramedSector::is_narrow`]), known to be so.
 #[derive(Clone, Copy)]
 struct Narrow<'a>(&'a FramedSector);
@@ -160,6 +179,10 @@ macro_rules! with_fixed_steps {
                 let $steps = ();
                 $body
             }
+            [Step::SquaredBands(a)] if a.one_edge().is_some() => {
+                let $steps = a.one_edge().unwrap();
+                $body
+            }
             [Step::SquaredBands(a)] => {
                 let $steps = a;
                 $body
@@ -170,6 +193,14 @@ macro_rules! with_fixed_steps {
             }
             [Step::Elevation(a)] => {
                 let $steps = a;
+                $body
+            }
+            [Step::Radar(a)] if a.one_pulse().is_some_and(|p| p.is_exponential()) => {
+                let $steps = OnePulse::<true>(a.one_pulse().unwrap());
+                $body
+            }
+            [Step::Radar(a)] if a.one_pulse().is_some() => {
+                let $steps = OnePulse::<false>(a.one_pulse().unwrap());
                 $body
             }
             [Step::SquaredBands(a), Step::Sector(b)] if b.is_narrow() => {

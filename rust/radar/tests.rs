@@ -94,6 +94,15 @@ fn the_equation_falls_with_the_fourth_power_of_range() {
     assert_eq!(radar.at(0.0), 1.0);
     assert!(radar.at(f64::NAN).is_nan());
     assert!((radar.at(1e9) - 1e-6).abs() < 1e-12);
+    // r⁴ overflows beyond 1e77 m: S = 0 there, P_D = P_FA (not ∞/∞)
+    for r in [1e78, 1e100, f64::INFINITY] {
+        assert!((radar.at(r) / 1e-6 - 1.0).abs() < 1e-14, "{r}");
+    }
+    // the one-pulse form at range against P_FA^(1/(1+S)) with S from the SNR
+    for r in [1.0, 300.0, 1000.0, 2500.0, 1e5] {
+        let s = radar.snr_at_squared(r * r);
+        assert!((radar.at(r) / 1e-6f64.powf(1.0 / (1.0 + s)) - 1.0).abs() < 1e-13, "{r}");
+    }
 }
 
 #[test]

@@ -35,6 +35,13 @@ const TAYLOR: [f64; 14] = {
 pub fn exp<L: Lanes>(x: L) -> L {
     let x = L::select(L::lt(x, L::splat(-708.0)), L::splat(-708.0), x);
     let x = L::select(L::gt(x, L::splat(709.0)), L::splat(709.0), x); // (NaN compares false: kept)
+    exp_within(x)
+}
+
+/// [`exp`] for x already within [−708, 709] (or NaN), as a caller that bounds its argument
+/// knows: the same bits, without the clamps.
+#[inline(always)]
+pub fn exp_within<L: Lanes>(x: L) -> L {
     let kf = (x * L::splat(LOG2_E) + L::splat(SHIFTER)) - L::splat(SHIFTER);
     let r = (x - kf * L::splat(LN2_HI)) - kf * L::splat(LN2_LO);
     // Estrin's scheme: pairs, then quads and eights combined with r², r⁴ and r⁸, so that
