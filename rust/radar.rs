@@ -37,7 +37,7 @@
 //! bound the last bits of a sum could cross; it is monotone in range to within 1e-11.
 
 use crate::error::{ModelError, Result};
-use crate::simd::{exp, exp_within, Lanes, Portable};
+use crate::simd::{exp, Lanes, Portable};
 
 pub mod gamma;
 
@@ -96,14 +96,25 @@ impl OnePulse {
     fn at<L: Lanes>(self, s: L, t: f64) -> L {
         let one = L::splat(1.0);
         match self {
-            OnePulse::Exponential => exp(L::splat(-t).div(one + s)),
-            OnePulse::ChiSquare4 => {
-                let inverse = one.div(one + s * L::splat(0.5)); // 1/δ
-                let q = L::splat(t) * inverse;
-                let pd = exp(L::splat(0.0) - q) * (one + (one - inverse) * q);
-                L::select(L::gt(pd, one), one, pd)
-            }
+            OnePulse::Exponential => closed_form::<L, true>(one.div(one + s), t),
+            OnePulse::ChiSquare4 => closed_form::<L, false>(one.div(one + s * L::splat(0.5)), t),
         }
+    }
+}
+
+/// The one-pulse closed forms from `near` ∈ [0, 1] (NaN kept): 1/(1 + S) for the
+/// exponential form (`EXPONENTIAL`), 1/δ for the χ² one, against the threshold `t`.
+#[inline(always)]
+fn closed_form<L: Lanes, const EXPONENTIAL: bool>(near: L, t: f64) -> L {
+    // T < 690.8 (P_FA > 1e-300): −q lies within the range of exp
+    let q = L::splat(t) * near;
+    let tail = exp(L::splat(0.0) - q);
+    if EXPONENTIAL {
+        tail
+    } else {
+        let one = L::splat(1.0);
+        let pd = tail * (one + (one - near) * q);
+        L::select(L::gt(pd, one), one, pd)
     }
 }
 
@@ -143,14 +154,7 @@ impl OnePulseAtRange {
         let r4 = r2 * r2;
         // (where r⁴ overflows, r⁴/(r⁴ + c) would be ∞/∞)
         let near = L::select(L::gt(r4, L::splat(f64::MAX)), one, r4.div(r4 + L::splat(self.scale)));
-        // T < 690.8 (P_FA > 1e-300) and near ∈ [0, 1]: e^x within its range unclamped
-        let q = L::splat(self.threshold) * near;
-        if EXPONENTIAL {
-            exp_within(L::splat(0.0) - q)
-        } else {
-            let pd = exp_within(L::splat(0.0) - q) * (one + (one - near) * q);
-            L::select(L::gt(pd, one), one, pd)
-        }
+        closed_form::<L, EXPONENTIAL>(near, self.threshold)
     }
 }
 

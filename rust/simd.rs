@@ -299,7 +299,7 @@ impl Lanes for Portable {
 }
 
 mod exp;
-pub use exp::{exp, exp_within};
+pub use exp::exp;
 
 #[cfg(target_arch = "x86_64")]
 mod x86;
