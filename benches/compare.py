@@ -381,6 +381,18 @@ def _bench_clutter(n, repeats, min_sample):
     return [row("clutter_metadata", n, n, times, check)]
 
 
+def slant_offsets(x, y, z, height, dz, h2, r2, tmp):
+    """NumPy's offsets from a sensor at the origin and ``height``, into the buffers: the
+    height above it ``dz``, the squared plane range ``h2`` and the squared slant range ``r2``
+    (``h2`` and ``r2`` may be one buffer)."""
+    np.subtract(z, height, out=dz)
+    np.multiply(x, x, out=h2)
+    np.multiply(y, y, out=tmp)
+    np.add(h2, tmp, out=h2)
+    np.multiply(dz, dz, out=tmp)
+    np.add(h2, tmp, out=r2)
+
+
 def bench_clutter_heights(sizes, repeats, min_sample):
     """λ of a 3-D radar's detections, (M, 3) positions: range bands on the slant range from
     the sensor's height × sea clutter below +0.5° of elevation (an elevation sector)."""
@@ -403,12 +415,7 @@ def bench_clutter_heights(sizes, repeats, min_sample):
 
         def numpy_clutter():
             # slant r², the band, then r sin(lower) ≤ dz ≤ r sin(upper) without an arctangent
-            np.subtract(z, 25.0, out=dz)
-            np.multiply(x, x, out=r2)
-            np.multiply(y, y, out=tmp)
-            np.add(r2, tmp, out=r2)
-            np.multiply(dz, dz, out=tmp)
-            np.add(r2, tmp, out=r2)
+            slant_offsets(x, y, z, 25.0, dz, r2, r2, tmp)
             np.sqrt(r2, out=r)
             np.multiply(r, math.sin(upper), out=tmp)
             np.less_equal(dz, tmp, out=sea)
@@ -628,12 +635,7 @@ def bench_heights(sizes, repeats, min_sample):
         m1, m2 = np.empty(n, bool), np.empty(n, bool)
 
         def offsets():
-            np.subtract(z, 25.0, out=dz)
-            np.multiply(x, x, out=h2)
-            np.multiply(y, y, out=tmp)
-            np.add(h2, tmp, out=h2)
-            np.multiply(dz, dz, out=tmp)
-            np.add(h2, tmp, out=r2)
+            slant_offsets(x, y, z, 25.0, dz, h2, r2, tmp)
 
         def beam_mask():
             # r sin(lower) ≤ dz ≤ r sin(upper): no arctangent
