@@ -83,7 +83,8 @@ fn models() -> Vec<DetectionModel> {
             sector(0.4, 2.5, 0.7, 0.9),
             bands(&[10.0, 1e3], &[0.7, 0.9, 0.1], &[false, false]),
         ],
-        // Every specialised step sequence of the kernels (lanes::with_fixed_steps) is here:
+        // Every specialised step sequence of the kernels (lanes::with_fixed_steps, and the
+        // lone factors of P_D at points) is here:
         // none, one sector, bands then a narrow or a wide sector, sector then bands, one set
         // of bands, one edge (its edge owned by either side), a one-pulse radar equation of
         // either form.

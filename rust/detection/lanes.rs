@@ -179,10 +179,6 @@ macro_rules! with_fixed_steps {
                 let $steps = ();
                 $body
             }
-            [Step::SquaredBands(a)] if a.one_edge().is_some() => {
-                let $steps = a.one_edge().unwrap();
-                $body
-            }
             [Step::SquaredBands(a)] => {
                 let $steps = a;
                 $body
@@ -193,14 +189,6 @@ macro_rules! with_fixed_steps {
             }
             [Step::Elevation(a)] => {
                 let $steps = a;
-                $body
-            }
-            [Step::Radar(a)] if a.one_pulse().is_some_and(|p| p.is_exponential()) => {
-                let $steps = OnePulse::<true>(a.one_pulse().unwrap());
-                $body
-            }
-            [Step::Radar(a)] if a.one_pulse().is_some() => {
-                let $steps = OnePulse::<false>(a.one_pulse().unwrap());
                 $body
             }
             [Step::SquaredBands(a), Step::Sector(b)] if b.is_narrow() => {
@@ -305,6 +293,24 @@ impl<P: Positions, H: Heights, V: Velocities> LaneKernel for AtStates<'_, P, H, 
 
     #[inline(always)]
     fn run<L: Lanes>(self) -> Option<usize> {
+        // A lone factor with a cheaper fixed form, without land or sight: here only, not in
+        // the expected kernels, as each specialisation adds to one function's stack frame
+        // in unoptimised builds.
+        if self.scan.indexed.is_empty() {
+            match self.scan.steps.as_slice() {
+                [Step::SquaredBands(a)] => {
+                    if let Some(edge) = a.one_edge() {
+                        return self.run_with::<L, _, false>(edge);
+                    }
+                }
+                [Step::Radar(a)] => match a.one_pulse() {
+                    Some(p) if p.is_exponential() => return self.run_with::<L, _, false>(OnePulse::<true>(p)),
+                    Some(p) => return self.run_with::<L, _, false>(OnePulse::<false>(p)),
+                    None => {}
+                },
+                _ => {}
+            }
+        }
         with_fixed_steps!(self.scan, steps, INDEXED => self.run_with::<L, _, INDEXED>(steps))
     }
 }
