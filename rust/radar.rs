@@ -169,6 +169,9 @@ pub struct RadarEquation {
     pulses: u64,
     false_alarm: f64,
     threshold: f64,
+    /// (Q(n, T), t_n(T)): where Swerling 0's sum starts for the SNRs whose Poisson window
+    /// reaches k = 0 (most of a scan's), the same for every state.
+    start: (f64, f64),
 }
 
 impl RadarEquation {
@@ -212,13 +215,15 @@ impl RadarEquation {
                 format!("must be an integer in 1..{MAX_PULSES}, got {pulses}"),
             ));
         }
+        let threshold = gamma::inverse_upper(pulses, false_alarm_probability);
         Ok(RadarEquation {
             snr: 10f64.powf((reference_snr_db - loss_db) / 10.0),
             reference_range2: reference_range * reference_range,
             swerling,
             pulses,
             false_alarm: false_alarm_probability,
-            threshold: gamma::inverse_upper(pulses, false_alarm_probability),
+            threshold,
+            start: gamma::upper_and_term(pulses, threshold),
         })
     }
 
@@ -257,12 +262,13 @@ impl RadarEquation {
             return form.lanes_at_squared(Portable::splat(r2)).to_array()[0];
         }
         // (NaN r² gives a NaN SNR, which detection_probability keeps)
-        detection_probability(
+        summed(
             self.swerling,
             self.pulses,
             self.snr_at_squared(r2),
             self.threshold,
             self.false_alarm,
+            self.start,
         )
     }
 
@@ -288,6 +294,16 @@ impl RadarEquation {
 /// P_D for `pulses` pulses of per-pulse SNR `snr` (linear) against `threshold`, whose
 /// false-alarm probability is `false_alarm` (P_D at SNR 0).
 pub fn detection_probability(swerling: Swerling, pulses: u64, snr: f64, threshold: f64, false_alarm: f64) -> f64 {
+    // (Swerling 0's window may start at k = 0; the other cases need no start)
+    let start = match swerling {
+        Swerling::Zero => gamma::upper_and_term(pulses, threshold),
+        _ => (f64::NAN, f64::NAN),
+    };
+    summed(swerling, pulses, snr, threshold, false_alarm, start)
+}
+
+/// [`detection_probability`] given `start` = (Q(n, T), t_n(T)).
+fn summed(swerling: Swerling, pulses: u64, snr: f64, threshold: f64, false_alarm: f64, start: (f64, f64)) -> f64 {
     if let Some(form) = OnePulse::of(swerling, pulses) {
         return form.at(Portable::splat(snr), threshold).to_array()[0];
     }
@@ -303,7 +319,7 @@ pub fn detection_probability(swerling: Swerling, pulses: u64, snr: f64, threshol
         return 1.0; // (S = ∞: every sum below would be ∞/∞)
     }
     let pd = match swerling {
-        Swerling::Zero => swerling0(n, nf * snr, t),
+        Swerling::Zero => swerling0(n, nf * snr, t, start),
         Swerling::One => {
             let gamma = 1.0 + nf * snr;
             let c = nf * snr / gamma;
@@ -340,56 +356,68 @@ pub fn detection_probability(swerling: Swerling, pulses: u64, snr: f64, threshol
 /// 1 − Σ_k Poisson(k; λ) P(n + k, T) summed downwards (P falls with k), so that every
 /// recurrence adds; the side is guessed from the mean of the summed power, n + λ, against
 /// T, and the other side summed only when the guess was wrong.
-fn swerling0(n: u64, lambda: f64, t: f64) -> f64 {
+///
+/// The weights are kept relative to the mode's (w_mode = 1, w_{k+1} = w_k λ/(k + 1)) and
+/// each sum is divided by its weights' total: the common factor e^{−λ} λ^m / m! cancels,
+/// so it is never formed, and neither is the rounding it would pass to every weight.
+/// `start` is (Q(n, T), t_n(T)), the model's own, for a window from k = 0.
+fn swerling0(n: u64, lambda: f64, t: f64, start: (f64, f64)) -> f64 {
     if lambda > 1e15 {
         // T < 1e4 (Q(n, T) ≥ 1e-300, n ≤ 1024): no Poisson mass where P(n + k, T) is not 0
         return 1.0;
     }
     // A sure lower end first (below it lies < 1e-20 of the Poisson mass): where every
-    // k above it misses with probability < 1e-18, P_D is 1 to double precision.
+    // k above it misses with probability < 1e-18, P_D is 1 to double precision. (At 0 it
+    // would ask whether 1 − P_FA < 1e-18: never.)
     let floor = (lambda - 10.0 * lambda.sqrt() - 10.0).max(0.0) as u64;
-    if gamma::regularized(n + floor, t).0 < 1e-18 {
+    if floor > 0 && gamma::regularized(n + floor, t).0 < 1e-18 {
         return 1.0;
     }
     let mode = lambda.floor() as u64;
-    let peak = gamma::term(mode, lambda);
-    let (mut lo, mut hi, mut w) = (mode, mode, peak);
-    while lo > 0 && w > 1e-18 * peak {
-        w *= lo as f64 / lambda;
+    let inverse_lambda = 1.0 / lambda;
+    // (counters kept as floats too where they scale a weight: exact below 2⁵³, and no
+    // integer conversion in the loops)
+    let (mut lo, mut w_lo, mut lo_f) = (mode, 1.0, mode as f64);
+    while lo > 0 && w_lo > 1e-18 {
+        w_lo *= lo_f * inverse_lambda;
         lo -= 1;
+        lo_f -= 1.0;
     }
-    w = peak;
-    while w > 1e-18 * peak {
-        hi += 1;
-        w *= lambda / hi as f64;
-    }
-    let q_lo = gamma::regularized(n + lo, t).1;
     // t_a = e^{−T} T^a / a!, with t_{a+1} = t_a T / (a + 1)
     let detected = || {
-        let mut weight = gamma::term(lo, lambda);
-        let (mut q, mut step) = (q_lo, gamma::term(n + lo, t));
-        let (mut pd, mut total) = (0.0, 0.0);
+        let (mut q, mut step) = if lo == 0 {
+            start
+        } else {
+            gamma::upper_and_term(n + lo, t)
+        };
+        let (mut weight, mut pd, mut total) = (w_lo, 0.0, 0.0);
         let mut k = lo;
-        // past hi while the weights still matter next to P_D itself (Q grows with k, so a
-        // small P_D needs the tail the mode's window leaves out)
-        while k <= hi || (weight > 1e-18 * pd && weight > 0.0) {
+        // to where the weights fall below 1e-18 of the mode's, and past it while they still
+        // matter next to P_D itself (Q grows with k, so a small P_D needs the tail)
+        loop {
             pd += weight * q;
             total += weight;
+            if !(k <= mode || weight > 1e-18 || (weight > 1e-18 * pd && weight > 0.0)) {
+                break;
+            }
             q += step;
-            step *= t / (n + k + 1) as f64;
-            weight *= lambda / (k + 1) as f64;
+            step *= t * gamma::reciprocal(n + k + 1);
+            weight *= lambda * gamma::reciprocal(k + 1);
             k += 1;
         }
-        // (dividing by the window's computed mass removes the rounding of the first weight,
-        // which every later one inherits)
         pd / total
     };
     let missed = || {
-        let (mut p, _) = gamma::regularized(n + hi, t);
-        let mut weight = gamma::term(hi, lambda);
-        let mut step = gamma::term(n + hi - 1, t); // t_{n+k−1}: P(n+k−1) = P(n+k) + t_{n+k−1}
+        let (mut hi, mut weight) = (mode, 1.0);
+        while weight > 1e-18 {
+            hi += 1;
+            weight *= lambda * gamma::reciprocal(hi);
+        }
+        // t_{n+k−1}: P(n+k−1) = P(n+k) + t_{n+k−1}
+        let (mut p, mut step) = gamma::lower_and_term_below(n + hi, t);
         let (mut miss, mut total) = (0.0, 0.0);
-        let mut k = hi;
+        let (mut k, mut k_f, mut shape) = (hi, hi as f64, (n + hi) as f64);
+        let inverse_t = 1.0 / t;
         loop {
             miss += weight * p;
             total += weight;
@@ -397,9 +425,12 @@ fn swerling0(n: u64, lambda: f64, t: f64) -> f64 {
                 break;
             }
             p += step;
+            // w_{k−1} = w_k k / λ, t_{n+k−2} = t_{n+k−1} (n + k − 1) / T
             k -= 1;
-            weight *= (k + 1) as f64 / lambda;
-            step *= (n + k) as f64 / t;
+            weight *= k_f * inverse_lambda;
+            k_f -= 1.0;
+            shape -= 1.0;
+            step *= shape * inverse_t;
         }
         miss / total
     };

@@ -38,6 +38,25 @@ pub fn term(j: u64, x: f64) -> f64 {
     (-x + j as f64 * x.ln() - ln_factorial(j)).exp()
 }
 
+/// 1/j, correctly rounded (a table below 2048, so that the sums' recurrences multiply
+/// rather than divide; the same bits either way).
+#[inline]
+pub fn reciprocal(j: u64) -> f64 {
+    const TABLE: [f64; 2048] = {
+        let mut table = [f64::INFINITY; 2048];
+        let mut j = 1;
+        while j < 2048 {
+            table[j] = 1.0 / j as f64;
+            j += 1;
+        }
+        table
+    };
+    match TABLE.get(j as usize) {
+        Some(&r) => r,
+        None => 1.0 / j as f64,
+    }
+}
+
 /// (P(a, x), Q(a, x)) for an integer shape `a` ≥ 0 and x ≥ 0 (x = +inf gives (1, 0)).
 /// Shape 0 is the point mass at 0: P = 1.
 pub fn regularized(a: u64, x: f64) -> (f64, f64) {
@@ -50,37 +69,66 @@ pub fn regularized(a: u64, x: f64) -> (f64, f64) {
     if x <= 0.0 {
         return (0.0, 1.0);
     }
+    let (p, q, _) = with_terms(a, x);
+    (p, q)
+}
+
+/// (P(a, x), Q(a, x), (t_{a−1}, t_a)) for a ≥ 1 and finite x > 0, t_j = e^{−x} x^j / j!:
+/// the sums' largest term formed in logs, the other from it by one step where that keeps
+/// it a normal number.
+fn with_terms(a: u64, x: f64) -> (f64, f64, (f64, f64)) {
+    let inverse = 1.0 / x;
     if x >= a as f64 {
         // Q = Σ_{j<a} t_j, from the largest term (j = a − 1) down: t_{j−1} = t_j j / x.
-        let mut t = term(a - 1, x);
-        let mut q = 0.0;
-        let mut j = a - 1;
+        let below = term(a - 1, x);
+        let (mut t, mut q, mut j) = (below, 0.0, a - 1);
         loop {
             q += t;
             if j == 0 || t <= q * 1e-18 {
                 break;
             }
-            t *= j as f64 / x;
+            t *= j as f64 * inverse;
             j -= 1;
         }
         let q = q.min(1.0);
-        (1.0 - q, q)
+        (1.0 - q, q, (below, beside(below, x * reciprocal(a), || term(a, x))))
     } else {
         // P = Σ_{j≥a} t_j, from the largest term (j = a) up: t_{j+1} = t_j x / (j + 1).
-        let mut t = term(a, x);
-        let mut p = 0.0;
-        let mut j = a;
+        let at = term(a, x);
+        let (mut t, mut p, mut j) = (at, 0.0, a);
         loop {
             p += t;
             j += 1;
-            t *= x / j as f64;
+            t *= x * reciprocal(j);
             if t <= p * 1e-18 {
                 break;
             }
         }
         let p = p.min(1.0);
-        (p, 1.0 - p)
+        (p, 1.0 - p, (beside(at, a as f64 * inverse, || term(a - 1, x)), at))
     }
+}
+
+/// `t · ratio`, or `direct()` where t is subnormal or zero (the step would carry its lost
+/// bits).
+fn beside(t: f64, ratio: f64, direct: impl Fn() -> f64) -> f64 {
+    if t >= f64::MIN_POSITIVE {
+        t * ratio
+    } else {
+        direct()
+    }
+}
+
+/// (Q(a, x), t_a(x)) for a ≥ 1 and finite x > 0: where an upward sum of Q starts.
+pub fn upper_and_term(a: u64, x: f64) -> (f64, f64) {
+    let (_, q, (_, at)) = with_terms(a, x);
+    (q, at)
+}
+
+/// (P(a, x), t_{a−1}(x)) for a ≥ 1 and finite x > 0: where a downward sum of P starts.
+pub fn lower_and_term_below(a: u64, x: f64) -> (f64, f64) {
+    let (p, _, (below, _)) = with_terms(a, x);
+    (p, below)
 }
 
 /// Q(a, x).

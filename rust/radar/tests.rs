@@ -1,4 +1,7 @@
-use super::gamma::{inverse_upper, ln_scaled_lower, regularized, upper};
+use super::gamma::{
+    inverse_upper, ln_factorial, ln_scaled_lower, lower_and_term_below, reciprocal, regularized, term, upper,
+    upper_and_term,
+};
 use super::*;
 
 const CASES: [Swerling; 5] = [
@@ -34,6 +37,38 @@ fn p_and_q_add_to_one_and_scaled_lower_tends_to_its_limit() {
     let (a, t) = (4u64, 3.0f64);
     assert!((ln_scaled_lower(a, 0.0, t).exp() - t.powi(4) / 24.0).abs() < 1e-14);
     assert!((ln_scaled_lower(a, 1.0, t).exp() - regularized(a, t).0).abs() < 1e-15);
+}
+
+#[test]
+fn the_sums_starting_points_are_the_functions_and_terms_they_stand_for() {
+    // the reciprocal table is the division, bit for bit, and so is the fallback past it
+    for j in (1..5000u64).chain([1 << 40, u64::MAX]) {
+        assert_eq!(reciprocal(j).to_bits(), (1.0 / j as f64).to_bits(), "{j}");
+    }
+    // each start pairs P or Q with the term next to it, the one derived from the other
+    // as close as two terms formed in logs are to each other (each carries the rounding of
+    // −x + j ln x − ln j!, ~(x + j|ln x|)ε), on both sides of x = a and into the underflow
+    for (a, x) in [
+        (1, 0.5),
+        (10, 33.0),
+        (10, 3.0),
+        (40, 39.5),
+        (300, 20.0),
+        (700, 1.0),
+        (5, 900.0),
+    ] {
+        let (p, q) = regularized(a, x);
+        let (q_start, at) = upper_and_term(a, x);
+        let (p_start, below) = lower_and_term_below(a, x);
+        assert_eq!((q_start, p_start), (q, p));
+        let logs = 4.0 * f64::EPSILON * (x + a as f64 * x.ln().abs() + ln_factorial(a));
+        for (got, want) in [(at, term(a, x)), (below, term(a - 1, x))] {
+            assert!(
+                got == want || (got / want - 1.0).abs() < logs,
+                "a {a} x {x}: {got:e} {want:e}"
+            );
+        }
+    }
 }
 
 #[test]
