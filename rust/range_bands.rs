@@ -109,6 +109,17 @@ impl RangeBands {
         value
     }
 
+    /// The bands read through their root thresholds as a [`OneEdge`] of sums of squares, if
+    /// they have one edge: its [`OneEdge::lanes_at_squared`] gives [`Self::lanes_at_root`]'s
+    /// bits, with its three numbers in registers.
+    pub fn one_root_edge(&self) -> Option<OneEdge> {
+        (self.root_thresholds.len() == 1).then(|| OneEdge {
+            at_least: self.root_thresholds[0],
+            below: self.values[0],
+            above: self.values[1],
+        })
+    }
+
     /// [`Self::lanes_at`] of the ranges `s.sqrt()`, the same bits, without the square root:
     /// `s` four squared ranges (sums of squares: ≥ 0, +inf or NaN).
     #[inline(always)]

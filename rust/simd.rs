@@ -35,6 +35,8 @@ pub trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = S
     fn rows4_columns024(rows: &[f64]) -> (Self, Self, Self);
     /// The x and y of four consecutive (x, y) pairs.
     fn pairs(xy: &[f64]) -> (Self, Self);
+    /// The x, y and z of four consecutive (x, y, z) triples: 3-D detections' rows.
+    fn triples(xyz: &[f64]) -> (Self, Self, Self);
     fn sqrt(self) -> Self;
     fn div(self, other: Self) -> Self;
     fn abs(self) -> Self;
@@ -227,6 +229,15 @@ impl Lanes for Portable {
         (Portable([p[0], p[2], p[4], p[6]]), Portable([p[1], p[3], p[5], p[7]]))
     }
     #[inline(always)]
+    fn triples(xyz: &[f64]) -> (Self, Self, Self) {
+        let p = &xyz[..12];
+        (
+            Portable([p[0], p[3], p[6], p[9]]),
+            Portable([p[1], p[4], p[7], p[10]]),
+            Portable([p[2], p[5], p[8], p[11]]),
+        )
+    }
+    #[inline(always)]
     fn sqrt(self) -> Self {
         Portable(self.0.map(f64::sqrt))
     }
@@ -353,6 +364,8 @@ mod tests {
                 if i + 16 <= v.len() {
                     let (x, y) = L::rows4_columns02(&v[i..]);
                     bits.extend(x.to_array().into_iter().chain(y.to_array()).map(f64::to_bits));
+                    let (x, y, z) = L::triples(&v[i..]);
+                    bits.extend([x, y, z].into_iter().flat_map(|l| l.to_array()).map(f64::to_bits));
                 }
             }
             bits
@@ -397,16 +410,20 @@ mod tests {
         let rows: Vec<f64> = (0..16).map(|k| k as f64).collect();
         struct Gather(Vec<f64>);
         impl LaneKernel for Gather {
-            type Output = ([f64; 4], [f64; 4], [f64; 4], [f64; 4]);
+            type Output = ([f64; 4], [f64; 4], [f64; 4], [f64; 4], [[f64; 4]; 3]);
             #[inline(always)]
             fn run<L: Lanes>(self) -> Self::Output {
                 let (x, y) = L::rows4_columns02(&self.0);
                 let (px, py) = L::pairs(&self.0);
-                (x.to_array(), y.to_array(), px.to_array(), py.to_array())
+                let (tx, ty, tz) = L::triples(&self.0);
+                let triples = [tx.to_array(), ty.to_array(), tz.to_array()];
+                (x.to_array(), y.to_array(), px.to_array(), py.to_array(), triples)
             }
         }
         for backend in [Backend::Portable, Backend::Avx2].into_iter().filter(|b| b.available()) {
-            let (x, y, px, py) = run_on(backend, Gather(rows.clone()));
+            let (x, y, px, py, triples) = run_on(backend, Gather(rows.clone()));
+            let third = |from: f64| [from, from + 3.0, from + 6.0, from + 9.0];
+            assert_eq!(triples, [third(0.0), third(1.0), third(2.0)], "{backend:?}");
             assert_eq!(x, [0.0, 4.0, 8.0, 12.0], "{backend:?}");
             assert_eq!(y, [2.0, 6.0, 10.0, 14.0], "{backend:?}");
             assert_eq!(px, [0.0, 2.0, 4.0, 6.0], "{backend:?}");

@@ -94,6 +94,8 @@ impl Densities<'_> {
                 }
                 ClutterFactor::Range(bands) => {
                     let fresh = i == 0 && fused_start;
+                    // (a lone edge, a range limit say, kept in registers for the pass)
+                    let one_edge = bands.one_root_edge();
                     for ((j, o), p) in blocks.enumerate().zip(xy.chunks_exact(block)) {
                         let (x, y, dz) = place::<L, RAISED>(p, oz);
                         let (dx, dy) = (x - ox, y - oy);
@@ -109,7 +111,10 @@ impl Densities<'_> {
                                 let measured = L::load(&measured[first + 4 * j..]);
                                 bands.lanes_at(L::select(measured.is_nan(), squared.sqrt(), measured))
                             }
-                            None => bands.lanes_at_root(squared),
+                            None => match one_edge {
+                                Some(edge) => edge.lanes_at_squared(squared),
+                                None => bands.lanes_at_root(squared),
+                            },
                         };
                         let before = if fresh {
                             L::select(L::or(L::or(x.non_finite(), y.non_finite()), dz.non_finite()), nan, one)
@@ -217,12 +222,8 @@ impl Densities<'_> {
 #[inline(always)]
 fn place<L: Lanes, const RAISED: bool>(p: &[f64], oz: L) -> (L, L, L) {
     if RAISED {
-        let p = &p[..12];
-        (
-            L::from_array([p[0], p[3], p[6], p[9]]),
-            L::from_array([p[1], p[4], p[7], p[10]]),
-            L::from_array([p[2], p[5], p[8], p[11]]) - oz,
-        )
+        let (x, y, z) = L::triples(p);
+        (x, y, z - oz)
     } else {
         let (x, y) = L::pairs(p);
         (x, y, L::splat(0.0))

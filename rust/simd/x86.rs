@@ -153,6 +153,25 @@ impl Lanes for Avx2 {
         }
     }
     #[inline(always)]
+    fn triples(xyz: &[f64]) -> (Self, Self, Self) {
+        let p = &xyz[..12];
+        unsafe {
+            // Pairs of 128-bit halves: [x0 y0 | x2 y2], [z0 x1 | z2 x3], [y1 z1 | y3 z3] (each
+            // upper half inserted from memory), then every value picked by one shuffle.
+            let half = |i: usize| _mm_loadu_pd(p[i..].as_ptr());
+            let (a, b, c) = (
+                _mm256_set_m128d(half(6), half(0)),
+                _mm256_set_m128d(half(8), half(2)),
+                _mm256_set_m128d(half(10), half(4)),
+            );
+            (
+                Avx2(_mm256_shuffle_pd::<0b1010>(a, b)),
+                Avx2(_mm256_shuffle_pd::<0b0101>(a, c)),
+                Avx2(_mm256_shuffle_pd::<0b1010>(b, c)),
+            )
+        }
+    }
+    #[inline(always)]
     fn sqrt(self) -> Self {
         Avx2(unsafe { _mm256_sqrt_pd(self.0) })
     }
