@@ -186,6 +186,20 @@ def test_any_executor_works(tmp_path):
     assert sorted(map(key, threaded.results)) == sorted(map(key, inline.results))
 
 
+def test_each_scenario_is_prepared_once_before_any_job_runs(monkeypatch):
+    # (the Solent's preparation downloads its data: once, not in every worker at a time)
+    from ctxmodels.experiment import runner
+    from ctxmodels.experiment.simulation.layouts import ScenarioSpec
+    events = []
+    monkeypatch.setattr(ScenarioSpec, "prepare", lambda spec: events.append(spec.name))
+    real = runner.run_job
+    monkeypatch.setattr(runner, "run_job", lambda job: events.append("job") or real(job))
+    jobs = [Job(name, seed, "gmphd-radar-only", duration=4.0)
+            for name, seed in [("mixed-range", 0), ("formation", 0), ("mixed-range", 1)]]
+    assert len(runner.run_jobs(jobs, workers=1, progress=False)) == 3
+    assert events == ["formation", "mixed-range", "job", "job", "job"]
+
+
 def test_cli_experiment_and_coverage(tmp_path, capsys):
     out = tmp_path / "run"
     code = main(["experiment", "--scenarios", "islands", "--trackers", "gmphd-context",

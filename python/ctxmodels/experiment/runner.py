@@ -283,6 +283,9 @@ def run_jobs(jobs: list[Job], workers: int | None = None,
              progress: bool = True) -> list[JobResult]:
     """Runs ``jobs`` (see :func:`run_experiment`); results in completion order."""
     own = executor is None
+    # (once here, not in every worker: the Solent's first use downloads its data)
+    for name in sorted({job.scenario for job in jobs} & SCENARIOS.keys()):
+        SCENARIOS[name].prepare()
     if own:
         # More processes than jobs would only sit idle.
         workers = min(workers or os.cpu_count() or 1, max(len(jobs), 1))

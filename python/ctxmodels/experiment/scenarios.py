@@ -129,6 +129,14 @@ class SolentSpec:
         from .solent.scene import DURATION
         return DURATION
 
+    def prepare(self) -> None:
+        """Reads the coast and the traffic once, before a study's workers start: the first
+        use downloads them, which each worker would otherwise do at the same time (forked
+        workers inherit what was read)."""
+        from .solent import scene
+        scene.land()
+        scene.traffic()
+
 
 #: Every scenario by name: the paper's two, our islands, and the Solent.
 SCENARIOS: dict = {**SIMULATED_SCENARIOS, SOLENT: SolentSpec()}

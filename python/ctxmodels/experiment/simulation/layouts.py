@@ -269,6 +269,10 @@ class ScenarioSpec:
         """The scenario's length (s)."""
         return self.layout().default_duration
 
+    def prepare(self) -> None:
+        """What a study does once before its workers start: nothing (a simulated scene
+        needs no data)."""
+
 
 SCENARIOS: dict[str, ScenarioSpec] = {
     "mixed-range": ScenarioSpec("mixed-range", 1, "Mixed-range traffic", _mixed_range_layout),
