@@ -105,9 +105,9 @@ impl FixedSteps for OneEdge {
 
 /// A one-pulse radar equation whose form (exponential or not) is fixed at compile time.
 #[derive(Clone, Copy)]
-struct OnePulse<const EXPONENTIAL: bool>(OnePulseAtRange);
+struct OnePulseForm<const EXPONENTIAL: bool>(OnePulseAtRange);
 
-impl<const EXPONENTIAL: bool> FixedSteps for OnePulse<EXPONENTIAL> {
+impl<const EXPONENTIAL: bool> FixedSteps for OnePulseForm<EXPONENTIAL> {
     #[inline(always)]
     fn apply<L: Lanes>(self, pd: L, g: &Offsets<L>) -> L {
         pd * self.0.lanes_form::<L, EXPONENTIAL>(g.r2)
@@ -304,8 +304,8 @@ impl<P: Positions, H: Heights, V: Velocities> LaneKernel for AtStates<'_, P, H, 
                     }
                 }
                 [Step::Radar(a)] => match a.one_pulse() {
-                    Some(p) if p.is_exponential() => return self.run_with::<L, _, false>(OnePulse::<true>(p)),
-                    Some(p) => return self.run_with::<L, _, false>(OnePulse::<false>(p)),
+                    Some(p) if p.is_exponential() => return self.run_with::<L, _, false>(OnePulseForm::<true>(p)),
+                    Some(p) => return self.run_with::<L, _, false>(OnePulseForm::<false>(p)),
                     None => {}
                 },
                 _ => {}
