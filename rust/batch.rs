@@ -510,7 +510,8 @@ pub fn pool_usable() -> bool {
 }
 
 /// Calls `kernel(first_row, out_chunk)` over `out` in chunks of [`CHUNK`] rows, in parallel
-/// for large N (serially in a process forked after the pool started). The kernel returns
+/// for large N (serially in a process forked after the pool started, and with a pool of one
+/// thread, where handing the work over would only add the hand-off). The kernel returns
 /// the index (within its chunk) of the first row it could not evaluate; the smallest such
 /// global row is reported. Chunks are the same either way, so are the results.
 pub fn for_each_chunk<F>(out: &mut [f64], kernel: F) -> Option<usize>
@@ -527,7 +528,7 @@ where
     F: Fn(usize, &mut [f64]) -> Option<usize> + Sync,
 {
     let run = |(c, chunk): (usize, &mut [f64])| kernel(c * CHUNK, chunk).map(|bad| c * CHUNK + bad);
-    if out.len() >= threshold && pool_usable() {
+    if out.len() >= threshold && pool_usable() && rayon::current_num_threads() > 1 {
         out.par_chunks_mut(CHUNK).enumerate().filter_map(run).min()
     } else {
         out.chunks_mut(CHUNK).enumerate().filter_map(run).min()
