@@ -7,6 +7,7 @@
 //! asserted equal, bit for bit. docs/benchmarks.md compares these floors with NumPy's times.
 //!
 //! Needs an x86-64 CPU with AVX2 and AVX-512F.
+use ctxmodels::radar::{RadarEquation, Swerling};
 use std::arch::x86_64::*;
 use std::time::Instant;
 const LOG2_E: f64 = std::f64::consts::LOG2_E;
@@ -204,6 +205,16 @@ fn main() {
         sw1_4(&rows, &mut o4, c, t);
         sw1_8(&rows, &mut o8, c, t);
         assert!(o4.iter().zip(&o8).all(|(a, b)| a.to_bits() == b.to_bits()), "sw1 bits");
+        // the 4-lane kernel is the library's computation: its RadarEquation, bit for bit
+        let radar = RadarEquation::new(13.0, 1500.0, 0.0, 1e-6, Swerling::One, 1).unwrap();
+        for (row, pd) in rows.chunks_exact(4).zip(&o4) {
+            let r2 = row[0] * row[0] + row[2] * row[2];
+            assert_eq!(
+                pd.to_bits(),
+                radar.at_squared(r2).to_bits(),
+                "the library's bits at r² {r2}"
+            );
+        }
         hz_4(&rows, &mut o4, d2);
         hz_8(&rows, &mut o8, d2);
         assert!(
